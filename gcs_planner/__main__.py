@@ -1,0 +1,3 @@
+from gcs_planner.cli import main
+
+raise SystemExit(main())

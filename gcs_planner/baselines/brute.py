@@ -1,0 +1,88 @@
+"""Brute force: enumerate every simple route and keep the shortest per number of corrections.
+
+Deliberately naive so that it is obviously right: a depth-first walk over simple routes that
+prunes only a prefix already past a limit (errors only grow along a prefix until a reset, and the
+violated arrival has already happened, so every extension of it is infeasible too). No length
+bounds, no dominance. The arithmetic mirrors ``evaluate_route`` step by step (same distances,
+same order of additions, same comparison in metres flown against ``Parameters.limits_m``), so a
+boundary case is decided identically. Exponential: for scenarios of up to about 9 correction
+points.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from gcs_planner.baselines import Front
+from gcs_planner.scenario.model import Kind, Scenario
+
+
+def distance_matrix(scenario: Scenario) -> np.ndarray:
+    """Straight distances [i, j] = |P_j − P_i|, computed the way ``straight_legs`` computes them
+    (difference, then ``np.linalg.norm`` over the coordinates) so that the floats agree."""
+    xyz = scenario.xyz
+    return np.linalg.norm(xyz[None, :, :] - xyz[:, None, :], axis=2)
+
+
+def front_from_best(best: dict[int, tuple[float, tuple[int, ...]]]) -> Front:
+    """Pareto front from the shortest route with exactly k corrections, for each k found:
+    keep k only where the minimum length over ≤ k corrections strictly decreases."""
+    front: Front = []
+    for k in sorted(best):
+        length, route = best[k]
+        if not front or length < front[-1][0]:
+            front.append((length, k, route))
+    return front
+
+
+def brute_force_front(scenario: Scenario, max_corrections: int | None = None) -> Front:
+    """The exact (length, corrections) Pareto front over simple routes, by enumeration.
+
+    ``max_corrections`` caps the depth (None: all correction points may be used). Returns an
+    empty list when no feasible route exists.
+    """
+    dist = distance_matrix(scenario).tolist()
+    params = scenario.params
+    kinds = [Kind(int(k)) for k in scenario.kind]
+    limits = [params.limits_m(k) for k in kinds]
+    start, end = scenario.start, scenario.end
+    corrections = [i for i, k in enumerate(kinds) if k in (Kind.V, Kind.H)]
+    depth_cap = len(corrections) if max_corrections is None else max(0, max_corrections)
+
+    best: dict[int, tuple[float, tuple[int, ...]]] = {}
+    path = [start]
+    used = [False] * scenario.n
+    used[start] = True
+
+    def visit(i: int, dv: float, dh: float, length: float) -> None:
+        row = dist[i]
+        # B ends the route: record it, never extend past it.
+        d = row[end]
+        lim_v, lim_h = limits[end]
+        if dv + d <= lim_v and dh + d <= lim_h:
+            k = len(path) - 1
+            total = length + d
+            if k not in best or total < best[k][0]:
+                best[k] = (total, (*path, end))
+        if len(path) - 1 >= depth_cap:
+            return
+        for j in corrections:
+            if used[j]:
+                continue
+            d = row[j]
+            arrive_v, arrive_h = dv + d, dh + d
+            lim_v, lim_h = limits[j]
+            if arrive_v > lim_v or arrive_h > lim_h:
+                continue
+            if kinds[j] == Kind.V:
+                arrive_v = 0.0
+            else:
+                arrive_h = 0.0
+            used[j] = True
+            path.append(j)
+            visit(j, arrive_v, arrive_h, length + d)
+            path.pop()
+            used[j] = False
+
+    visit(start, 0.0, 0.0, 0.0)
+    return front_from_best(best)

@@ -1,0 +1,70 @@
+"""Arguments shared by the commands that read a scenario (plan, mock-vehicle, dry-run)."""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+from gcs_planner.errors import InputError
+from gcs_planner.scenario.model import Origin, Scenario
+
+# flag -> Parameters field
+PARAMETER_FLAGS = {
+    "alpha1": "vertical limit on arrival at a V point (error units)",
+    "alpha2": "horizontal limit on arrival at a V point",
+    "beta1": "vertical limit on arrival at an H point",
+    "beta2": "horizontal limit on arrival at an H point",
+    "theta": "limit of both errors on arrival at B",
+    "delta": "error growth per metre flown",
+    "turn_radius": "minimum turning radius in metres (0: straight legs)",
+    "p_success": "success probability of a correction at an unreliable point",
+    "fail_residual": "residual error after a failed correction",
+}
+
+
+def add_scenario_arguments(parser: argparse.ArgumentParser, positional: bool = True) -> None:
+    if positional:
+        parser.add_argument("scenario", help="scenario file: .toml, .csv or contest .xlsx")
+    group = parser.add_argument_group("scenario parameters (override the scenario file)")
+    for name, help_text in PARAMETER_FLAGS.items():
+        group.add_argument(f"--{name.replace('_', '-')}", dest=name, type=float, help=help_text)
+    group.add_argument(
+        "--heading-at-a", type=_vector, help="initial heading at A as X,Y,Z (default: free)"
+    )
+    group.add_argument("--origin", type=parse_origin, help="georeference LAT,LON[,ALT]")
+
+
+def _vector(text: str) -> tuple[float, float, float]:
+    try:
+        parts = tuple(float(t) for t in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected X,Y,Z numbers, got {text!r}") from None
+    if len(parts) != 3 or not all(math.isfinite(p) for p in parts) or not any(parts):
+        raise argparse.ArgumentTypeError(f"expected a non-zero X,Y,Z vector, got {text!r}")
+    return parts  # type: ignore[return-value]
+
+
+def parse_origin(text: str) -> Origin:
+    try:
+        parts = [float(t) for t in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected LAT,LON[,ALT], got {text!r}") from None
+    if len(parts) not in (2, 3) or not all(math.isfinite(p) for p in parts):
+        raise argparse.ArgumentTypeError(f"expected LAT,LON[,ALT] numbers, got {text!r}")
+    if not -90 <= parts[0] <= 90 or not -180 <= parts[1] <= 180:
+        raise argparse.ArgumentTypeError(
+            f"latitude must be within ±90 and longitude ±180: {text!r}"
+        )
+    return Origin(*parts)
+
+
+def load_scenario_from_args(args: argparse.Namespace, path: str | None = None) -> Scenario:
+    from gcs_planner.scenario.readers import load_scenario
+
+    overrides: dict = {name: getattr(args, name, None) for name in PARAMETER_FLAGS}
+    overrides["heading_at_a"] = getattr(args, "heading_at_a", None)
+    overrides["origin"] = getattr(args, "origin", None)
+    path = path if path is not None else args.scenario
+    if path is None:
+        raise InputError("no scenario given")
+    return load_scenario(path, overrides)

@@ -1,0 +1,177 @@
+"""`gcs-planner plan SCENARIO`: the Pareto front and the chosen route's table."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from pathlib import Path
+
+from gcs_planner.atomic import write_atomic
+from gcs_planner.cli.common import add_scenario_arguments, load_scenario_from_args
+from gcs_planner.core.choose import CHOICES
+from gcs_planner.core.planner import OBJECTIVES, Plan, plan
+from gcs_planner.core.route import Route
+from gcs_planner.errors import InputError
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "plan",
+        help="plan a scenario: the exact Pareto front and one chosen route",
+        description="Compute the Pareto front of INS-feasible routes and choose one.",
+    )
+    add_scenario_arguments(p)
+    p.add_argument(
+        "--objectives",
+        help="comma-separated subset of length,corrections,probability (default: "
+        "length,corrections, plus probability when the scenario has unreliable points)",
+    )
+    p.add_argument("--choose", default="compromise", choices=CHOICES, help="route choice")
+    p.add_argument(
+        "--weights", help="weights of the objectives for a weighted compromise, e.g. 1,0.5"
+    )
+    p.add_argument("--max-corrections", type=int, help="consider routes with at most K corrections")
+    p.add_argument("--json", action="store_true", help="print one JSON object, nothing else")
+    p.add_argument("--out", type=Path, help="folder for plan.json, route.csv and the mission files")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    scenario = load_scenario_from_args(args)
+    if args.objectives:
+        objectives = tuple(o.strip() for o in args.objectives.split(",") if o.strip())
+        unknown = [o for o in objectives if o not in OBJECTIVES]
+        if unknown or not objectives:
+            raise InputError(
+                f"unknown objective(s) {', '.join(unknown) or '(none)'}; "
+                f"choose from {', '.join(OBJECTIVES)}",
+                field="--objectives",
+            )
+    else:
+        objectives = ("length", "corrections")
+        if scenario.unreliable.any():
+            objectives += ("probability",)
+    weights = None
+    if args.weights:
+        try:
+            weights = [float(w) for w in args.weights.split(",")]
+        except ValueError:
+            raise InputError(f"not numbers: {args.weights!r}", field="--weights") from None
+    if args.choose == "most-reliable" and "probability" not in objectives:
+        objectives += ("probability",)
+    try:
+        result = plan(
+            scenario,
+            objectives=objectives,
+            choice=args.choose,
+            weights=weights,
+            max_corrections=args.max_corrections,
+        )
+    except ValueError as exc:
+        raise InputError(str(exc)) from None
+
+    from gcs_planner import plan_json
+
+    plan_dict = plan_json.plan_to_dict(result)
+    text = plan_json.dumps_dict(plan_dict)
+    if args.out:
+        written = write_outputs(result, plan_dict, text, args.out)
+    if args.json:
+        sys.stdout.write(text)
+    else:
+        print(render(result))
+        if args.out:
+            print(f"\nwrote {', '.join(str(p) for p in written)}")
+    if args.out and scenario.origin is None:
+        from gcs_planner.mission.georef import DEFAULT_ORIGIN_WARNING
+
+        print(f"gcs-planner: warning: {DEFAULT_ORIGIN_WARNING}", file=sys.stderr)
+    return 0
+
+
+def write_outputs(result: Plan, plan_dict: dict, text: str, out: Path) -> list[Path]:
+    """plan.json beside the mission files of the chosen route (default mission options; the
+    `export` command takes the others)."""
+    from gcs_planner.mission.export import write_all
+
+    written = write_all(plan_dict, out)  # renders everything first: a bad plan writes nothing
+    written.append(write_atomic(out / "plan.json", text))
+    return written
+
+
+COLUMNS = (
+    ("#", "{:>3}"),
+    ("point", "{:>6}"),
+    ("kind", "{:>4}"),
+    ("leg m", "{:>10.1f}"),
+    ("arc m", "{:>7.1f}"),
+    ("total m", "{:>10.1f}"),
+    ("v err", "{:>7.3f}"),
+    ("h err", "{:>7.3f}"),
+    ("v margin", "{:>8.3f}"),
+    ("h margin", "{:>8.3f}"),
+    ("P arrive", "{:>8.4f}"),
+)
+
+
+def table_rows(route: Route) -> list[list]:
+    rows = []
+    for n, s in enumerate(route.stops):
+        leg = s.leg.length if s.leg else 0.0
+        arc = s.leg.arc if s.leg else 0.0
+        vm = s.v_margin if math.isfinite(s.v_margin) else float("nan")
+        hm = s.h_margin if math.isfinite(s.h_margin) else float("nan")
+        kind = s.kind.name + ("*" if s.unreliable else "")
+        rows.append(
+            [n, s.id, kind, leg, arc, s.cumulative, s.v_arrival, s.h_arrival, vm, hm, s.p_arrive]
+        )
+    return rows
+
+
+def render_table(route: Route) -> str:
+    head = " ".join(
+        f"{name:>{len(fmt.format(0) if 'f' not in fmt else fmt.format(0.0))}}"
+        for name, fmt in COLUMNS
+    )
+    lines = [head]
+    for row in table_rows(route):
+        cells = []
+        for (_, fmt), value in zip(COLUMNS, row):
+            cell = fmt.format(value)
+            cells.append(cell.replace("nan", "  -"))
+        lines.append(" ".join(cells))
+    return "\n".join(lines)
+
+
+def render(result: Plan) -> str:
+    s = result.scenario
+    p = s.params
+    out = [
+        f"scenario {s.name}: {s.n} points ({s.counts()['V']} V, {s.counts()['H']} H, "
+        f"{s.counts()['unreliable']} unreliable)",
+        f"parameters: alpha1={p.alpha1:g} alpha2={p.alpha2:g} beta1={p.beta1:g} "
+        f"beta2={p.beta2:g} theta={p.theta:g} delta={p.delta:g} turn radius={p.turn_radius:g} m"
+        + (
+            f" p={p.p_success:g} r={p.fail_residual:g}"
+            if "probability" in result.objectives
+            else ""
+        ),
+        f"optimality: {result.statement}",
+        "",
+        f"Pareto front ({len(result.routes)} routes; * = chosen by {result.choice}):",
+        f"  {'':1} {'length m':>11} {'corr':>4} {'P success':>9} {'gap m':>7}  route",
+    ]
+    for i, (r, gap) in enumerate(zip(result.routes, result.gaps())):
+        mark = "*" if i == result.chosen else " "
+        ids = " ".join(r.ids())
+        row = f"{r.length:>11.1f} {r.corrections:>4} {r.probability:>9.4f} {gap:>7.1f}"
+        out.append(f"  {mark} {row}  {ids}")
+    out += [
+        "",
+        f"chosen route ({result.route.corrections} corrections, "
+        f"{result.route.length:,.1f} m; errors on arrival before correction, "
+        "margins to the point's limits; * unreliable point):",
+        render_table(result.route),
+    ]
+    return "\n".join(out)

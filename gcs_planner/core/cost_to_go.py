@@ -1,0 +1,131 @@
+"""A lower bound on the length still to fly from a point to B, given the error carried there.
+
+G_j(e) = the least straight-leg length of any walk from j (just corrected, carrying e metres on
+the component j did not reset) to B that keeps every arrival within its limits. Walks relax
+simple routes and straight legs are never longer than flown ones, and a flown continuation that
+is feasible is feasible with its (shorter) straight legs too; so G_j(e) is an admissible bound
+for branch and bound with turns and with uncertain corrections alike (extra error on the
+component j reset only makes the continuation harder, so assuming it 0 stays a lower bound).
+
+Computed backwards from B in layers of legs, as labels (R, E) at j: "R metres to B, feasible iff
+e <= E", kept Pareto-minimal (smaller R, larger E). A walk of a simple-route's length has at most
+n - 1 legs, so n layers suffice for the bound to hold over every simple route.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from gcs_planner.core.reach import ReachGraph
+from gcs_planner.core.search import _not_dominated
+from gcs_planner.scenario.model import Kind, Scenario
+
+
+@dataclass(frozen=True)
+class CostToGo:
+    # Per point j: labels sorted by E ascending with the suffix minimum of R, so that
+    # G_j(e) = suffix_min_R[first index with E >= e].
+    indptr: np.ndarray
+    e_max: np.ndarray
+    r_suffix_min: np.ndarray
+
+    def __call__(self, j: int, e: float) -> float:
+        lo, hi = self.indptr[j], self.indptr[j + 1]
+        i = lo + int(np.searchsorted(self.e_max[lo:hi], e, side="left"))
+        return float(self.r_suffix_min[i]) if i < hi else float("inf")
+
+
+def cost_to_go(scenario: Scenario, graph: ReachGraph) -> CostToGo:
+    n = graph.n
+    end = graph.end
+    is_v = scenario.kind == Kind.V
+    # Reverse arcs: pred -> j, excluding arcs into B (the base case) and out of A.
+    src = np.repeat(np.arange(n), graph.degree())
+    tgt = graph.target.astype(np.int64)
+    dist = graph.length
+    lim_b = graph.lim_v[end]
+    into_b = (tgt == end) & (src != graph.start)
+    # Base: j -> B. Own component arrives with d, the carried one with e + d; both <= θ/δ.
+    node = src[into_b]
+    R = dist[into_b]
+    E = lim_b - R
+    ok = E >= 0
+    node, R, E = node[ok], R[ok], E[ok]
+    # Archive for dominance: "e" of the generic filter is -E (smaller is better).
+    keep = _not_dominated(
+        node,
+        R,
+        -E,
+        np.zeros((len(node), 0), np.uint64),
+        np.zeros(0, np.int64),
+        np.zeros(0),
+        np.zeros(0),
+        np.zeros((0, 0), np.uint64),
+    )
+    node, R, E = node[keep], R[keep], E[keep]
+    arch_node, arch_R, arch_E = node.copy(), R.copy(), E.copy()
+
+    # Reverse CSR over arcs between correction points.
+    inner = (tgt != end) & (src != graph.start)
+    r_src, r_tgt, r_len = src[inner], tgt[inner], dist[inner]
+    order = np.argsort(r_tgt, kind="stable")
+    r_src, r_tgt, r_len = r_src[order], r_tgt[order], r_len[order]
+    r_ptr = np.zeros(n + 1, dtype=np.int64)
+    np.add.at(r_ptr, r_tgt + 1, 1)
+    np.cumsum(r_ptr, out=r_ptr)
+    r_deg = np.diff(r_ptr)
+
+    for _ in range(n):
+        if not len(node):
+            break
+        counts = r_deg[node]
+        total = int(counts.sum())
+        if total == 0:
+            break
+        lab = np.repeat(np.arange(len(node)), counts)
+        offs = np.cumsum(counts) - counts
+        arc = r_ptr[node][lab] + (np.arange(total) - offs[lab])
+        j = r_src[arc]  # the predecessor, where the new label lives
+        j1 = node[lab]  # the point the label was at
+        d = r_len[arc]
+        same = is_v[j] == is_v[j1]
+        # Component j resets ("own") arrives at j1 with d; the carried one with e + d.
+        lim_own = np.where(is_v[j], graph.lim_v[j1], graph.lim_h[j1])
+        lim_other = np.where(is_v[j], graph.lim_h[j1], graph.lim_v[j1])
+        E1 = E[lab]
+        feasible = (d <= lim_own) & (same | (d <= E1))
+        newE = np.where(same, np.minimum(lim_other, E1) - d, lim_other - d)
+        newR = R[lab] + d
+        feasible &= newE >= 0
+        j, newR, newE = j[feasible], newR[feasible], newE[feasible]
+        empty = np.zeros((len(j), 0), np.uint64)
+        keep = _not_dominated(
+            j,
+            newR,
+            -newE,
+            empty,
+            arch_node,
+            arch_R,
+            -arch_E,
+            np.zeros((len(arch_node), 0), np.uint64),
+        )
+        node, R, E = j[keep], newR[keep], newE[keep]
+        arch_node = np.concatenate([arch_node, node])
+        arch_R = np.concatenate([arch_R, R])
+        arch_E = np.concatenate([arch_E, E])
+
+    # A label can be dominated by a later one (the filter only drops new labels); the suffix
+    # minimum below makes that harmless.
+    order = np.lexsort((arch_E, arch_node))
+    a_node, a_E, a_R = arch_node[order], arch_E[order], arch_R[order]
+    indptr = np.zeros(n + 1, dtype=np.int64)
+    np.add.at(indptr, a_node + 1, 1)
+    np.cumsum(indptr, out=indptr)
+    suffix = a_R.copy()
+    for j in range(n):
+        lo, hi = indptr[j], indptr[j + 1]
+        if hi > lo:
+            suffix[lo:hi] = np.minimum.accumulate(a_R[lo:hi][::-1])[::-1]
+    return CostToGo(indptr, a_E, suffix)

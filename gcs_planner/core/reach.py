@@ -1,0 +1,72 @@
+"""The reach graph: which point can follow which, and at what straight distance.
+
+A leg longer than the largest error budget divided by δ can never be flown between two
+corrections, so only neighbours within that radius are arcs. The graph is stored as CSR arrays
+(networkx-style plain data) so that the searches expand whole label layers with numpy.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from gcs_planner.scenario.model import Kind, Scenario
+
+
+@dataclass(frozen=True)
+class ReachGraph:
+    indptr: np.ndarray  # (n+1,) int64: arcs of i are indptr[i]:indptr[i+1]
+    target: np.ndarray  # (m,) int32
+    length: np.ndarray  # (m,) float64, straight distance
+    lim_v: np.ndarray  # (n,) float64: vertical arrival limit at each point, metres flown
+    lim_h: np.ndarray  # (n,) float64
+    to_end: np.ndarray  # (n,) float64: straight distance to B (an admissible bound)
+    start: int
+    end: int
+
+    @property
+    def n(self) -> int:
+        return len(self.lim_v)
+
+    def degree(self) -> np.ndarray:
+        return np.diff(self.indptr)
+
+
+def arrival_limits_m(scenario: Scenario) -> tuple[np.ndarray, np.ndarray]:
+    """Per point, the (vertical, horizontal) arrival limits in metres flown."""
+    n = scenario.n
+    lim_v = np.full(n, np.inf)
+    lim_h = np.full(n, np.inf)
+    for kind in (Kind.V, Kind.H, Kind.B):
+        mask = scenario.kind == kind
+        lim_v[mask], lim_h[mask] = scenario.params.limits_m(kind)
+    return lim_v, lim_h
+
+
+def build_reach_graph(scenario: Scenario) -> ReachGraph:
+    """Arcs i → j for every pair within reach, j never A and i never B.
+
+    An arc is kept only if a leg of that length can arrive within j's limits when flown right
+    after both errors were reset, i.e. d ≤ min(lim_v[j], lim_h[j]) — no route can use it
+    otherwise. A leg from A counts from zero errors, the same test.
+    """
+    xyz = scenario.xyz
+    lim_v, lim_h = arrival_limits_m(scenario)
+    start, end = scenario.start, scenario.end
+    tree = cKDTree(xyz)
+    pairs = tree.query_pairs(r=scenario.params.reach_m, output_type="ndarray")
+    # Both directions; the tree gives unordered pairs i < j.
+    src = np.concatenate([pairs[:, 0], pairs[:, 1]]).astype(np.int64)
+    dst = np.concatenate([pairs[:, 1], pairs[:, 0]]).astype(np.int64)
+    dist = np.linalg.norm(xyz[src] - xyz[dst], axis=1)
+    keep = (dst != start) & (src != end) & (dist <= np.minimum(lim_v[dst], lim_h[dst]))
+    src, dst, dist = src[keep], dst[keep], dist[keep]
+    order = np.lexsort((dist, src))
+    src, dst, dist = src[order], dst[order], dist[order]
+    indptr = np.zeros(scenario.n + 1, dtype=np.int64)
+    np.add.at(indptr, src + 1, 1)
+    np.cumsum(indptr, out=indptr)
+    to_end = np.linalg.norm(xyz - xyz[end], axis=1)
+    return ReachGraph(indptr, dst.astype(np.int32), dist, lim_v, lim_h, to_end, start, end)

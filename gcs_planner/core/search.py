@@ -1,0 +1,278 @@
+"""The exact Pareto front of (length, corrections) with straight legs.
+
+Method: a label-setting search in layers of the number of corrections k. A label is a partial
+route ending at a point, with its length L and the carried error e (metres flown since the last
+reset of the component the point did *not* reset; the other one is 0 right after a correction).
+Layer k+1 is made from layer k in one numpy expansion over the reach graph, then filtered:
+
+* feasibility: the arrival limits of the target point;
+* bound: L + |P - B| >= the best complete length with <= k corrections cannot lead to a
+  non-dominated route (lengths only grow, corrections only grow);
+* dominance at the same point: (L', e') <= (L, e) from a layer <= k+1 dominates, because a
+  smaller carried error is never less feasible and the earlier layer has fewer corrections.
+
+Routes must be simple (MODEL.md), but a label (point, L, e) does not know where it has been, so
+the search above solves a relaxation over walks. Decremental state-space relaxation closes the
+gap exactly: if a front walk repeats a point, that point becomes *critical*, labels carry a bit
+per critical point visited, a label may not re-enter a critical point it visited, and labels
+only dominate labels with the same visited set. Repeat until every front route is simple: the
+front of the relaxation is then made of simple routes, and since every simple route is also a
+walk, it is the front over simple routes.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from gcs_planner.core.reach import ReachGraph, build_reach_graph
+from gcs_planner.scenario.model import Kind, Scenario
+
+
+@dataclass(frozen=True)
+class FrontPoint:
+    length: float
+    corrections: int
+    points: tuple[int, ...]  # indices, A first, B last
+
+
+@dataclass
+class SearchStats:
+    labels: int = 0  # labels kept over all rounds
+    candidates: int = 0  # labels generated before filtering
+    layers: int = 0
+    rounds: int = 0  # decremental relaxation rounds
+    critical: list[int] = field(default_factory=list)
+    seconds: float = 0.0
+    graph_seconds: float = 0.0
+    arcs: int = 0
+
+
+@dataclass(frozen=True)
+class FrontResult:
+    front: tuple[FrontPoint, ...]
+    stats: SearchStats
+    # When the front is empty: the diagnosis of why (see explain_infeasible).
+    why_infeasible: str | None = None
+
+
+def straight_front(
+    scenario: Scenario,
+    graph: ReachGraph | None = None,
+    max_corrections: int | None = None,
+) -> FrontResult:
+    """Exact Pareto front of (length, corrections) over simple feasible routes, straight legs."""
+    t0 = time.perf_counter()
+    stats = SearchStats()
+    if graph is None:
+        graph = build_reach_graph(scenario)
+    stats.graph_seconds = time.perf_counter() - t0
+    stats.arcs = len(graph.target)
+    kmax = scenario.n - 2 if max_corrections is None else min(max_corrections, scenario.n - 2)
+    is_v = scenario.kind == Kind.V
+    critical: list[int] = []
+    while True:
+        stats.rounds += 1
+        front, closest = _layered_search(graph, is_v, critical, kmax, stats)
+        repeated = sorted(
+            {p for fp in front for p in fp.points if fp.points.count(p) > 1} - set(critical)
+        )
+        if not repeated:
+            break
+        critical.extend(repeated)
+    stats.critical = critical
+    stats.seconds = time.perf_counter() - t0
+    why = None if front else explain_infeasible(scenario, graph, closest)
+    return FrontResult(tuple(front), stats, why)
+
+
+def _layered_search(
+    graph: ReachGraph,
+    is_v: np.ndarray,
+    critical: list[int],
+    kmax: int,
+    stats: SearchStats,
+) -> tuple[list[FrontPoint], int]:
+    n = graph.n
+    start, end = graph.start, graph.end
+    words = (len(critical) + 63) // 64
+    crit_word = np.full(n, -1, dtype=np.int64)
+    crit_bit = np.zeros(n, dtype=np.uint64)
+    for i, c in enumerate(critical):
+        crit_word[c] = i // 64
+        crit_bit[c] = np.uint64(1) << np.uint64(i % 64)
+    kind_v = is_v
+    lim_b = graph.lim_v[end]  # = lim_h[end] = θ/δ
+
+    # Label store (all rounds' layers): node and parent index, for route reconstruction.
+    store_node = [np.array([start], dtype=np.int64)]
+    store_parent = [np.array([-1], dtype=np.int64)]
+    n_stored = 1
+
+    # Current layer.
+    node = np.array([start], dtype=np.int64)
+    L = np.zeros(1)
+    dv = np.zeros(1)  # metres since the last vertical reset
+    dh = np.zeros(1)
+    mask = np.zeros((1, words), dtype=np.uint64)
+    gid = np.zeros(1, dtype=np.int64)
+
+    # Archive of kept labels for dominance: node, L, e, mask.
+    arch_node, arch_L, arch_e, arch_mask = node.copy(), L.copy(), np.zeros(1), mask.copy()
+
+    best = np.inf
+    found: list[tuple[int, float, int, int]] = []  # (k, length, parent gid, end)
+    closest = start
+    closest_d = graph.to_end[start]
+
+    deg = graph.degree()
+    k = 0
+    while len(node) and k <= kmax:
+        stats.layers += 1
+        # Completions: fly straight on to B from every label of this layer.
+        d_end = graph.to_end[node]
+        ok = np.maximum(dv, dh) + d_end <= lim_b
+        if ok.any():
+            total = np.where(ok, L + d_end, np.inf)
+            i = int(np.argmin(total))
+            if total[i] < best:
+                best = float(total[i])
+                found.append((k, best, int(gid[i]), end))
+        i = int(np.argmin(d_end))
+        if d_end[i] < closest_d:
+            closest, closest_d = int(node[i]), float(d_end[i])
+        if k == kmax:
+            break
+        # Labels that cannot lead to a shorter route than the best with <= k corrections.
+        alive = L + d_end < best
+        node, L, dv, dh, mask, gid = (a[alive] for a in (node, L, dv, dh, mask, gid))
+        if not len(node):
+            break
+
+        # Expand the layer over the reach graph (CSR), all labels at once.
+        counts = deg[node]
+        total_c = int(counts.sum())
+        if total_c == 0:
+            break
+        src = np.repeat(np.arange(len(node)), counts)
+        offs = np.cumsum(counts) - counts
+        arc = graph.indptr[node][src] + (np.arange(total_c) - offs[src])
+        j = graph.target[arc].astype(np.int64)
+        d = graph.length[arc]
+        nL = L[src] + d
+        ndv = dv[src] + d
+        ndh = dh[src] + d
+        keep = (j != end) & (ndv <= graph.lim_v[j]) & (ndh <= graph.lim_h[j])
+        keep &= nL + graph.to_end[j] < best
+        if words:
+            w = crit_word[j]
+            is_crit = w >= 0
+            visited = np.zeros(total_c, dtype=bool)
+            if is_crit.any():
+                wi = np.where(is_crit, w, 0)
+                visited = is_crit & ((mask[src, wi] & crit_bit[j]) != 0)
+            keep &= ~visited
+        stats.candidates += int(keep.sum())
+        src, j, nL, ndv, ndh = src[keep], j[keep], nL[keep], ndv[keep], ndh[keep]
+        jv = kind_v[j]
+        ne = np.where(jv, ndh, ndv)  # the component this point does not reset
+        nmask = mask[src].copy()
+        if words:
+            w = crit_word[j]
+            rows = np.flatnonzero(w >= 0)
+            nmask[rows, w[rows]] |= crit_bit[j[rows]]
+
+        survive = _not_dominated(j, nL, ne, nmask, arch_node, arch_L, arch_e, arch_mask)
+        src, j, nL, ne, nmask, jv = (a[survive] for a in (src, j, nL, ne, nmask, jv))
+
+        new_gid = n_stored + np.arange(len(j), dtype=np.int64)
+        store_node.append(j)
+        store_parent.append(gid[src])
+        n_stored += len(j)
+        stats.labels += len(j)
+        arch_node = np.concatenate([arch_node, j])
+        arch_L = np.concatenate([arch_L, nL])
+        arch_e = np.concatenate([arch_e, ne])
+        arch_mask = np.concatenate([arch_mask, nmask])
+
+        node, L, mask, gid = j, nL, nmask, new_gid
+        dv = np.where(jv, 0.0, ne)
+        dh = np.where(jv, ne, 0.0)
+        k += 1
+
+    all_node = np.concatenate(store_node)
+    all_parent = np.concatenate(store_parent)
+    front = []
+    for k_, length, g, last in found:
+        pts = [last]
+        while g >= 0:
+            pts.append(int(all_node[g]))
+            g = int(all_parent[g])
+        front.append(FrontPoint(length, k_, tuple(reversed(pts))))
+    return front, closest
+
+
+def _not_dominated(
+    j: np.ndarray,
+    L: np.ndarray,
+    e: np.ndarray,
+    mask: np.ndarray,
+    arch_node: np.ndarray,
+    arch_L: np.ndarray,
+    arch_e: np.ndarray,
+    arch_mask: np.ndarray,
+) -> np.ndarray:
+    """Which new labels no archived label and no other new label dominates (or equals).
+
+    Labels compare only within a group (same point, same visited critical set). Within a group
+    sorted by (L, e), a label survives iff its e is strictly below every e before it. Values are
+    replaced by their ranks so that groups can be offset apart with exact integer arithmetic.
+    """
+    m = len(j)
+    if m == 0:
+        return np.zeros(0, dtype=bool)
+    touched = np.isin(arch_node, np.unique(j))
+    nodes = np.concatenate([arch_node[touched], j])
+    Ls = np.concatenate([arch_L[touched], L])
+    es = np.concatenate([arch_e[touched], e])
+    is_new = np.concatenate([np.zeros(int(touched.sum()), dtype=bool), np.ones(m, dtype=bool)])
+    if mask.shape[1]:
+        masks = np.concatenate([arch_mask[touched], mask])
+        key = np.column_stack([nodes.astype(np.uint64), masks])
+        _, group = np.unique(key, axis=0, return_inverse=True)
+        group = group.ravel().astype(np.int64)
+    else:
+        group = nodes
+    order = np.lexsort((is_new, es, Ls, group))
+    _, e_rank = np.unique(es, return_inverse=True)
+    span = int(e_rank.max()) + 1
+    t = e_rank[order].astype(np.int64) - group[order].astype(np.int64) * span
+    run_min = np.minimum.accumulate(t)
+    prev = np.empty_like(run_min)
+    prev[0] = np.iinfo(np.int64).max
+    prev[1:] = run_min[:-1]
+    # The first entry of a group sees the previous group's minimum, which is larger than any
+    # value of this group by construction of the offsets.
+    keep_sorted = is_new[order] & (t < prev)
+    keep = np.zeros(len(order), dtype=bool)
+    keep[order] = keep_sorted
+    return keep[-m:]
+
+
+def explain_infeasible(scenario: Scenario, graph: ReachGraph, closest: int) -> str:
+    """Why no route exists: how close to B any feasible chain gets, and what B demands."""
+    p = scenario.params
+    lim_b = graph.lim_v[graph.end]
+    d = float(graph.to_end[closest])
+    where = "A itself" if closest == graph.start else f"point {scenario.ids[closest]}"
+    first_hops = int(graph.degree()[graph.start])
+    msg = (
+        f"no feasible route from A to B: the closest any feasible chain of corrections gets to B "
+        f"is {where}, {d:,.0f} m from B, but B must be reached within theta={p.theta:g} "
+        f"(at most {lim_b:,.0f} m flown since the last reset of each error, delta={p.delta:g})"
+    )
+    if first_hops == 0:
+        msg += "; no correction point can be reached from A within its limits"
+    return msg

@@ -1,0 +1,1 @@
+"""Leg geometry: straight legs and 3D Dubins (circle then straight) legs, trajectories."""

@@ -1,0 +1,1 @@
+"""The MAVLink link, ground-station side: mission upload/download/clear, parameters."""

@@ -1,0 +1,1 @@
+"""The mission: route → MAVLink mission items, georeference, .plan/.waypoints, trajectories."""

@@ -1,0 +1,396 @@
+"""A planned route (from the plan JSON) as the mission a fixed-wing autopilot flies.
+
+The exporter knows nothing of the search: it reads the plan dict (docs/plan-json.md) and turns
+one route of its front into MAVLink mission items (MISSION_ITEM_INT semantics, common.xml):
+
+* ArduPilot (default): seq 0 is home at A, as ArduPilot stores it; PX4 has no home item, so every
+  seq is one less (``Mission.point_seqs`` follows).
+* A speed item (MAV_CMD_DO_CHANGE_SPEED, airspeed) first, then a NAV_WAYPOINT on A.
+* A NAV_WAYPOINT exactly on each correction point, overflown: param2 the acceptance radius (the
+  capture radius, a whole number of metres within which the aircraft's correction works), param3
+  0 (pass through the point, no orbit offset).
+* Each Dubins arc densified into NAV_WAYPOINTs at most 16 degrees apart and close enough that a
+  chord stays within 2 m of the arc (sagitta R(1 - cos(step/2)) <= 2 m), so the autopilot flies
+  the planned turn and not its own shortcut. Straight legs need no intermediate item.
+* At B a NAV_WAYPOINT on B, then the end action: MAV_CMD_NAV_LOITER_UNLIM about B whose radius is
+  the turning radius (positive = clockwise, MAVLink's convention), RTL, or LAND at B at sea level.
+
+Altitudes: MAV_FRAME_GLOBAL (metres above mean sea level) by default, or
+MAV_FRAME_GLOBAL_RELATIVE_ALT (metres above home, i.e. above A). ArduPlane and PX4 both accept
+both frames; any other name is refused.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from gcs_planner.errors import InputError
+from gcs_planner.geometry.dubins import CSLeg
+from gcs_planner.geometry.trajectory import leg_from_dict
+from gcs_planner.mission.georef import DEFAULT_ORIGIN, LocalFrame, validate_origin
+from gcs_planner.mission.items import (
+    MAV_CMD_DO_CHANGE_SPEED,
+    MAV_CMD_NAV_LAND,
+    MAV_CMD_NAV_LOITER_UNLIM,
+    MAV_CMD_NAV_RETURN_TO_LAUNCH,
+    MAV_CMD_NAV_WAYPOINT,
+    MAV_FRAME_GLOBAL,
+    MAV_FRAME_GLOBAL_RELATIVE_ALT,
+    MAV_FRAME_MISSION,
+    MissionItem,
+)
+from gcs_planner.scenario.model import Origin
+
+# Within this distance of a correction point the aircraft's correction works, and the autopilot
+# counts the waypoint reached. 50 m is a quarter of the 200 m turning radius: tight enough for the
+# correction, loose enough that a fixed wing in wind does not miss the point and circle back.
+DEFAULT_CAPTURE_RADIUS = 50
+# Airspeed of a small maritime fixed wing (m/s); 25 m/s flies the contest's ~100 km in ~70 min.
+DEFAULT_CRUISE_SPEED = 25.0
+# QGroundControl's default hover speed; meaningless for a fixed wing but the .plan carries it.
+HOVER_SPEED = 5.0
+
+MAX_ARC_STEP_DEG = 16.0
+MAX_CHORD_ERROR_M = 2.0
+
+FIRMWARES = ("ardupilot", "px4")
+ALTITUDE_FRAMES = {"amsl": MAV_FRAME_GLOBAL, "relative": MAV_FRAME_GLOBAL_RELATIVE_ALT}
+# Which altitude frames each firmware takes in a mission (ArduPlane: AP_Mission; PX4: the
+# mission feasibility checks). Both take both; the table is where a refusal would be stated.
+FRAMES_ACCEPTED = {"ardupilot": ("amsl", "relative"), "px4": ("amsl", "relative")}
+END_ACTIONS = ("loiter", "rtl", "land")
+# The vehicle parameter that holds the loiter radius, set by the link on upload.
+LOITER_RADIUS_PARAM = {"ardupilot": "WP_LOITER_RAD", "px4": "NAV_LOITER_RAD"}
+
+PLAN_FORMAT = "gcs-planner-plan"
+PLAN_VERSION = 1
+
+
+@dataclass(frozen=True)
+class Mission:
+    """The mission items of one route and what a ground station needs beside them."""
+
+    items: tuple[MissionItem, ...]
+    firmware: str  # "ardupilot" | "px4"
+    home: tuple[float, float, float]  # lat, lon (deg), alt (m AMSL) of A
+    cruise_speed: float  # m/s
+    turn_radius: float  # m; 0 for a straight-leg plan
+    # (parameter name, value) the link sets on upload; None when the plan has no turning radius
+    # (setting a loiter radius of 0 would break the autopilot's loiters).
+    loiter_param: tuple[str, float] | None
+    capture_radius: float  # m, param2 of every correction waypoint
+    origin: Origin
+    origin_is_default: bool
+    altitude_frame: str = "amsl"
+    at_end: str = "loiter"
+    route_index: int = 0
+    route: tuple[str, ...] = ()  # point ids, A..B
+    # (point id, seq of its NAV_WAYPOINT) for A, every correction point and B, in route order.
+    point_seqs: tuple[tuple[str, int], ...] = ()
+
+    @property
+    def frame(self) -> int:
+        return ALTITUDE_FRAMES[self.altitude_frame]
+
+    def seq_of(self, point_id: str) -> int:
+        """Seq of the NAV_WAYPOINT on the route's point ``point_id``."""
+        for pid, seq in self.point_seqs:
+            if pid == str(point_id):
+                return seq
+        raise KeyError(point_id)
+
+
+# ---------------------------------------------------------------------------------------------
+# Reading the plan dict
+
+
+def _bad(message: str, source: str, field: str | None = None) -> InputError:
+    return InputError(message, file=source, field=field)
+
+
+def check_plan(plan: Any, source: str = "") -> None:
+    """Raise InputError unless ``plan`` looks like a plan JSON this module can read."""
+    if not isinstance(plan, dict):
+        raise _bad("not a plan: expected a JSON object", source)
+    if plan.get("format") != PLAN_FORMAT:
+        raise _bad(f"not a plan: 'format' must be {PLAN_FORMAT!r}", source, "format")
+    if plan.get("version") != PLAN_VERSION:
+        raise _bad(
+            f"unsupported plan version {plan.get('version')!r} (this reader knows {PLAN_VERSION})",
+            source,
+            "version",
+        )
+    front = plan.get("front")
+    if not isinstance(front, list) or not front:
+        raise _bad("the plan has no route: 'front' must be a non-empty list", source, "front")
+
+
+def route_entry(plan: dict, route_index: int | None = None, source: str = "") -> tuple[int, dict]:
+    """(index, entry) of the route to export: ``route_index`` or the plan's chosen one."""
+    check_plan(plan, source)
+    front = plan["front"]
+    k = plan.get("chosen", 0) if route_index is None else route_index
+    if isinstance(k, bool) or not isinstance(k, int) or not 0 <= k < len(front):
+        field = "chosen" if route_index is None else "--route-index"
+        raise _bad(f"route index {k!r} is not in the front (0..{len(front) - 1})", source, field)
+    entry = front[k]
+    if not isinstance(entry, dict):
+        raise _bad(f"front[{k}] is not an object", source, "front")
+    route, legs = entry.get("route"), entry.get("legs")
+    if not isinstance(route, list) or len(route) < 2:
+        raise _bad(f"front[{k}].route must list at least A and B", source, "route")
+    if not isinstance(legs, list) or len(legs) != len(route) - 1:
+        raise _bad(f"front[{k}].legs must have one leg per point after A", source, "legs")
+    return k, entry
+
+
+def route_legs(entry: dict, source: str = "") -> list[CSLeg]:
+    """The flown legs of a front entry, from their ``geometry``."""
+    out = []
+    for i, leg in enumerate(entry["legs"]):
+        try:
+            out.append(leg_from_dict(leg.get("geometry") if isinstance(leg, dict) else None))
+        except ValueError as exc:
+            raise _bad(f"legs[{i}].geometry: {exc}", source, "geometry") from exc
+    return out
+
+
+def point_table(plan: dict) -> dict[str, dict]:
+    """The plan's ``points`` by id (empty when the plan does not carry them)."""
+    points = plan.get("points")
+    if not isinstance(points, list):
+        return {}
+    return {str(p["id"]): p for p in points if isinstance(p, dict) and "id" in p}
+
+
+def route_xyz(plan: dict, entry: dict, legs: list[CSLeg], source: str = "") -> np.ndarray:
+    """(m, 3) local positions of the route's points: the points table where it has them (the
+    scenario's own coordinates), else the ends of the legs."""
+    table = point_table(plan)
+    xyz = [legs[0].start] + [leg.end for leg in legs]
+    out = np.empty((len(xyz), 3))
+    for i, (pid, fallback) in enumerate(zip(entry["route"], xyz, strict=True)):
+        p = table.get(str(pid))
+        try:
+            out[i] = [float(p["x"]), float(p["y"]), float(p["z"])] if p else fallback
+        except (KeyError, TypeError, ValueError) as exc:
+            raise _bad(f"point {pid!r} needs numbers x, y, z", source, "points") from exc
+    if not np.all(np.isfinite(out)):
+        raise _bad("route points must have finite coordinates", source, "points")
+    return out
+
+
+def resolve_origin(plan: dict, origin: Origin | None, source: str = "") -> tuple[Origin, bool]:
+    """(origin, is_default): the given one, else the plan's scenario origin, else the default."""
+    if origin is not None:
+        return validate_origin(origin, file=source, field="--origin"), False
+    scen = plan.get("scenario") if isinstance(plan.get("scenario"), dict) else {}
+    o = scen.get("origin")
+    if isinstance(o, dict):
+        try:
+            given = Origin(float(o["lat"]), float(o["lon"]), float(o.get("alt", 0.0)))
+        except (KeyError, TypeError, ValueError) as exc:
+            raise _bad(f"scenario.origin must have numbers lat, lon[, alt]: {o!r}", source) from exc
+        return validate_origin(given, file=source), bool(scen.get("origin_is_default", False))
+    if o is not None:
+        raise _bad(f"scenario.origin must be an object or null, got {o!r}", source, "origin")
+    return DEFAULT_ORIGIN, True
+
+
+# ---------------------------------------------------------------------------------------------
+# Geometry of the arcs
+
+
+def arc_step(radius: float) -> float:
+    """Largest angle (radians) between arc waypoints: 16 degrees, or less when a 16-degree chord
+    would stray more than 2 m from a large arc."""
+    step = math.radians(MAX_ARC_STEP_DEG)
+    if radius > MAX_CHORD_ERROR_M:
+        step = min(step, 2.0 * math.acos(1.0 - MAX_CHORD_ERROR_M / radius))
+    return step
+
+
+def arc_waypoints(leg: CSLeg) -> np.ndarray:
+    """(k, 3) points on the leg's arc after its start, evenly spaced in angle at most
+    ``arc_step`` apart, the last one the tangent point. Empty for a straight leg."""
+    if leg.centre is None or leg.arc_angle <= 0.0 or leg.radius <= 0.0:
+        return np.empty((0, 3))
+    step = arc_step(leg.radius)
+    k = max(1, math.ceil(leg.arc_angle / step - 1e-9))
+    angles = leg.arc_angle * np.arange(1, k + 1) / k
+    pts = np.array([leg.point_at(leg.radius * a) for a in angles])
+    pts[-1] = leg.tangent_point
+    return pts
+
+
+def last_turn_sense(legs: list[CSLeg]) -> int:
+    """Sense (+1 counter-clockwise, -1 clockwise seen from above) of the route's last turn that
+    has one; clockwise when the route never turns."""
+    for leg in reversed(legs):
+        if leg.sense != 0:
+            return leg.sense
+    return -1
+
+
+# ---------------------------------------------------------------------------------------------
+# Building the mission
+
+
+def _whole_metres(value: Any, name: str) -> int:
+    try:
+        v = float(value)
+    except (TypeError, ValueError) as exc:
+        raise _bad(f"must be a whole number of metres, got {value!r}", "", name) from exc
+    if not math.isfinite(v) or v != round(v) or not 1 <= v <= 10_000:
+        raise _bad(f"must be a whole number of metres in 1..10000, got {value!r}", "", name)
+    return int(v)
+
+
+def _check_options(firmware: str, altitude_frame: str, at_end: str, cruise_speed: Any) -> float:
+    if firmware not in FIRMWARES:
+        raise _bad(f"unknown firmware {firmware!r} (one of {', '.join(FIRMWARES)})", "", "firmware")
+    if altitude_frame not in ALTITUDE_FRAMES:
+        raise _bad(
+            f"unknown altitude frame {altitude_frame!r} (one of {', '.join(ALTITUDE_FRAMES)})",
+            "",
+            "altitude-frame",
+        )
+    if altitude_frame not in FRAMES_ACCEPTED[firmware]:
+        raise _bad(
+            f"{firmware} does not accept the {altitude_frame!r} altitude frame in missions "
+            f"(it accepts {', '.join(FRAMES_ACCEPTED[firmware])})",
+            "",
+            "altitude-frame",
+        )
+    if at_end not in END_ACTIONS:
+        raise _bad(f"unknown end action {at_end!r} (one of {', '.join(END_ACTIONS)})", "", "at-end")
+    try:
+        speed = float(cruise_speed)
+    except (TypeError, ValueError) as exc:
+        raise _bad(f"must be a number of m/s, got {cruise_speed!r}", "", "cruise-speed") from exc
+    if not math.isfinite(speed) or not 0.0 < speed <= 1000.0:
+        raise _bad(f"must lie in (0, 1000] m/s, got {cruise_speed!r}", "", "cruise-speed")
+    return speed
+
+
+def build_mission(
+    plan: dict,
+    *,
+    route_index: int | None = None,
+    firmware: str = "ardupilot",
+    altitude_frame: str = "amsl",
+    capture_radius: float = DEFAULT_CAPTURE_RADIUS,
+    cruise_speed: float = DEFAULT_CRUISE_SPEED,
+    at_end: str = "loiter",
+    origin: Origin | None = None,
+    source: str = "",
+) -> Mission:
+    """The mission for route ``route_index`` of ``plan`` (default: the plan's chosen route).
+
+    ``origin`` overrides the scenario's; without either the default origin is used and
+    ``Mission.origin_is_default`` is True (the caller warns). ``source`` names the plan file in
+    error messages.
+    """
+    speed = _check_options(firmware, altitude_frame, at_end, cruise_speed)
+    capture = _whole_metres(capture_radius, "capture-radius")
+    k, entry = route_entry(plan, route_index, source)
+    legs = route_legs(entry, source)
+    ids = [str(p) for p in entry["route"]]
+    xyz = route_xyz(plan, entry, legs, source)
+    org, org_default = resolve_origin(plan, origin, source)
+    frame = LocalFrame(org)
+    params = plan.get("parameters") if isinstance(plan.get("parameters"), dict) else {}
+    try:
+        radius = float(params.get("turn_radius", legs[0].radius))
+    except (TypeError, ValueError) as exc:
+        raise _bad("parameters.turn_radius must be a number", source, "turn_radius") from exc
+    if not math.isfinite(radius) or radius < 0:
+        raise _bad(f"parameters.turn_radius must be >= 0, got {radius!r}", source, "turn_radius")
+
+    home_lat, home_lon, home_alt = frame.to_geodetic(*xyz[0])
+    mav_frame = ALTITUDE_FRAMES[altitude_frame]
+    alt_offset = home_alt if altitude_frame == "relative" else 0.0
+
+    items: list[MissionItem] = []
+    point_seqs: list[tuple[str, int]] = []
+
+    def add(command: int, frame_: int, note: str, **fields: Any) -> int:
+        for name in ("param1", "param2", "param3", "param4", "z"):
+            if name in fields:
+                fields[name] = float(fields[name])
+        items.append(
+            MissionItem(seq=len(items), frame=frame_, command=command, note=note, **fields)
+        )
+        return items[-1].seq
+
+    def at(p: np.ndarray) -> dict[str, Any]:
+        lat, lon, alt = frame.to_geodetic(*p)
+        return {"x": _deg_e7(lat), "y": _deg_e7(lon), "z": float(alt) - alt_offset}
+
+    if firmware == "ardupilot":
+        home_at = {"x": _deg_e7(home_lat), "y": _deg_e7(home_lon), "z": float(home_alt)}
+        add(MAV_CMD_NAV_WAYPOINT, MAV_FRAME_GLOBAL, "home (A)", **home_at)
+    # Airspeed (param1 0), no throttle change (param3 -1).
+    add(
+        MAV_CMD_DO_CHANGE_SPEED,
+        MAV_FRAME_MISSION,
+        "cruise speed",
+        param1=0,
+        param2=speed,
+        param3=-1,
+    )
+    point_seqs.append((ids[0], add(MAV_CMD_NAV_WAYPOINT, mav_frame, f"A {ids[0]}", **at(xyz[0]))))
+
+    n_legs = len(legs)
+    for i, leg in enumerate(legs):
+        arc = arc_waypoints(leg)
+        # A tangent point on the target itself (no straight part) is the target's own waypoint.
+        if len(arc) and np.linalg.norm(arc[-1] - xyz[i + 1]) < 1.0:
+            arc = arc[:-1]
+        # The autopilot must pass close to arc points, not cut inside the turn: their acceptance
+        # radius is at most a quarter of the spacing between them.
+        chord = 2.0 * leg.radius * math.sin(arc_step(leg.radius) / 2.0)
+        arc_accept = float(max(1, min(capture, math.floor(chord / 4.0))))
+        for j, p in enumerate(arc):
+            note = f"arc {ids[i]}->{ids[i + 1]} {j + 1}/{len(arc)}"
+            add(MAV_CMD_NAV_WAYPOINT, mav_frame, note, param2=arc_accept, **at(p))
+        label = "B" if i == n_legs - 1 else "correction"
+        note = f"{label} {ids[i + 1]}"
+        seq = add(MAV_CMD_NAV_WAYPOINT, mav_frame, note, param2=capture, param3=0, **at(xyz[i + 1]))
+        point_seqs.append((ids[i + 1], seq))
+
+    b = at(xyz[-1])
+    if at_end == "loiter":
+        # MAVLink: a positive loiter radius is clockwise; 0 leaves the autopilot's own radius.
+        signed = float(-last_turn_sense(legs) * radius) if radius > 0 else 0.0
+        add(MAV_CMD_NAV_LOITER_UNLIM, mav_frame, "end: loiter at B", param3=signed, **b)
+    elif at_end == "rtl":
+        add(MAV_CMD_NAV_RETURN_TO_LAUNCH, MAV_FRAME_MISSION, "end: return to launch")
+    else:
+        # Maritime: the surface at B is sea level, 0 m AMSL.
+        add(MAV_CMD_NAV_LAND, mav_frame, "end: land at B", x=b["x"], y=b["y"], z=0.0 - alt_offset)
+
+    return Mission(
+        items=tuple(items),
+        firmware=firmware,
+        home=(float(home_lat), float(home_lon), float(home_alt)),
+        cruise_speed=speed,
+        turn_radius=radius,
+        loiter_param=(LOITER_RADIUS_PARAM[firmware], radius) if radius > 0 else None,
+        capture_radius=float(capture),
+        origin=org,
+        origin_is_default=org_default,
+        altitude_frame=altitude_frame,
+        at_end=at_end,
+        route_index=k,
+        route=tuple(ids),
+        point_seqs=tuple(point_seqs),
+    )
+
+
+def _deg_e7(deg: float) -> int:
+    return int(round(float(deg) * 1e7))

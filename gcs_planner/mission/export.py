@@ -1,0 +1,55 @@
+"""Every export of a plan, by format name, each file written atomically.
+
+``write_all`` is what ``gcs-planner plan --out`` calls; ``export`` is ``gcs-planner export``.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from gcs_planner.atomic import write_atomic
+from gcs_planner.errors import InputError
+from gcs_planner.mission.builder import Mission, build_mission
+from gcs_planner.mission.geo_exports import csv_text, geojson_text, kml_text
+from gcs_planner.mission.pictures import front_png, route_png
+from gcs_planner.mission.qgc_plan import dumps_plan
+from gcs_planner.mission.waypoints import dumps_waypoints
+
+# format -> (file name in write_all, renderer of the file's content)
+FORMATS: dict[str, tuple[str, Callable[[dict, Mission], str | bytes]]] = {
+    "plan": ("mission.plan", lambda plan, m: dumps_plan(m)),
+    "waypoints": ("mission.waypoints", lambda plan, m: dumps_waypoints(m)),
+    "geojson": ("route.geojson", geojson_text),
+    "kml": ("route.kml", kml_text),
+    "csv": ("route.csv", csv_text),
+    "png": ("route.png", lambda plan, m: route_png(plan, m.route_index)),
+    "front-png": ("front.png", lambda plan, m: front_png(plan)),
+}
+
+
+def render(plan: dict, fmt: str, mission: Mission) -> str | bytes:
+    """The content of one export of ``plan`` (``mission`` built from it)."""
+    return FORMATS[fmt][1](plan, mission)
+
+
+def export(
+    plan: dict, fmt: str, out: str | os.PathLike[str], **mission_options: Any
+) -> tuple[Path, Mission]:
+    """Write one format to ``out``; returns the path and the mission it was built from."""
+    if fmt not in FORMATS:
+        raise InputError(f"unknown format {fmt!r} (one of {', '.join(FORMATS)})", field="--format")
+    mission = build_mission(plan, **mission_options)
+    return write_atomic(out, render(plan, fmt, mission)), mission
+
+
+def write_all(plan: dict, out_dir: str | os.PathLike[str], **mission_options: Any) -> list[Path]:
+    """Write mission.plan, mission.waypoints, route.geojson, route.kml, route.csv, route.png and
+    front.png into ``out_dir``. Everything is rendered before the first file is written, so a
+    bad plan or option leaves the folder as it was."""
+    mission = build_mission(plan, **mission_options)
+    contents = [(name, fn(plan, mission)) for name, fn in FORMATS.values()]
+    out = Path(out_dir)
+    return [write_atomic(out / name, data) for name, data in contents]

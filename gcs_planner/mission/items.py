@@ -1,0 +1,71 @@
+"""Mission items as plain data, with MAVLink common.xml semantics (MISSION_ITEM_INT).
+
+The files (.plan, .waypoints), the link and the mock vehicle all speak in these; none of them
+knows how the route was planned.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+# MAV_FRAME
+MAV_FRAME_GLOBAL = 0
+MAV_FRAME_MISSION = 2
+MAV_FRAME_GLOBAL_RELATIVE_ALT = 3
+MAV_FRAME_GLOBAL_INT = 5
+MAV_FRAME_GLOBAL_RELATIVE_ALT_INT = 6
+
+# MAV_CMD
+MAV_CMD_NAV_WAYPOINT = 16
+MAV_CMD_NAV_LOITER_UNLIM = 17
+MAV_CMD_NAV_RETURN_TO_LAUNCH = 20
+MAV_CMD_NAV_LAND = 21
+MAV_CMD_DO_CHANGE_SPEED = 178
+
+# MAV_MISSION_TYPE
+MAV_MISSION_TYPE_MISSION = 0
+
+
+@dataclass(frozen=True)
+class MissionItem:
+    """One mission item. ``x``/``y`` are latitude/longitude in degrees·1e7 (integers) for
+    global frames, as MISSION_ITEM_INT carries them; ``z`` is altitude in metres."""
+
+    seq: int
+    frame: int
+    command: int
+    current: int = 0
+    autocontinue: int = 1
+    param1: float = 0.0
+    param2: float = 0.0
+    param3: float = 0.0
+    param4: float = 0.0
+    x: int = 0
+    y: int = 0
+    z: float = 0.0
+    mission_type: int = MAV_MISSION_TYPE_MISSION
+    # What the item is for in the plan (e.g. "correction 417", "arc", "home"): not sent.
+    note: str = field(default="", compare=False)
+
+    @property
+    def lat(self) -> float:
+        return self.x / 1e7
+
+    @property
+    def lon(self) -> float:
+        return self.y / 1e7
+
+    def with_seq(self, seq: int) -> MissionItem:
+        return replace(self, seq=seq)
+
+
+@dataclass(frozen=True)
+class MissionFile:
+    """What a mission file (.plan, .waypoints) gives back: the items as the firmware stores them
+    (ArduPilot: home at seq 0; PX4: no home item), the firmware, home, and the cruise speed where
+    the format carries one."""
+
+    items: tuple[MissionItem, ...]
+    firmware: str  # "ardupilot" | "px4"
+    home: tuple[float, float, float]  # lat, lon (deg), alt (m AMSL)
+    cruise_speed: float | None = None

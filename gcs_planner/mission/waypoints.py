@@ -1,0 +1,173 @@
+"""Mission Planner ``.waypoints`` files (``QGC WPL 110``): writer and reader.
+
+One header line ``QGC WPL 110``, then one line per item, tab-separated, LF line endings:
+
+    INDEX  CURRENT  FRAME  COMMAND  P1  P2  P3  P4  LAT  LON  ALT  AUTOCONTINUE
+
+Row 0 is always home (the ArduPilot convention Mission Planner follows), with CURRENT 1 as Mission
+Planner writes it. For ArduPilot row k is seq k; a PX4 mission has no home item, so its seq k is
+row k + 1 and row 0 only records home. Latitude and longitude carry 8 decimals (about 1 mm),
+altitudes and parameters 6.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import replace
+from pathlib import Path
+
+from gcs_planner.atomic import write_atomic
+from gcs_planner.errors import InputError
+from gcs_planner.mission.builder import FIRMWARES, Mission
+from gcs_planner.mission.items import (
+    MAV_CMD_NAV_WAYPOINT,
+    MAV_FRAME_GLOBAL,
+    MAV_FRAME_GLOBAL_INT,
+    MAV_FRAME_GLOBAL_RELATIVE_ALT,
+    MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
+    MissionFile,
+    MissionItem,
+)
+
+HEADER = "QGC WPL 110"
+GLOBAL_FRAMES = (
+    MAV_FRAME_GLOBAL,
+    MAV_FRAME_GLOBAL_RELATIVE_ALT,
+    MAV_FRAME_GLOBAL_INT,
+    MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
+)
+FIELDS = (
+    "index",
+    "current",
+    "frame",
+    "command",
+    "param1",
+    "param2",
+    "param3",
+    "param4",
+    "lat",
+    "lon",
+    "alt",
+    "autocontinue",
+)
+
+
+def _row(index: int, current: int, item: MissionItem) -> str:
+    if item.frame in GLOBAL_FRAMES:
+        lat, lon = f"{item.x / 1e7:.8f}", f"{item.y / 1e7:.8f}"
+    else:
+        lat, lon = f"{item.x:.8f}", f"{item.y:.8f}"
+    cells = [
+        str(index),
+        str(current),
+        str(item.frame),
+        str(item.command),
+        *(f"{p:.6f}" for p in (item.param1, item.param2, item.param3, item.param4)),
+        lat,
+        lon,
+        f"{item.z:.6f}",
+        str(item.autocontinue),
+    ]
+    return "\t".join(cells)
+
+
+def dumps_waypoints(mission: Mission) -> str:
+    lat, lon, alt = mission.home
+    home = MissionItem(
+        seq=0,
+        frame=MAV_FRAME_GLOBAL,
+        command=MAV_CMD_NAV_WAYPOINT,
+        x=int(round(lat * 1e7)),
+        y=int(round(lon * 1e7)),
+        z=alt,
+    )
+    rest = mission.items[1:] if mission.firmware == "ardupilot" else mission.items
+    lines = [HEADER, _row(0, 1, home)]
+    lines += [_row(k + 1, item.current, item) for k, item in enumerate(rest)]
+    return "\n".join(lines) + "\n"
+
+
+def write_waypoints(mission: Mission, path: str | os.PathLike[str]) -> Path:
+    """Write the mission as a Mission Planner .waypoints file, atomically."""
+    return write_atomic(path, dumps_waypoints(mission))
+
+
+def _parse_row(line: str, lineno: int, source: str) -> tuple[int, MissionItem]:
+    cells = line.split("\t") if "\t" in line else line.split()
+    if len(cells) != len(FIELDS):
+        raise InputError(
+            f"expected {len(FIELDS)} tab-separated fields, got {len(cells)}",
+            file=source,
+            row=lineno,
+        )
+    values: dict[str, float] = {}
+    for name, cell in zip(FIELDS, cells, strict=True):
+        try:
+            values[name] = float(cell)
+        except ValueError as exc:
+            raise InputError(
+                f"not a number: {cell!r}", file=source, row=lineno, field=name
+            ) from exc
+        if not math.isfinite(values[name]) and name not in ("param1", "param2", "param3", "param4"):
+            raise InputError(f"must be finite: {cell!r}", file=source, row=lineno, field=name)
+    for name in ("index", "current", "frame", "command", "autocontinue"):
+        if values[name] != int(values[name]):
+            raise InputError("must be an integer", file=source, row=lineno, field=name)
+    frame = int(values["frame"])
+    scale = 1e7 if frame in GLOBAL_FRAMES else 1.0
+    item = MissionItem(
+        seq=0,
+        frame=frame,
+        command=int(values["command"]),
+        current=int(values["current"]),
+        autocontinue=int(values["autocontinue"]),
+        param1=values["param1"],
+        param2=values["param2"],
+        param3=values["param3"],
+        param4=values["param4"],
+        x=int(round(values["lat"] * scale)),
+        y=int(round(values["lon"] * scale)),
+        z=values["alt"],
+    )
+    return int(values["index"]), item
+
+
+def loads_waypoints(text: str, firmware: str = "ardupilot", source: str = "") -> MissionFile:
+    """Parse a .waypoints text. ``firmware`` says how to number the items (the format does not
+    record it): ArduPilot keeps row 0 as home at seq 0, PX4 starts at row 1."""
+    if firmware not in FIRMWARES:
+        raise InputError(f"unknown firmware {firmware!r}", field="firmware")
+    lines = text.splitlines()
+    if not lines or lines[0].strip() != HEADER:
+        raise InputError(f"the first line must be {HEADER!r}", file=source, row=1)
+    rows: list[MissionItem] = []
+    for lineno, line in enumerate(lines[1:], start=2):
+        if not line.strip() or line.startswith("#"):
+            continue
+        index, item = _parse_row(line, lineno, source)
+        if index != len(rows):
+            raise InputError(
+                f"index {index} out of order (expected {len(rows)})",
+                file=source,
+                row=lineno,
+                field="index",
+            )
+        rows.append(item)
+    if not rows:
+        raise InputError("no home row", file=source, row=2)
+    home_row = rows[0]
+    home = (home_row.lat, home_row.lon, home_row.z)
+    # Row 0's CURRENT 1 is Mission Planner's mark of the home row, not a state of the item.
+    kept = [replace(home_row, current=0), *rows[1:]] if firmware == "ardupilot" else rows[1:]
+    items = tuple(item.with_seq(k) for k, item in enumerate(kept))
+    return MissionFile(items=items, firmware=firmware, home=home)
+
+
+def read_waypoints(path: str | os.PathLike[str], firmware: str = "ardupilot") -> MissionFile:
+    """Read a Mission Planner .waypoints file."""
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"cannot read: {exc}", file=str(path)) from exc
+    return loads_waypoints(text, firmware, str(path))

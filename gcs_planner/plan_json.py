@@ -1,0 +1,139 @@
+"""The plan JSON: the contract between `plan` and everything that reads a plan (docs/plan-json.md).
+
+Readers (exporter, link, other tools) see only this dict, never the search's objects.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from gcs_planner.core.planner import Plan
+from gcs_planner.core.route import Route
+from gcs_planner.errors import InputError
+from gcs_planner.geometry.trajectory import leg_to_dict, route_trajectory
+from gcs_planner.scenario.model import Kind, Scenario
+
+FORMAT = "gcs-planner-plan"
+VERSION = 1
+
+
+def route_to_dict(scenario: Scenario, route: Route, lower_bound: float) -> dict[str, Any]:
+    trajectory = route_trajectory(
+        scenario.xyz[list(route.points)],
+        route.turn_radius,
+        None if scenario.heading_at_a is None else np.asarray(scenario.heading_at_a),
+    )
+    legs = []
+    for prev, stop, geo in zip(route.stops[:-1], route.stops[1:], trajectory.legs):
+        legs.append(
+            {
+                "from": prev.id,
+                "to": stop.id,
+                "kind": stop.kind.name,
+                "unreliable": stop.unreliable,
+                "length": stop.leg.length,
+                "arc": stop.leg.arc,
+                "straight": stop.leg.straight,
+                "turn_angle_deg": math.degrees(stop.leg.turn_angle),
+                "cumulative": stop.cumulative,
+                "v_error": stop.v_arrival,
+                "h_error": stop.h_arrival,
+                "v_limit": stop.v_limit,
+                "h_limit": stop.h_limit,
+                "v_margin": stop.v_margin,
+                "h_margin": stop.h_margin,
+                "p_arrive": stop.p_arrive,
+                "geometry": leg_to_dict(geo),
+            }
+        )
+    gap = max(0.0, route.length - lower_bound)
+    return {
+        "length": route.length,
+        "corrections": route.corrections,
+        "probability": route.probability,
+        "optimal": gap <= 1e-6,
+        "gap": gap,
+        "lower_bound": lower_bound,
+        "route": route.ids(),
+        "legs": legs,
+    }
+
+
+def plan_to_dict(plan: Plan) -> dict[str, Any]:
+    s = plan.scenario
+    origin = (
+        None
+        if s.origin is None
+        else {"lat": s.origin.lat, "lon": s.origin.lon, "alt": s.origin.alt}
+    )
+    return {
+        "format": FORMAT,
+        "version": VERSION,
+        "scenario": {
+            "name": s.name,
+            "source": s.source,
+            "points": s.n,
+            "origin": origin,
+            "origin_is_default": False,
+            "heading_at_a": None if s.heading_at_a is None else list(s.heading_at_a),
+        },
+        "parameters": s.params.to_dict(),
+        "objectives": list(plan.objectives),
+        "front": [route_to_dict(s, r, lb) for r, lb in zip(plan.routes, plan.lower_bounds)],
+        "chosen": plan.chosen,
+        "choice": plan.choice,
+        "optimality": {"optimal": plan.optimal, "statement": plan.statement},
+        "stats": plan.stats,
+        "points": [
+            {
+                "id": s.ids[i],
+                "x": float(s.xyz[i, 0]),
+                "y": float(s.xyz[i, 1]),
+                "z": float(s.xyz[i, 2]),
+                "kind": Kind(int(s.kind[i])).name,
+                "unreliable": bool(s.unreliable[i]),
+            }
+            for i in range(s.n)
+        ],
+    }
+
+
+def dumps_dict(data: dict[str, Any]) -> str:
+    return json.dumps(data, indent=1, allow_nan=False) + "\n"
+
+
+def dumps(plan: Plan) -> str:
+    return dumps_dict(plan_to_dict(plan))
+
+
+def load_plan(path: str | Path) -> dict[str, Any]:
+    """Read a plan JSON file, checking that it is one (clear error otherwise)."""
+    path = Path(path)
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise InputError("no such file", file=str(path)) from None
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise InputError(f"not a readable plan JSON ({exc})", file=str(path)) from None
+    if not isinstance(data, dict) or data.get("format") != FORMAT:
+        raise InputError(
+            f'not a gcs-planner plan (expected "format": "{FORMAT}")',
+            file=str(path),
+            field="format",
+        )
+    if data.get("version") != VERSION:
+        raise InputError(
+            f"unsupported plan version {data.get('version')!r}", file=str(path), field="version"
+        )
+    front = data.get("front")
+    if not isinstance(front, list) or not front:
+        raise InputError("the plan has no routes", file=str(path), field="front")
+    chosen = data.get("chosen")
+    if not isinstance(chosen, int) or not 0 <= chosen < len(front):
+        raise InputError("'chosen' is not an index into 'front'", file=str(path), field="chosen")
+    return data

@@ -1,0 +1,150 @@
+"""The scenario: points, their kinds, and the parameters of the INS error model.
+
+Everything downstream (search, export, mock vehicle) reads a :class:`Scenario`; nothing in it
+knows which file format it came from.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from enum import IntEnum
+
+import numpy as np
+
+
+class Kind(IntEnum):
+    """Kind of a scenario point. The integer codes are what ``Scenario.kind`` stores."""
+
+    A = 0  # start
+    B = 1  # end
+    V = 2  # vertical-error correction point
+    H = 3  # horizontal-error correction point
+
+
+# Names of the parameters as they appear in scenario files, flags and the plan JSON.
+PARAMETER_NAMES = ("alpha1", "alpha2", "beta1", "beta2", "theta", "delta")
+
+
+@dataclass(frozen=True)
+class Parameters:
+    """The model's parameters (MODEL.md, "Scenario"). Error limits are in error units.
+
+    ``turn_radius`` 0 means straight legs. ``p_success`` and ``fail_residual`` only matter at
+    points flagged unreliable.
+    """
+
+    alpha1: float
+    alpha2: float
+    beta1: float
+    beta2: float
+    theta: float
+    delta: float
+    turn_radius: float = 200.0
+    p_success: float = 0.8
+    fail_residual: float = 5.0
+
+    def validate(self) -> list[str]:
+        """Return the names of invalid parameters with why, empty when all are valid."""
+        bad: list[str] = []
+        for name in PARAMETER_NAMES:
+            value = getattr(self, name)
+            if not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
+                bad.append(f"{name} must be a finite number > 0 (got {value!r})")
+        if not math.isfinite(self.turn_radius) or self.turn_radius < 0:
+            bad.append(f"turn_radius must be a finite number >= 0 (got {self.turn_radius!r})")
+        if not math.isfinite(self.p_success) or not 0.0 <= self.p_success <= 1.0:
+            bad.append(f"p_success must lie in [0, 1] (got {self.p_success!r})")
+        if not math.isfinite(self.fail_residual) or self.fail_residual < 0:
+            bad.append(f"fail_residual must be a finite number >= 0 (got {self.fail_residual!r})")
+        return bad
+
+    # Limits in metres of flight: the search works in metres flown since the last reset of a
+    # component, so that comparing against a limit needs no multiplication by delta.
+    def limits_m(self, kind: Kind) -> tuple[float, float]:
+        """(vertical, horizontal) arrival limits at a point of ``kind``, in metres flown."""
+        if kind == Kind.V:
+            return self.alpha1 / self.delta, self.alpha2 / self.delta
+        if kind == Kind.H:
+            return self.beta1 / self.delta, self.beta2 / self.delta
+        if kind == Kind.B:
+            return self.theta / self.delta, self.theta / self.delta
+        return math.inf, math.inf
+
+    def limits(self, kind: Kind) -> tuple[float, float]:
+        """(vertical, horizontal) arrival limits at a point of ``kind``, in error units."""
+        if kind == Kind.V:
+            return self.alpha1, self.alpha2
+        if kind == Kind.H:
+            return self.beta1, self.beta2
+        if kind == Kind.B:
+            return self.theta, self.theta
+        return math.inf, math.inf
+
+    @property
+    def reach_m(self) -> float:
+        """Longest leg any feasible route can contain, in metres."""
+        return max(self.alpha1, self.alpha2, self.beta1, self.beta2, self.theta) / self.delta
+
+    def to_dict(self) -> dict[str, float]:
+        return {k: float(getattr(self, k)) for k in self.__dataclass_fields__}
+
+
+@dataclass(frozen=True)
+class Origin:
+    """Georeference of the local frame: WGS84 latitude, longitude (degrees), altitude (m AMSL)."""
+
+    lat: float
+    lon: float
+    alt: float = 0.0
+
+
+@dataclass(frozen=True, eq=False)
+class Scenario:
+    """Points in a local Cartesian frame (metres; x east, y north, z up) and the parameters.
+
+    Index 0..n-1 addresses the arrays; ``ids`` are the identifiers of the source file, which is
+    how routes are reported to users.
+    """
+
+    ids: tuple[str, ...]
+    xyz: np.ndarray  # (n, 3) float64
+    kind: np.ndarray  # (n,) uint8, Kind codes
+    unreliable: np.ndarray  # (n,) bool
+    params: Parameters
+    name: str = "scenario"
+    source: str = ""
+    origin: Origin | None = None
+    heading_at_a: tuple[float, float, float] | None = None
+    _index: dict[str, int] = field(default_factory=dict, repr=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "_index", {pid: i for i, pid in enumerate(self.ids)})
+
+    @property
+    def n(self) -> int:
+        return len(self.ids)
+
+    @property
+    def start(self) -> int:
+        return int(np.flatnonzero(self.kind == Kind.A)[0])
+
+    @property
+    def end(self) -> int:
+        return int(np.flatnonzero(self.kind == Kind.B)[0])
+
+    def index_of(self, point_id: str | int) -> int:
+        """Index of the point with identifier ``point_id`` (KeyError if unknown)."""
+        return self._index[str(point_id)]
+
+    def with_params(self, **changes: float) -> Scenario:
+        """A copy with some parameters changed (flags override file values this way)."""
+        return replace(self, params=replace(self.params, **changes))
+
+    def counts(self) -> dict[str, int]:
+        return {
+            "points": self.n,
+            "V": int(np.sum(self.kind == Kind.V)),
+            "H": int(np.sum(self.kind == Kind.H)),
+            "unreliable": int(np.sum(self.unreliable)),
+        }

@@ -1,0 +1,222 @@
+"""The scenario TOML: which points file, the parameters, the origin and the initial heading.
+
+Every key is checked against the known ones, so that a typo (``alpah1``) is an error and not a
+silently ignored value. tomllib gives no line numbers for keys; errors find them in the text,
+best effort, because a user fixes a file faster when told which line.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import sys
+from collections.abc import Mapping
+from dataclasses import dataclass, field, fields
+from pathlib import Path
+
+from gcs_planner.errors import InputError
+from gcs_planner.scenario.model import Origin, Parameters
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover - exercised only on Python 3.10
+    import tomli as tomllib
+
+PARAMETER_KEYS = tuple(f.name for f in fields(Parameters))
+TOP_KEYS = ("name", "points", "heading_at_a", "parameters", "origin")
+ORIGIN_KEYS = ("lat", "lon", "alt")
+POINTS_SUFFIXES = (".csv", ".xlsx")
+
+
+@dataclass(frozen=True)
+class ScenarioSpec:
+    """What a scenario TOML says, checked for types, unknown keys and ranges."""
+
+    path: Path
+    points: Path
+    name: str | None = None
+    parameters: dict[str, float] = field(default_factory=dict)
+    parameter_lines: dict[str, int | None] = field(default_factory=dict)
+    origin: Origin | None = None
+    heading_at_a: tuple[float, float, float] | None = None
+
+
+def key_line(text: str, table: str, key: str) -> int | None:
+    """1-based line where ``key`` is set inside ``[table]`` ("" for the top level), if found."""
+    current = ""
+    assignment = re.compile(rf"""^\s*(?:{re.escape(key)}|"{re.escape(key)}")\s*=""")
+    for number, line in enumerate(text.splitlines(), start=1):
+        header = re.match(r"^\s*\[\s*([^\[\]]+?)\s*\]", line)
+        if header:
+            current = header.group(1)
+        elif current == table and assignment.match(line):
+            return number
+    return None
+
+
+def _is_number(value: object) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def check_origin(
+    lat: object,
+    lon: object,
+    alt: object,
+    *,
+    file: str,
+    rows: Mapping[str, int | None] | None = None,
+) -> Origin:
+    """An Origin from raw values, or InputError naming the bad one (``rows``: line per key)."""
+    for name, value, bound in (("lat", lat, 90.0), ("lon", lon, 180.0), ("alt", alt, math.inf)):
+        row = (rows or {}).get(name)
+        if not _is_number(value) or not math.isfinite(value):
+            raise InputError(
+                f"must be a finite number (got {value!r})",
+                file=file,
+                row=row,
+                field=f"origin.{name}",
+            )
+        if abs(value) > bound:
+            raise InputError(
+                f"must lie in [-{bound:g}, {bound:g}] degrees (got {value!r})",
+                file=file,
+                row=row,
+                field=f"origin.{name}",
+            )
+    return Origin(float(lat), float(lon), float(alt))  # type: ignore[arg-type]
+
+
+def check_heading(value: object, *, file: str, row: int | None) -> tuple[float, float, float]:
+    """The unit vector of a heading given as three numbers, or InputError."""
+    if (
+        not isinstance(value, (list, tuple))
+        or len(value) != 3
+        or not all(_is_number(c) and math.isfinite(c) for c in value)
+    ):
+        raise InputError(
+            f"must be three finite numbers [x, y, z] (got {value!r})",
+            file=file,
+            row=row,
+            field="heading_at_a",
+        )
+    norm = math.hypot(*(float(c) for c in value))  # hypot: no overflow for large components
+    if norm == 0.0 or not math.isfinite(norm):
+        raise InputError(
+            "must not be the zero vector (it gives no direction)",
+            file=file,
+            row=row,
+            field="heading_at_a",
+        )
+    x, y, z = (float(c) / norm for c in value)
+    return x, y, z
+
+
+def _unknown(doc: dict, allowed: tuple[str, ...], table: str, file: str, text: str) -> None:
+    unknown = [k for k in doc if k not in allowed]
+    if unknown:
+        prefix = f"{table}." if table else ""
+        raise InputError(
+            f"unknown key(s) {', '.join(repr(prefix + k) for k in unknown)} "
+            f"(allowed: {', '.join(allowed)})",
+            file=file,
+            row=key_line(text, table, unknown[0]),
+            field=prefix + unknown[0],
+        )
+
+
+def _table(doc: dict, key: str, file: str, text: str) -> dict:
+    value = doc.get(key, {})
+    if not isinstance(value, dict):
+        raise InputError("must be a table", file=file, row=key_line(text, "", key), field=key)
+    return value
+
+
+def read_scenario_toml(path: Path) -> ScenarioSpec:
+    """Parse and check a scenario TOML; the points file must exist (it is not read here)."""
+    file = str(path)
+    try:
+        text = path.read_bytes().decode("utf-8")
+    except OSError as exc:
+        raise InputError(f"cannot read: {exc.strerror or exc}", file=file) from None
+    except UnicodeDecodeError as exc:
+        raise InputError(f"not UTF-8 text (offset {exc.start})", file=file) from None
+    try:
+        doc = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        found = re.search(r"line (\d+)", str(exc))
+        raise InputError(
+            f"TOML syntax error: {exc}", file=file, row=int(found.group(1)) if found else None
+        ) from None
+
+    _unknown(doc, TOP_KEYS, "", file, text)
+    name = doc.get("name")
+    if name is not None and not isinstance(name, str):
+        raise InputError(
+            "must be a string", file=file, row=key_line(text, "", "name"), field="name"
+        )
+
+    points_line = key_line(text, "", "points")
+    if "points" not in doc:
+        raise InputError(
+            "missing key: the points file (.csv or .xlsx), relative to this file",
+            file=file,
+            field="points",
+        )
+    if not isinstance(doc["points"], str) or not doc["points"].strip():
+        raise InputError("must be a file name (string)", file=file, row=points_line, field="points")
+    points = path.parent / doc["points"]
+    if points.suffix.lower() not in POINTS_SUFFIXES:
+        raise InputError(
+            f"points file must be .csv or .xlsx (got {doc['points']!r})",
+            file=file,
+            row=points_line,
+            field="points",
+        )
+    if not points.is_file():
+        what = "is a directory" if points.is_dir() else "does not exist"
+        raise InputError(
+            f"points file {str(points)!r} {what}", file=file, row=points_line, field="points"
+        )
+
+    table = _table(doc, "parameters", file, text)
+    _unknown(table, PARAMETER_KEYS, "parameters", file, text)
+    parameters: dict[str, float] = {}
+    lines: dict[str, int | None] = {}
+    for key, value in table.items():
+        lines[key] = key_line(text, "parameters", key)
+        if not _is_number(value):
+            raise InputError(
+                f"must be a number (got {value!r})", file=file, row=lines[key], field=key
+            )
+        parameters[key] = float(value)
+
+    origin = None
+    if "origin" in doc:
+        raw = _table(doc, "origin", file, text)
+        _unknown(raw, ORIGIN_KEYS, "origin", file, text)
+        for key in ("lat", "lon"):
+            if key not in raw:
+                raise InputError(
+                    "missing key (the origin needs lat and lon)",
+                    file=file,
+                    row=key_line(text, "", "origin"),
+                    field=f"origin.{key}",
+                )
+        rows = {key: key_line(text, "origin", key) for key in ORIGIN_KEYS}
+        origin = check_origin(raw["lat"], raw["lon"], raw.get("alt", 0.0), file=file, rows=rows)
+
+    heading = None
+    if "heading_at_a" in doc:
+        heading = check_heading(
+            doc["heading_at_a"], file=file, row=key_line(text, "", "heading_at_a")
+        )
+
+    return ScenarioSpec(
+        path=path,
+        points=points,
+        name=name,
+        parameters=parameters,
+        parameter_lines=lines,
+        origin=origin,
+        heading_at_a=heading,
+    )

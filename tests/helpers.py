@@ -1,0 +1,30 @@
+"""Shared builders for tests: random scenarios in the shapes that exercise the search."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from gcs_planner.scenario.generate import random_scenario
+from gcs_planner.scenario.model import Parameters, Scenario
+
+
+def corridor_scenario(seed: int, n_min: int = 4, n_max: int = 7) -> Scenario:
+    """Sparse scenarios in a narrow corridor with random limits: few chains are feasible, and
+    now and then only walks that revisit a point are (the elementarity cases of MODEL.md)."""
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(n_min, n_max + 1))
+    a1, a2, b1, b2, th = rng.uniform(5, 20, 5)
+    params = Parameters(a1, a2, b1, b2, th, 0.001, turn_radius=0.0)
+    length = rng.uniform(15_000, 40_000)
+    return random_scenario(n, seed, params=params, box=(length, length * 0.3, length * 0.05))
+
+
+def mixed_scenario(seed: int, n_min: int = 2, n_max: int = 7) -> Scenario:
+    """Random limits and box shapes: dense and sparse, feasible and infeasible."""
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(n_min, n_max + 1))
+    a1, a2, b1, b2 = rng.uniform(5, 30, 4)
+    params = Parameters(a1, a2, b1, b2, rng.uniform(5, 30), 0.001, turn_radius=0.0)
+    length = rng.uniform(10_000, 60_000)
+    box = (length, length * rng.uniform(0.1, 1.0), length * rng.uniform(0.01, 0.3))
+    return random_scenario(n, seed, params=params, box=box)

@@ -1,0 +1,127 @@
+"""Branch and bound with turns and uncertain corrections against exhaustive enumeration."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+from helpers import mixed_scenario
+
+from gcs_planner.core.bnb import bnb_front, flown_route
+from gcs_planner.core.probability import success_probability
+from gcs_planner.core.search import straight_front
+from gcs_planner.scenario.generate import random_scenario
+from gcs_planner.scenario.model import Parameters
+
+
+def all_routes(scenario):
+    inner = [i for i in range(scenario.n) if i not in (scenario.start, scenario.end)]
+    for k in range(len(inner) + 1):
+        for chain in itertools.permutations(inner, k):
+            yield (scenario.start, *chain, scenario.end)
+
+
+def pareto(points):
+    """Non-dominated (length, corrections, -probability) tuples, by plain pairwise comparison."""
+    keep = []
+    for a in points:
+        dominated = any(
+            all(x <= y for x, y in zip(b, a)) and any(x < y for x, y in zip(b, a)) for b in points
+        )
+        if not dominated and a not in keep:
+            keep.append(a)
+    return sorted(keep, key=lambda t: (t[1], t[0], t[2]))
+
+
+def enumerate_front(scenario, probability: bool):
+    values = []
+    for pts in all_routes(scenario):
+        route = flown_route(scenario, pts)
+        if probability:
+            legs = [s.leg for s in route.stops[1:]]
+            p = success_probability(scenario, pts, legs).probability
+            if p > 0:
+                values.append((round(route.length, 6), route.corrections, round(-p, 12)))
+        elif route.feasible:
+            values.append((round(route.length, 6), route.corrections, 0.0))
+    return pareto(values)
+
+
+def turning_scenario(seed: int, radius: float):
+    rng = np.random.default_rng(seed)
+    params = Parameters(
+        25,
+        15,
+        20,
+        25,
+        30,
+        0.001,
+        turn_radius=radius,
+        p_success=0.8,
+        fail_residual=float(rng.uniform(2, 15)),
+    )
+    return random_scenario(
+        int(rng.integers(2, 6)),
+        seed,
+        params=params,
+        box=(30_000, 8_000, 1_500),
+        unreliable_fraction=0.5,
+    )
+
+
+@pytest.mark.parametrize("probability", [False, True])
+def test_front_with_turns_equals_enumeration(probability: bool) -> None:
+    nonempty = uncertain = 0
+    for seed in range(60):
+        scenario = turning_scenario(seed, radius=[200.0, 1500.0, 4000.0][seed % 3])
+        result = bnb_front(scenario, probability=probability, max_labels=10**6)
+        assert result.optimal
+        got = [
+            (round(f.length, 6), f.corrections, round(-f.probability, 12) if probability else 0.0)
+            for f in result.front
+        ]
+        want = enumerate_front(scenario, probability)
+        assert [g[1:] for g in got] == [w[1:] for w in want], seed
+        np.testing.assert_allclose([g[0] for g in got], [w[0] for w in want], atol=1e-6)
+        nonempty += bool(want)
+        uncertain += any(w[2] > -1 for w in want)
+    assert nonempty >= 20
+    assert uncertain >= 3 or not probability, "failures must matter in some scenarios"
+
+
+def test_turns_never_shorten_and_straight_front_is_a_lower_bound() -> None:
+    for seed in range(40):
+        scenario = turning_scenario(seed, radius=1000.0)
+        straight = straight_front(scenario.with_params(turn_radius=0.0))
+        turned = bnb_front(scenario, probability=False, max_labels=10**6)
+        for f in turned.front:
+            best_straight = min(
+                (s.length for s in straight.front if s.corrections <= f.corrections),
+                default=np.inf,
+            )
+            assert f.length >= best_straight - 1e-9
+
+
+def test_branch_and_bound_without_turns_agrees_with_the_layered_search() -> None:
+    for seed in range(80):
+        scenario = mixed_scenario(seed)
+        layered = straight_front(scenario)
+        bnb = bnb_front(scenario, probability=False, max_labels=10**6)
+        assert [f.corrections for f in bnb.front] == [f.corrections for f in layered.front]
+        np.testing.assert_allclose(
+            [f.length for f in bnb.front], [f.length for f in layered.front], atol=1e-6
+        )
+
+
+def test_budget_reports_gaps_instead_of_claiming_optimality(dataset_paths) -> None:
+    from gcs_planner.scenario.generate import DATASET1
+    from gcs_planner.scenario.readers import load_scenario
+
+    scenario = load_scenario(dataset_paths[1], DATASET1.to_dict())
+    result = bnb_front(scenario, probability=False, max_labels=50)
+    assert not result.optimal
+    for f, lb in zip(result.front, result.lower_bounds):
+        assert lb <= f.length + 1e-9
+        again = flown_route(scenario, f.points)
+        assert again.feasible and again.length == pytest.approx(f.length, abs=1e-6)

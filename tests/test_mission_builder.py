@@ -1,0 +1,372 @@
+"""Route -> mission items: home, frames, correction waypoints, arc densification, end action.
+
+``make_plan`` builds plan dicts (docs/plan-json.md) from small hand-made scenarios through the
+project's own plan_json, so that the exporter is tested on the real contract. The other mission
+test files import it from here.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pyproj
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from gcs_planner import plan_json
+from gcs_planner.core.route import Leg, evaluate_route
+from gcs_planner.errors import InputError
+from gcs_planner.geometry.dubins import cs_leg
+from gcs_planner.geometry.trajectory import route_trajectory
+from gcs_planner.mission.builder import (
+    DEFAULT_CAPTURE_RADIUS,
+    DEFAULT_CRUISE_SPEED,
+    Mission,
+    arc_step,
+    arc_waypoints,
+    build_mission,
+)
+from gcs_planner.mission.georef import DEFAULT_ORIGIN
+from gcs_planner.mission.items import (
+    MAV_CMD_DO_CHANGE_SPEED,
+    MAV_CMD_NAV_LAND,
+    MAV_CMD_NAV_LOITER_UNLIM,
+    MAV_CMD_NAV_RETURN_TO_LAUNCH,
+    MAV_CMD_NAV_WAYPOINT,
+    MAV_FRAME_GLOBAL,
+    MAV_FRAME_GLOBAL_RELATIVE_ALT,
+)
+from gcs_planner.scenario.generate import DATASET1
+from gcs_planner.scenario.model import Kind, Origin, Scenario
+
+GEOD = pyproj.Geod(ellps="WGS84")
+ORIGIN = Origin(lat=31.2, lon=122.8, alt=12.5)
+
+# A, five correction points, B: legs of 20-40 km that turn both ways, up to ~110 km from A.
+XYZ = np.array(
+    [
+        [0.0, 50_000.0, 5_000.0],  # A
+        [22_000.0, 62_000.0, 5_600.0],  # V, left of the chord to B
+        [45_000.0, 40_000.0, 4_200.0],  # H
+        [60_000.0, 70_000.0, 6_100.0],  # V (unreliable)
+        [80_000.0, 30_000.0, 3_900.0],  # H
+        [55_000.0, 20_000.0, 4_400.0],  # V (never on the main route)
+        [100_000.0, 59_000.0, 5_000.0],  # B
+    ]
+)
+KINDS = [Kind.A, Kind.V, Kind.H, Kind.V, Kind.H, Kind.V, Kind.B]
+ROUTES = ([0, 1, 2, 3, 4, 6], [0, 2, 4, 6], [0, 6])
+
+
+def tiny_scenario(origin: Origin | None = ORIGIN, turn_radius: float = 200.0) -> Scenario:
+    return Scenario(
+        ids=("A0", "11", "12", "13", "14", "15", "B9"),
+        xyz=XYZ.copy(),
+        kind=np.array(KINDS, dtype=np.uint8),
+        unreliable=np.array([False, False, False, True, False, False, False]),
+        params=DATASET1.__class__(**{**DATASET1.to_dict(), "turn_radius": turn_radius}),
+        name="tiny",
+        source="hand-made",
+        origin=origin,
+    )
+
+
+def make_plan(
+    scenario: Scenario | None = None,
+    routes: tuple[list[int], ...] = ROUTES,
+    chosen: int = 0,
+    probability: bool = True,
+) -> dict:
+    """A plan dict as `gcs-planner plan` writes it, for the given routes (front order as
+    given)."""
+    s = scenario if scenario is not None else tiny_scenario()
+    radius = s.params.turn_radius
+    front = []
+    for points in routes:
+        traj = route_trajectory(s.xyz[points], radius)
+        legs = [Leg(leg.length, leg.arc_length, leg.arc_angle) for leg in traj.legs]
+        route = evaluate_route(s, points, legs, turn_radius=radius)
+        p = 0.8 ** sum(bool(s.unreliable[i]) for i in points)
+        route = route.with_probabilities(p, [1.0] * len(points))
+        front.append(plan_json.route_to_dict(s, route, route.length))
+    origin = None if s.origin is None else vars(s.origin)
+    return {
+        "format": "gcs-planner-plan",
+        "version": 1,
+        "scenario": {"name": s.name, "source": s.source, "points": s.n, "origin": origin},
+        "parameters": s.params.to_dict(),
+        "objectives": ["length", "corrections"] + (["probability"] if probability else []),
+        "front": front,
+        "chosen": chosen,
+        "choice": "compromise",
+        "optimality": {"optimal": False, "statement": "hand-made test routes"},
+        "points": [
+            {
+                "id": s.ids[i],
+                "x": float(s.xyz[i, 0]),
+                "y": float(s.xyz[i, 1]),
+                "z": float(s.xyz[i, 2]),
+                "kind": Kind(int(s.kind[i])).name,
+                "unreliable": bool(s.unreliable[i]),
+            }
+            for i in range(s.n)
+        ],
+    }
+
+
+def true_position(origin: Origin, x: float, y: float, z: float) -> tuple[float, float, float]:
+    """WGS84 position of a local point computed independently of the exporter: the geodesic from
+    the origin with azimuth atan2(x, y) and length hypot(x, y) (what azimuthal equidistant
+    means)."""
+    lon, lat, _ = GEOD.fwd(origin.lon, origin.lat, math.degrees(math.atan2(x, y)), math.hypot(x, y))
+    return lat, lon, z + origin.alt
+
+
+def geodesic_distance(lat1: float, lon1: float, lat2: float, lon2: float) -> float:
+    return GEOD.inv(lon1, lat1, lon2, lat2)[2]
+
+
+def nav(mission: Mission) -> list:
+    return [it for it in mission.items if it.command == MAV_CMD_NAV_WAYPOINT]
+
+
+# ---------------------------------------------------------------------------------------------
+
+
+def test_ardupilot_mission_layout():
+    plan = make_plan()
+    m = build_mission(plan)
+    route = plan["front"][0]["route"]
+    assert m.firmware == "ardupilot" and m.route == tuple(route)
+    home = m.items[0]
+    assert home.seq == 0 and home.command == MAV_CMD_NAV_WAYPOINT and home.frame == MAV_FRAME_GLOBAL
+    assert m.items[1].command == MAV_CMD_DO_CHANGE_SPEED
+    assert m.items[1].param2 == DEFAULT_CRUISE_SPEED and m.cruise_speed == DEFAULT_CRUISE_SPEED
+    assert [it.seq for it in m.items] == list(range(len(m.items)))
+    # The route's points come in order, each on a waypoint with the capture radius.
+    seqs = [m.seq_of(pid) for pid in route]
+    assert seqs == sorted(seqs) and seqs[0] == 2
+    for pid in route[1:]:
+        it = m.items[m.seq_of(pid)]
+        assert it.command == MAV_CMD_NAV_WAYPOINT
+        assert it.param2 == DEFAULT_CAPTURE_RADIUS and it.param3 == 0.0
+        assert it.param2 == int(it.param2)
+    assert m.items[-1].command == MAV_CMD_NAV_LOITER_UNLIM
+    assert m.loiter_param == ("WP_LOITER_RAD", 200.0)
+    # Home is A, in lat/lon/alt AMSL.
+    a = plan["points"][0]
+    lat, lon, alt = true_position(ORIGIN, a["x"], a["y"], a["z"])
+    assert geodesic_distance(home.lat, home.lon, lat, lon) < 0.02
+    assert home.z == pytest.approx(alt, abs=1e-9) and m.home[2] == pytest.approx(alt, abs=1e-9)
+
+
+def test_px4_has_no_home_and_every_seq_shifts_by_one():
+    plan = make_plan()
+    ap = build_mission(plan, firmware="ardupilot")
+    px4 = build_mission(plan, firmware="px4")
+    assert len(px4.items) == len(ap.items) - 1
+    assert px4.items[0].command == MAV_CMD_DO_CHANGE_SPEED
+    for a, b in zip(ap.items[1:], px4.items, strict=True):
+        assert b.seq == a.seq - 1
+        assert (a.command, a.frame, a.x, a.y, a.z, a.param2, a.param3) == (
+            b.command,
+            b.frame,
+            b.x,
+            b.y,
+            b.z,
+            b.param2,
+            b.param3,
+        )
+    for pid in plan["front"][0]["route"]:
+        assert px4.seq_of(pid) == ap.seq_of(pid) - 1
+    assert px4.loiter_param == ("NAV_LOITER_RAD", 200.0)
+
+
+def test_correction_waypoints_are_on_the_true_wgs84_positions():
+    """Every route point's waypoint within 0.05 m of its WGS84 position computed independently
+    (geodesic from the origin), altitudes exact, in both frames; points up to 110 km away."""
+    plan = make_plan()
+    table = {p["id"]: p for p in plan["points"]}
+    for frame_name in ("amsl", "relative"):
+        m = build_mission(plan, altitude_frame=frame_name)
+        home_alt = m.home[2]
+        for pid in m.route:
+            it = m.items[m.seq_of(pid)]
+            p = table[pid]
+            lat, lon, alt = true_position(ORIGIN, p["x"], p["y"], p["z"])
+            assert geodesic_distance(it.lat, it.lon, lat, lon) < 0.05
+            expected = alt if frame_name == "amsl" else alt - home_alt
+            assert it.z == pytest.approx(expected, abs=1e-9)
+            want = MAV_FRAME_GLOBAL if frame_name == "amsl" else MAV_FRAME_GLOBAL_RELATIVE_ALT
+            assert it.frame == want
+    far = max(math.hypot(p["x"], p["y"]) for p in plan["points"])
+    assert far > 100_000
+
+
+def test_relative_frame_altitudes_are_above_home():
+    plan = make_plan()
+    amsl = build_mission(plan)
+    rel = build_mission(plan, altitude_frame="relative")
+    assert rel.items[0].frame == MAV_FRAME_GLOBAL  # home always AMSL
+    for a, r in zip(amsl.items[2:], rel.items[2:], strict=True):
+        if a.frame == MAV_FRAME_GLOBAL:
+            assert r.frame == MAV_FRAME_GLOBAL_RELATIVE_ALT
+            assert r.z == pytest.approx(a.z - amsl.home[2], abs=1e-9)
+    assert rel.items[rel.seq_of("A0")].z == pytest.approx(0.0, abs=1e-9)
+
+
+def test_arcs_are_densified_within_16_degrees_and_2_m_of_the_planned_arc():
+    plan = make_plan()
+    m = build_mission(plan)
+    front = plan["front"][0]
+    frame_origin = m.origin
+    arc_items = [it for it in m.items if it.note.startswith("arc ")]
+    turning = [leg for leg in front["legs"] if leg["geometry"]["arc"] is not None]
+    assert turning and arc_items
+    for leg in front["legs"]:
+        g = leg["geometry"]
+        own = [it for it in arc_items if it.note.startswith(f"arc {leg['from']}->{leg['to']} ")]
+        if g["arc"] is None:
+            assert not own  # straight legs need no intermediate item
+            continue
+        angle, radius = g["arc"]["angle"], g["radius"]
+        # Consecutive points (start, arc points, tangent point) at most 16 degrees apart.
+        n_steps = len(own) + (0 if g["straight_length"] >= 1.0 else 1)
+        assert angle / n_steps <= math.radians(16.0) + 1e-12
+        assert radius * (1 - math.cos(angle / n_steps / 2)) <= 2.0
+        # Each arc item lies on the planned circle (within the file's 1e-7 degree rounding).
+        c = np.array(g["arc"]["centre"])
+        for it in own:
+            lat, lon = it.lat, it.lon
+            fwd_az, _, dist = GEOD.inv(frame_origin.lon, frame_origin.lat, lon, lat)
+            x = dist * math.sin(math.radians(fwd_az))
+            y = dist * math.cos(math.radians(fwd_az))
+            z = it.z - frame_origin.alt
+            assert abs(np.linalg.norm(np.array([x, y, z]) - c) - radius) < 0.05
+            assert it.param2 >= 1 and it.param2 == int(it.param2)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    radius=st.floats(min_value=20.0, max_value=5_000.0),
+    bearing=st.floats(min_value=-math.pi, max_value=math.pi),
+    dist=st.floats(min_value=0.1, max_value=20.0),
+)
+def test_arc_points_stay_within_2_m_and_16_degrees(radius, bearing, dist):
+    start = np.zeros(3)
+    end = dist * radius * np.array([math.cos(bearing), math.sin(bearing), 0.1])
+    leg = cs_leg(start, np.array([1.0, 0.0, 0.0]), end, radius)
+    if not leg.reachable or leg.centre is None:
+        return
+    pts = arc_waypoints(leg)
+    step = arc_step(radius)
+    assert step <= math.radians(16.0)
+    assert radius * (1 - math.cos(step / 2)) <= 2.0 + 1e-9
+    chain = np.vstack([leg.start, pts])
+    assert np.allclose(chain[-1], leg.tangent_point)
+    # Every point on the circle, and each chord's mid-arc within 2 m of the chord.
+    centre = np.asarray(leg.centre)
+    assert np.allclose(np.linalg.norm(chain - centre, axis=1), radius, atol=1e-6 * radius)
+    for p, q in zip(chain[:-1], chain[1:], strict=True):
+        chord = np.linalg.norm(q - p)
+        assert chord <= 2 * radius * math.sin(math.radians(8.0)) + 1e-6
+        sagitta = radius - math.sqrt(max(radius**2 - (chord / 2) ** 2, 0.0))
+        assert sagitta <= 2.0 + 1e-6
+
+
+def test_loiter_radius_signed_by_the_last_turn():
+    plan = make_plan()
+    m = build_mission(plan)
+    last_turn = next(
+        leg["geometry"]["arc"]["sense"]
+        for leg in reversed(plan["front"][0]["legs"])
+        if leg["geometry"]["arc"] is not None and leg["geometry"]["arc"]["sense"] != 0
+    )
+    loiter = m.items[-1]
+    assert abs(loiter.param3) == 200.0
+    # MAVLink: positive = clockwise; the plan's sense +1 = counter-clockwise.
+    assert (loiter.param3 > 0) == (last_turn == -1)
+    assert (loiter.x, loiter.y, loiter.z) == (
+        m.items[m.seq_of("B9")].x,
+        m.items[m.seq_of("B9")].y,
+        m.items[m.seq_of("B9")].z,
+    )
+
+
+def test_end_actions():
+    plan = make_plan()
+    rtl = build_mission(plan, at_end="rtl")
+    assert rtl.items[-1].command == MAV_CMD_NAV_RETURN_TO_LAUNCH
+    land = build_mission(plan, at_end="land", altitude_frame="relative")
+    assert land.items[-1].command == MAV_CMD_NAV_LAND
+    assert land.items[-1].z == pytest.approx(-land.home[2])  # sea level, relative to home
+    b = land.items[land.seq_of("B9")]
+    assert (land.items[-1].x, land.items[-1].y) == (b.x, b.y)
+
+
+def test_other_front_routes_and_straight_plans():
+    plan = make_plan(chosen=1)
+    m = build_mission(plan)
+    assert m.route == tuple(plan["front"][1]["route"]) and m.route_index == 1
+    m2 = build_mission(plan, route_index=2)
+    assert m2.route == ("A0", "B9")
+    straight = make_plan(tiny_scenario(turn_radius=0.0))
+    s = build_mission(straight)
+    assert not [it for it in s.items if it.note.startswith("arc ")]
+    assert s.loiter_param is None and s.items[-1].param3 == 0.0
+    assert len(nav(s)) == 1 + len(straight["front"][0]["route"])  # home + route points
+
+
+def test_origin_resolution():
+    plan = make_plan()
+    assert build_mission(plan).origin == ORIGIN and not build_mission(plan).origin_is_default
+    other = Origin(-33.9, 151.3, 0.0)
+    m = build_mission(plan, origin=other)
+    assert m.origin == other and not m.origin_is_default
+    bare = make_plan(tiny_scenario(origin=None))
+    d = build_mission(bare)
+    assert d.origin == DEFAULT_ORIGIN and d.origin_is_default
+
+
+@pytest.mark.parametrize(
+    "kwargs, field",
+    [
+        ({"firmware": "inav"}, "firmware"),
+        ({"altitude_frame": "terrain"}, "altitude-frame"),
+        ({"at_end": "crash"}, "at-end"),
+        ({"capture_radius": 12.5}, "capture-radius"),
+        ({"capture_radius": 0}, "capture-radius"),
+        ({"cruise_speed": -3}, "cruise-speed"),
+        ({"cruise_speed": float("nan")}, "cruise-speed"),
+        ({"route_index": 3}, "--route-index"),
+        ({"origin": Origin(91.0, 0.0)}, "--origin"),
+        ({"origin": Origin(float("nan"), 0.0)}, "--origin"),
+    ],
+)
+def test_bad_options_are_input_errors(kwargs, field):
+    with pytest.raises(InputError) as err:
+        build_mission(make_plan(), **kwargs)
+    assert err.value.field == field
+
+
+@pytest.mark.parametrize(
+    "mutate",
+    [
+        lambda p: p.update(format="something"),
+        lambda p: p.update(version=7),
+        lambda p: p.update(front=[]),
+        lambda p: p["front"][0]["legs"].pop(),
+        lambda p: p["front"][0]["legs"][1]["geometry"].pop("start"),
+        lambda p: p["scenario"].update(origin={"lat": 95.0, "lon": 0.0}),
+        lambda p: p["points"][1].update(x="east"),
+        lambda p: p["parameters"].update(turn_radius="wide"),
+        lambda p: p.update(chosen=True),
+    ],
+)
+def test_bad_plans_are_input_errors(mutate):
+    plan = make_plan()
+    mutate(plan)
+    with pytest.raises(InputError):
+        build_mission(plan, source="plan.json")
