@@ -1,0 +1,86 @@
+"""`gcs-planner mock-vehicle --connect CONN --scenario SCENARIO`: a simulated autopilot any ground
+station can talk to, until Ctrl-C. It stores what it is sent and, on MAV_CMD_MISSION_START,
+flies it against the scenario's correction points with telemetry."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from gcs_planner.cli.common import add_scenario_arguments, load_scenario_from_args
+from gcs_planner.link.signing import key_from_passphrase
+from sim.faults import FaultRates
+from sim.replay import DEFAULT_CAPTURE_RADIUS_M
+from sim.vehicle import FLAVOURS, MockVehicle
+
+
+def _rate(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a rate in [0, 1], got {text!r}") from None
+    if not 0.0 <= value <= 1.0:
+        raise argparse.ArgumentTypeError(f"expected a rate in [0, 1], got {text!r}")
+    return value
+
+
+def run(args: argparse.Namespace) -> int:
+    scenario = load_scenario_from_args(args, args.scenario)
+    faults = FaultRates(
+        drop=args.drop, duplicate=args.duplicate, delay=args.delay, reorder=args.reorder
+    )
+    vehicle = MockVehicle(
+        args.connect,
+        scenario=scenario,
+        flavour=args.flavour,
+        system_id=args.system_id,
+        capacity=args.capacity,
+        faults_out=faults if args.faults_on in ("out", "both") else None,
+        faults_in=faults if args.faults_on in ("in", "both") else None,
+        fault_seed=args.seed,
+        signing_key=key_from_passphrase(args.signing_key) if args.signing_key else None,
+        capture_radius=args.capture_radius,
+        baud=args.baud,
+    )
+    print(
+        f"mock vehicle ({args.flavour}, system {args.system_id}) on {args.connect} with "
+        f"{scenario.n} landmarks from {scenario.source}; Ctrl-C to stop",
+        file=sys.stderr,
+    )
+    try:
+        vehicle.serve_forever()
+    except KeyboardInterrupt:
+        pass
+    finally:
+        vehicle.stop()
+    print(f"mock vehicle stopped; it holds {len(vehicle.mission)} items", file=sys.stderr)
+    return 0
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "mock-vehicle",
+        help="run a simulated fixed-wing autopilot for a ground station to talk to",
+        description="The vehicle side of the MAVLink mission protocol, with the scenario's "
+        "correction points as its landmark database; runs until Ctrl-C.",
+    )
+    p.add_argument("--connect", required=True, metavar="CONN", help="e.g. udpin:0.0.0.0:14550")
+    p.add_argument("--scenario", required=True, help="scenario file: .toml, .csv or .xlsx")
+    add_scenario_arguments(p, positional=False)
+    p.add_argument("--flavour", choices=FLAVOURS, default="ardupilot")
+    p.add_argument("--system-id", type=int, default=1)
+    p.add_argument("--capacity", type=int, default=5000, help="most items it stores")
+    p.add_argument("--baud", type=int, default=57600)
+    p.add_argument("--signing-key", metavar="PASSPHRASE", help="sign and require signatures")
+    p.add_argument(
+        "--capture-radius",
+        type=float,
+        default=DEFAULT_CAPTURE_RADIUS_M,
+        help=f"landmark capture radius in metres (default {DEFAULT_CAPTURE_RADIUS_M:g})",
+    )
+    g = p.add_argument_group("fault injection (seeded)")
+    for name in ("drop", "duplicate", "delay", "reorder"):
+        g.add_argument(f"--{name}", type=_rate, default=0.0, help=f"{name} rate in [0, 1]")
+    g.add_argument("--faults-on", choices=("out", "in", "both"), default="both")
+    g.add_argument("--seed", type=int, default=0)
+    p.set_defaults(func=run)

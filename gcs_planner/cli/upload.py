@@ -1,0 +1,121 @@
+"""`gcs-planner upload FILE --connect CONN`: send a mission to a vehicle and verify it."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from gcs_planner.errors import LinkError
+from gcs_planner.link.connection import open_link
+from gcs_planner.link.mission_client import FIRMWARES, MissionClient
+from gcs_planner.link.mission_file import load_mission_file
+from gcs_planner.link.progress import Progress
+from gcs_planner.link.signing import key_from_passphrase
+
+
+def add_link_arguments(p: argparse.ArgumentParser) -> None:
+    """The connection options every command that talks to a vehicle takes."""
+    g = p.add_argument_group("link")
+    g.add_argument(
+        "--connect",
+        required=True,
+        metavar="CONN",
+        help="pymavlink connection: udpin:0.0.0.0:14550, udpout:HOST:PORT, tcp:HOST:PORT, "
+        "or a serial device such as /dev/ttyUSB0 (with --baud)",
+    )
+    g.add_argument("--baud", type=int, default=57600, help="serial baud rate (default 57600)")
+    g.add_argument(
+        "--signing-key",
+        metavar="PASSPHRASE",
+        help="MAVLink 2 signing passphrase (SHA-256 gives the key); unsigned peers are refused",
+    )
+    g.add_argument("--target-system", type=int, help="vehicle system id (default: first heard)")
+    g.add_argument("--target-component", type=int, help="vehicle component id")
+    g.add_argument(
+        "--firmware", choices=FIRMWARES, help="autopilot firmware (default: from its heartbeat)"
+    )
+    g.add_argument("--timeout", type=float, default=1.5, help="seconds per wait (default 1.5)")
+    g.add_argument("--retries", type=int, default=5, help="resends per wait (default 5)")
+    g.add_argument(
+        "--wait", type=float, default=15.0, help="seconds to wait for a heartbeat (default 15)"
+    )
+    g.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def connect_client(args: argparse.Namespace) -> MissionClient:
+    """Open the link, wait for the vehicle, return a client (the caller closes ``client.link``)."""
+    if args.timeout <= 0 or args.retries < 0:
+        raise LinkError("--timeout must be > 0 and --retries >= 0")
+    key = key_from_passphrase(args.signing_key) if args.signing_key else None
+    link = open_link(args.connect, baud=args.baud, signing_key=key)
+    quiet = args.quiet
+
+    def progress(label: str, total: int) -> Progress:
+        return Progress(label, total, enabled=None if not quiet else False)
+
+    client = MissionClient(
+        link,
+        target_system=args.target_system,
+        target_component=args.target_component,
+        firmware=args.firmware,
+        timeout=args.timeout,
+        retries=args.retries,
+        progress=progress,
+    )
+    try:
+        client.connect(timeout=args.wait)
+    except BaseException:
+        link.close()
+        raise
+    return client
+
+
+def run(args: argparse.Namespace) -> int:
+    mission = load_mission_file(args.file, firmware=args.firmware, route_index=args.route_index)
+    client = connect_client(args)
+    try:
+        vehicle = client.vehicle
+        assert vehicle is not None
+        if (
+            mission.firmware is not None
+            and vehicle.firmware in FIRMWARES
+            and mission.firmware != vehicle.firmware
+        ):
+            raise LinkError(
+                f"{args.file} is a {mission.firmware} mission but the vehicle runs "
+                f"{vehicle.firmware}: export it again with --firmware {vehicle.firmware}"
+            )
+        radius = args.loiter_radius if args.loiter_radius is not None else mission.loiter_radius
+        report = client.upload_verified(mission.items, loiter_radius=radius)
+    finally:
+        client.link.close()
+    print(
+        f"uploaded and verified {report.items} items to system {vehicle.system} "
+        f"({vehicle.firmware}) in {report.seconds:.2f} s"
+        + (f", {report.retries} resends" if report.retries else "")
+    )
+    if radius is not None:
+        print(f"loiter radius set to {radius:g} m")
+    return 0
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "upload",
+        help="upload a mission to a vehicle, read it back and compare",
+        description="Upload a .plan, .waypoints or plan JSON over MAVLink, read it back and "
+        "compare; a partial or different mission is an error (exit 4).",
+    )
+    p.add_argument("file", help="mission file: .plan, .waypoints or plan JSON")
+    add_link_arguments(p)
+    p.add_argument("--route-index", type=int, help="plan JSON: route of the front to upload")
+    p.add_argument(
+        "--loiter-radius",
+        type=float,
+        help="set the vehicle's loiter radius to this (default: the plan's turning radius)",
+    )
+    p.set_defaults(func=run)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit("run as: gcs-planner upload")

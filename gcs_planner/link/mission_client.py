@@ -1,0 +1,418 @@
+"""The ground-station side of the MAVLink mission protocol: upload, download, clear, set current.
+
+One object per vehicle. Every wait has a deadline (1.5 s by default, 0.25 s for a single item as
+the specification recommends) and is retried a bounded number of times; every failure is a
+:class:`~gcs_planner.errors.LinkError` whose message says what the vehicle answered. An upload is
+only reported done after the mission has been read back and found equal to what was sent.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from gcs_planner.errors import LinkError
+from gcs_planner.link.connection import Link, mavlink
+from gcs_planner.link.params import set_loiter_radius
+from gcs_planner.link.progress import Progress
+from gcs_planner.link.protocol import (
+    DEFAULT_RETRIES,
+    DEFAULT_TIMEOUT_S,
+    ITEM_TIMEOUT_S,
+    Tolerance,
+    describe_result,
+    item_from_message,
+    item_to_message,
+    mission_differences,
+)
+from gcs_planner.mission.items import MAV_MISSION_TYPE_MISSION, MissionItem
+
+FIRMWARES = ("ardupilot", "px4")
+_AUTOPILOT_FIRMWARE = {
+    mavlink.MAV_AUTOPILOT_ARDUPILOTMEGA: "ardupilot",
+    mavlink.MAV_AUTOPILOT_PX4: "px4",
+}
+_COMMAND_OK = (mavlink.MAV_RESULT_ACCEPTED, mavlink.MAV_RESULT_IN_PROGRESS)
+_NOT_VEHICLES = {mavlink.MAV_TYPE_GCS, mavlink.MAV_TYPE_GIMBAL, mavlink.MAV_TYPE_ADSB}
+
+
+@dataclass(frozen=True)
+class Vehicle:
+    """Who answered: system and component ids, and the firmware its heartbeat names."""
+
+    system: int
+    component: int
+    autopilot: int
+    firmware: str  # "ardupilot", "px4" or "generic"
+
+
+@dataclass(frozen=True)
+class UploadReport:
+    items: int
+    seconds: float
+    upload_seconds: float
+    verify_seconds: float
+    retries: int
+
+
+ProgressFactory = Callable[[str, int], Progress]
+
+
+class MissionClient:
+    """Mission transfers with one vehicle over a :class:`Link`.
+
+    ``target_system`` / ``target_component`` pin the vehicle; left None they are learnt from the
+    first vehicle heartbeat (:meth:`connect`). Messages from any other system or component are
+    ignored, so a second vehicle or ground station on the link cannot confuse a transfer.
+    """
+
+    def __init__(
+        self,
+        link: Link,
+        *,
+        target_system: int | None = None,
+        target_component: int | None = None,
+        firmware: str | None = None,
+        timeout: float = DEFAULT_TIMEOUT_S,
+        item_timeout: float = ITEM_TIMEOUT_S,
+        retries: int = DEFAULT_RETRIES,
+        progress: ProgressFactory | None = None,
+    ) -> None:
+        if firmware is not None and firmware not in FIRMWARES:
+            raise LinkError(f"unknown firmware {firmware!r}: expected one of {FIRMWARES}")
+        self.link = link
+        self.mav = link.mav
+        self.target_system = target_system
+        self.target_component = target_component
+        self.firmware = firmware
+        self.timeout = timeout
+        self.item_timeout = item_timeout
+        self.retries = retries
+        self.progress: ProgressFactory = progress or (
+            lambda label, total: Progress(label, total, enabled=False)
+        )
+        self.retry_count = 0  # resends done so far, for reports
+        self.vehicle: Vehicle | None = None
+        self._last_gcs_heartbeat = 0.0
+
+    # Connection -------------------------------------------------------------------------------
+    def _send_heartbeat(self) -> None:
+        self.link.send(
+            self.mav.heartbeat_encode(
+                mavlink.MAV_TYPE_GCS, mavlink.MAV_AUTOPILOT_INVALID, 0, 0, mavlink.MAV_STATE_ACTIVE
+            )
+        )
+        self._last_gcs_heartbeat = time.monotonic()
+
+    def connect(self, timeout: float = 10.0) -> Vehicle:
+        """Wait for the vehicle's heartbeat, sending ours every second so that a vehicle
+        listening on ``udpin`` learns where we are."""
+        deadline = time.monotonic() + timeout
+        while (remaining := deadline - time.monotonic()) > 0:
+            if time.monotonic() - self._last_gcs_heartbeat >= 1.0:
+                self._send_heartbeat()
+            msg = self.link.recv(min(remaining, 0.25))
+            if msg is None or msg.get_type() != "HEARTBEAT" or msg.type in _NOT_VEHICLES:
+                continue
+            if msg.autopilot == mavlink.MAV_AUTOPILOT_INVALID:
+                continue
+            if self.target_system is not None and msg.get_srcSystem() != self.target_system:
+                continue
+            if (
+                self.target_component is not None
+                and msg.get_srcComponent() != self.target_component
+            ):
+                continue
+            self.target_system = msg.get_srcSystem()
+            self.target_component = msg.get_srcComponent()
+            flavour = _AUTOPILOT_FIRMWARE.get(msg.autopilot, "generic")
+            if self.firmware is None:
+                self.firmware = flavour
+            self.vehicle = Vehicle(
+                self.target_system, self.target_component, msg.autopilot, self.firmware
+            )
+            return self.vehicle
+        if self.link.refused_signature:
+            raise LinkError(
+                f"refused {self.link.refused_signature} message(s) from the other end: they "
+                "are unsigned or signed with another key (check --signing-key)"
+            )
+        raise LinkError(
+            f"no vehicle heartbeat on {self.link.connection} within {timeout:g} s"
+            + (" (messages refused for their signature)" if self.link.refused_signature else "")
+        )
+
+    def _target(self) -> tuple[int, int]:
+        if self.target_system is None or self.target_component is None:
+            self.connect()
+        return int(self.target_system), int(self.target_component)  # type: ignore[arg-type]
+
+    def _from_target(self, msg: Any) -> bool:
+        if msg.get_srcSystem() != self.target_system:
+            return False
+        if msg.get_srcComponent() != self.target_component:
+            return False
+        # Messages addressed to someone else on a shared link are not ours to act on.
+        ts = getattr(msg, "target_system", None)
+        if ts not in (None, 0, self.mav.srcSystem):
+            return False
+        tc = getattr(msg, "target_component", None)
+        return tc in (None, 0, self.mav.srcComponent)
+
+    def _recv(self, timeout: float, types: set[str], mission_type: int | None) -> Any | None:
+        """The next message of ``types`` from the target within ``timeout``; our heartbeat
+        keeps going meanwhile."""
+        deadline = time.monotonic() + timeout
+        while (remaining := deadline - time.monotonic()) > 0:
+            if time.monotonic() - self._last_gcs_heartbeat >= 1.0:
+                self._send_heartbeat()
+            msg = self.link.recv(min(remaining, 0.5))
+            if msg is None:
+                continue
+            if msg.get_type() not in types or not self._from_target(msg):
+                continue
+            if mission_type is not None and getattr(msg, "mission_type", 0) != mission_type:
+                continue
+            return msg
+        return None
+
+    def _give_up(self, what: str) -> LinkError:
+        extra = ""
+        if self.link.refused_signature:
+            extra = f" ({self.link.refused_signature} message(s) refused: unsigned or another key)"
+        return LinkError(f"{what}: no answer after {self.retries + 1} attempts{extra}")
+
+    def _cancel_stray(self, msg: Any, mission_type: int) -> None:
+        """A request we did not start (a late duplicate of an old MISSION_COUNT put the vehicle
+        in receive mode): cancel it as the specification allows, so the vehicle returns idle."""
+        ts, tc = self._target()
+        self.link.send(
+            self.mav.mission_ack_encode(
+                ts, tc, mavlink.MAV_MISSION_OPERATION_CANCELLED, mission_type
+            )
+        )
+
+    # Upload -----------------------------------------------------------------------------------
+    def upload(
+        self, items: Sequence[MissionItem], mission_type: int = MAV_MISSION_TYPE_MISSION
+    ) -> None:
+        """Send ``items`` (MISSION_COUNT, then each requested item, until MISSION_ACK).
+
+        Answers MISSION_REQUEST and MISSION_REQUEST_INT alike, always with MISSION_ITEM_INT.
+        An INVALID_SEQUENCE acknowledgement mid-transfer is ArduPilot saying it dropped an
+        out-of-order item and will ask again: not fatal. Any other error result ends the
+        transfer with that result in words.
+        """
+        ts, tc = self._target()
+        items = [it.with_seq(i) if it.seq != i else it for i, it in enumerate(items)]
+        count = len(items)
+        count_msg = self.mav.mission_count_encode(ts, tc, count, mission_type)
+        self.link.send(count_msg)
+        bar = self.progress("upload", count)
+        attempts = 0
+        requested: int | None = None
+        highest = -1
+        try:
+            while True:
+                msg = self._recv(
+                    self.timeout,
+                    {"MISSION_REQUEST", "MISSION_REQUEST_INT", "MISSION_ACK"},
+                    mission_type,
+                )
+                if msg is None:
+                    attempts += 1
+                    if attempts > self.retries:
+                        where = "MISSION_COUNT" if requested is None else f"item {requested}"
+                        raise self._give_up(f"upload stalled after {where}")
+                    self.retry_count += 1
+                    if requested is None:
+                        self.link.send(count_msg)
+                    else:
+                        self.link.send(item_to_message(self.mav, items[requested], ts, tc))
+                    continue
+                if msg.get_type() == "MISSION_ACK":
+                    if msg.type == mavlink.MAV_MISSION_ACCEPTED:
+                        if highest == count - 1:
+                            return
+                        continue  # a late acknowledgement of an earlier transfer
+                    if msg.type == mavlink.MAV_MISSION_INVALID_SEQUENCE:
+                        continue
+                    raise LinkError(f"upload refused: {describe_result(msg.type)}")
+                seq = int(msg.seq)
+                if not 0 <= seq < count:
+                    raise LinkError(f"the vehicle asked for item {seq} of a {count}-item mission")
+                attempts = 0
+                requested = seq
+                highest = max(highest, seq)
+                self.link.send(item_to_message(self.mav, items[seq], ts, tc))
+                bar.update(highest + 1)
+        finally:
+            bar.close()
+
+    # Download ---------------------------------------------------------------------------------
+    def download(self, mission_type: int = MAV_MISSION_TYPE_MISSION) -> list[MissionItem]:
+        """The vehicle's mission (MISSION_REQUEST_LIST, MISSION_COUNT, one MISSION_REQUEST_INT
+        per item, then our MISSION_ACK)."""
+        ts, tc = self._target()
+        request_list = self.mav.mission_request_list_encode(ts, tc, mission_type)
+        self.link.send(request_list)
+        attempts = 0
+        while True:
+            msg = self._recv(
+                self.timeout,
+                {"MISSION_COUNT", "MISSION_ACK", "MISSION_REQUEST", "MISSION_REQUEST_INT"},
+                mission_type,
+            )
+            if msg is None or (
+                msg.get_type() == "MISSION_ACK" and msg.type == mavlink.MAV_MISSION_DENIED
+            ):
+                # DENIED: the vehicle is busy receiving; it will time out or be cancelled.
+                attempts += 1
+                if attempts > self.retries:
+                    if msg is not None:
+                        raise LinkError(f"download refused: {describe_result(msg.type)}")
+                    raise self._give_up("download: MISSION_REQUEST_LIST")
+                self.retry_count += 1
+                if msg is not None:
+                    time.sleep(min(self.timeout, 0.2))
+                self.link.send(request_list)
+                continue
+            kind = msg.get_type()
+            if kind == "MISSION_COUNT":
+                count = int(msg.count)
+                break
+            if kind == "MISSION_ACK":
+                if msg.type in (mavlink.MAV_MISSION_ACCEPTED, mavlink.MAV_MISSION_INVALID_SEQUENCE):
+                    continue  # leftovers of an earlier transfer
+                raise LinkError(f"download refused: {describe_result(msg.type)}")
+            self._cancel_stray(msg, mission_type)
+
+        items: list[MissionItem] = []
+        bar = self.progress("download", count)
+        try:
+            for seq in range(count):
+                items.append(self._download_item(ts, tc, seq, mission_type))
+                bar.update(seq + 1)
+        finally:
+            bar.close()
+        done = self.mav.mission_ack_encode(ts, tc, mavlink.MAV_MISSION_ACCEPTED, mission_type)
+        self.link.send(done)
+        return items
+
+    def _download_item(self, ts: int, tc: int, seq: int, mission_type: int) -> MissionItem:
+        request = self.mav.mission_request_int_encode(ts, tc, seq, mission_type)
+        self.link.send(request)
+        attempts = 0
+        while True:
+            msg = self._recv(
+                self.item_timeout,
+                {"MISSION_ITEM_INT", "MISSION_ITEM", "MISSION_ACK"},
+                mission_type,
+            )
+            if msg is None:
+                attempts += 1
+                if attempts > self.retries:
+                    raise self._give_up(f"download: item {seq}")
+                self.retry_count += 1
+                self.link.send(request)
+                continue
+            if msg.get_type() == "MISSION_ACK":
+                if msg.type in (mavlink.MAV_MISSION_ACCEPTED, mavlink.MAV_MISSION_INVALID_SEQUENCE):
+                    continue
+                raise LinkError(f"download of item {seq} refused: {describe_result(msg.type)}")
+            if int(msg.seq) != seq:
+                continue  # a duplicate or late answer to an earlier request
+            return item_from_message(msg)
+
+    # Clear and set current --------------------------------------------------------------------
+    def clear(self, mission_type: int = MAV_MISSION_TYPE_MISSION) -> None:
+        """MISSION_CLEAR_ALL, confirmed by MISSION_ACK."""
+        ts, tc = self._target()
+        msg_out = self.mav.mission_clear_all_encode(ts, tc, mission_type)
+        for _ in range(self.retries + 1):
+            self.link.send(msg_out)
+            msg = self._recv(self.timeout, {"MISSION_ACK"}, mission_type)
+            if msg is None:
+                self.retry_count += 1
+                continue
+            if msg.type == mavlink.MAV_MISSION_ACCEPTED:
+                return
+            raise LinkError(f"clear refused: {describe_result(msg.type)}")
+        raise self._give_up("clear: MISSION_CLEAR_ALL")
+
+    def set_current(self, seq: int) -> None:
+        """Make ``seq`` the current item: MAV_CMD_DO_SET_MISSION_CURRENT, falling back to the
+        older MISSION_SET_CURRENT; success is the MISSION_CURRENT the vehicle broadcasts."""
+        ts, tc = self._target()
+        command = self.mav.command_long_encode(
+            ts, tc, mavlink.MAV_CMD_DO_SET_MISSION_CURRENT, 0, seq, 0, 0, 0, 0, 0, 0
+        )
+        legacy = self.mav.mission_set_current_encode(ts, tc, seq)
+        use_legacy = False
+        for _ in range(self.retries + 1):
+            self.link.send(legacy if use_legacy else command)
+            deadline = time.monotonic() + self.timeout
+            while (remaining := deadline - time.monotonic()) > 0:
+                msg = self._recv(remaining, {"MISSION_CURRENT", "COMMAND_ACK", "STATUSTEXT"}, None)
+                if msg is None:
+                    break
+                kind = msg.get_type()
+                if kind == "MISSION_CURRENT" and int(msg.seq) == seq:
+                    return
+                if kind == "COMMAND_ACK" and msg.command == mavlink.MAV_CMD_DO_SET_MISSION_CURRENT:
+                    if msg.result == mavlink.MAV_RESULT_UNSUPPORTED:
+                        use_legacy = True
+                        break
+                    if msg.result not in _COMMAND_OK:
+                        raise LinkError(f"the vehicle refused to make item {seq} current")
+                if kind == "STATUSTEXT" and "current" in str(msg.text).lower():
+                    raise LinkError(f"the vehicle refused to make item {seq} current: {msg.text}")
+            self.retry_count += 1
+        raise self._give_up(f"set current item {seq}")
+
+    # The whole job ----------------------------------------------------------------------------
+    def upload_verified(
+        self,
+        items: Sequence[MissionItem],
+        *,
+        loiter_radius: float | None = None,
+        tolerance: Tolerance | None = None,
+    ) -> UploadReport:
+        """Upload, read back and compare; optionally set the loiter radius (confirmed).
+
+        A read-back that differs from the upload in any item, or in the number of items, is a
+        :class:`LinkError` listing the differences: never a success.
+        """
+        start = time.perf_counter()
+        self._target()
+        retries_before = self.retry_count
+        self.upload(items)
+        uploaded = time.perf_counter()
+        got = self.download()
+        skip_home = self.firmware == "ardupilot"
+        diffs = mission_differences(
+            list(items), got, skip_home=skip_home, tol=tolerance or Tolerance()
+        )
+        if diffs:
+            more = f"; and {len(diffs) - 5} more" if len(diffs) > 5 else ""
+            shown = "; ".join(diffs[:5]) + more
+            raise LinkError(f"the mission read back differs from the upload: {shown}")
+        verified = time.perf_counter()
+        if loiter_radius is not None:
+            set_loiter_radius(
+                self.link,
+                self._target(),
+                loiter_radius,
+                self.firmware if self.firmware in FIRMWARES else "ardupilot",
+                timeout=self.timeout,
+                retries=self.retries,
+            )
+        return UploadReport(
+            items=len(items),
+            seconds=time.perf_counter() - start,
+            upload_seconds=uploaded - start,
+            verify_seconds=verified - uploaded,
+            retries=self.retry_count - retries_before,
+        )

@@ -1,0 +1,181 @@
+"""The vehicle side on its own, driven by a raw pymavlink peer: sequence, timeouts, no final
+acknowledgement, parameters, duplicates; and the seeded fault injector."""
+
+from __future__ import annotations
+
+import time
+
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from gcs_planner.link.connection import mavlink, open_link
+from gcs_planner.link.mission_client import MissionClient
+from gcs_planner.mission.items import MissionItem
+from sim.faults import FaultInjector, FaultRates
+from sim.vehicle import MockVehicle, free_udp_port
+
+ITEMS = [MissionItem(i, 0, 16, x=305_000_000 + i, y=1_235_000_000, z=100.0) for i in range(4)]
+
+
+def _collect(link, types, seconds):
+    out = []
+    deadline = time.monotonic() + seconds
+    while time.monotonic() < deadline:
+        msg = link.recv(0.05)
+        if msg is not None and msg.get_type() in types:
+            out.append(msg)
+    return out
+
+
+def _raw_peer(port):
+    link = open_link(f"udpout:127.0.0.1:{port}")
+    link.send(link.mav.heartbeat_encode(6, 8, 0, 0, 4))
+    return link
+
+
+def test_heartbeat_and_mission_current_as_a_fixed_wing():
+    port = free_udp_port()
+    with MockVehicle(f"udpin:127.0.0.1:{port}", flavour="px4", heartbeat_period=0.2):
+        link = _raw_peer(port)
+        try:
+            msgs = _collect(link, {"HEARTBEAT", "MISSION_CURRENT"}, 1.3)
+        finally:
+            link.close()
+    beats = [m for m in msgs if m.get_type() == "HEARTBEAT"]
+    assert len(beats) >= 3
+    assert all(m.type == mavlink.MAV_TYPE_FIXED_WING for m in beats)
+    assert all(m.autopilot == mavlink.MAV_AUTOPILOT_PX4 for m in beats)
+    assert all(m.get_srcComponent() == 1 for m in beats)
+    assert any(m.get_type() == "MISSION_CURRENT" for m in msgs)
+
+
+def test_wrong_sequence_is_refused_and_the_item_asked_again():
+    port = free_udp_port()
+    with MockVehicle(f"udpin:127.0.0.1:{port}", flavour="px4", request_timeout=0.2) as vehicle:
+        link = _raw_peer(port)
+        try:
+            link.send(link.mav.mission_count_encode(1, 1, 3, 0))
+            _collect(link, {"MISSION_REQUEST_INT"}, 0.1)
+            wrong = ITEMS[2]
+            link.send(
+                link.mav.mission_item_int_encode(
+                    1, 1, 2, wrong.frame, wrong.command, 0, 1, 0, 0, 0, 0, wrong.x, wrong.y, 100.0
+                )
+            )
+            msgs = _collect(link, {"MISSION_ACK", "MISSION_REQUEST_INT"}, 0.6)
+        finally:
+            link.close()
+    acks = [m.type for m in msgs if m.get_type() == "MISSION_ACK"]
+    assert mavlink.MAV_MISSION_INVALID_SEQUENCE in acks
+    assert [m.seq for m in msgs if m.get_type() == "MISSION_REQUEST_INT"][-1] == 0
+    assert vehicle.mission == []
+
+
+def test_silent_uploader_is_re_requested_then_cancelled():
+    port = free_udp_port()
+    with MockVehicle(
+        f"udpin:127.0.0.1:{port}", flavour="px4", request_timeout=0.1, upload_timeout=0.6
+    ) as vehicle:
+        link = _raw_peer(port)
+        try:
+            link.send(link.mav.mission_count_encode(1, 1, 3, 0))
+            msgs = _collect(link, {"MISSION_ACK", "MISSION_REQUEST_INT"}, 1.2)
+        finally:
+            link.close()
+    requests = [m for m in msgs if m.get_type() == "MISSION_REQUEST_INT"]
+    assert len(requests) >= 3 and all(m.seq == 0 for m in requests)
+    acks = [m.type for m in msgs if m.get_type() == "MISSION_ACK"]
+    assert acks == [mavlink.MAV_MISSION_OPERATION_CANCELLED]
+    assert vehicle.mission == []
+
+
+def test_download_needs_no_final_ack_and_busy_vehicle_denies():
+    port = free_udp_port()
+    with MockVehicle(f"udpin:127.0.0.1:{port}", flavour="px4") as vehicle:
+        link = open_link(f"udpout:127.0.0.1:{port}")
+        try:
+            client = MissionClient(link)
+            client.connect(5.0)
+            client.upload(ITEMS)
+            # A download that never sends its final MISSION_ACK...
+            link.send(link.mav.mission_request_list_encode(1, 1, 0))
+            assert _collect(link, {"MISSION_COUNT"}, 0.3)[0].count == 4
+            link.send(link.mav.mission_request_int_encode(1, 1, 0, 0))
+            assert _collect(link, {"MISSION_ITEM_INT"}, 0.3)[0].seq == 0
+            # ...leaves the vehicle free for the next upload at once.
+            new = ITEMS[:2]
+            client.upload(new)
+            assert vehicle.mission == new
+            # While receiving, the vehicle denies a download (as ArduPilot does).
+            link.send(link.mav.mission_count_encode(1, 1, 3, 0))
+            link.send(link.mav.mission_request_list_encode(1, 1, 0))
+            acks = _collect(link, {"MISSION_ACK"}, 0.3)
+            assert mavlink.MAV_MISSION_DENIED in [m.type for m in acks]
+        finally:
+            link.close()
+
+
+def test_parameters_read_list_and_set():
+    port = free_udp_port()
+    with MockVehicle(f"udpin:127.0.0.1:{port}", flavour="ardupilot") as vehicle:
+        link = _raw_peer(port)
+        try:
+            link.send(link.mav.param_request_list_encode(1, 1))
+            names = {m.param_id for m in _collect(link, {"PARAM_VALUE"}, 0.4)}
+            assert "WP_LOITER_RAD" in names
+            link.send(link.mav.param_set_encode(1, 1, b"WP_LOITER_RAD", 187.6, 4))
+            values = _collect(link, {"PARAM_VALUE"}, 0.3)
+            assert values[0].param_value == 188.0  # an INT16 parameter rounds
+            link.send(link.mav.param_request_read_encode(1, 1, b"", 0))
+            assert _collect(link, {"PARAM_VALUE"}, 0.3)[0].param_index == 0
+        finally:
+            link.close()
+    assert vehicle.parameters["WP_LOITER_RAD"] == 188.0
+
+
+def test_exact_link_duplicates_are_dropped():
+    port = free_udp_port()
+    with MockVehicle(f"udpin:127.0.0.1:{port}", flavour="px4") as vehicle:
+        link = _raw_peer(port)
+        try:
+            buf = link.mav.mission_clear_all_encode(1, 1, 0).pack(link.mav)
+            link.write_raw(buf)
+            link.write_raw(buf)  # same bytes, same MAVLink sequence number
+            acks = _collect(link, {"MISSION_ACK"}, 0.4)
+        finally:
+            link.close()
+    assert len(acks) == 1
+    assert vehicle.acks_sent.count(mavlink.MAV_MISSION_ACCEPTED) == 1
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    st.integers(0, 2**31),
+    st.floats(0, 1),
+    st.floats(0, 1),
+    st.floats(0, 1),
+    st.floats(0, 1),
+)
+def test_fault_injector_conserves_frames_and_is_seeded(seed, drop, dup, delay, reorder):
+    rates = FaultRates(drop, dup, delay, reorder, delay_s=0.01)
+
+    def run():
+        inj = FaultInjector(rates, seed)
+        out = []
+        for i in range(200):
+            out += inj.push(i, i * 0.001)
+        out += inj.due(10.0)
+        return inj, out
+
+    inj, out = run()
+    assert run()[1] == out  # same seed, same traffic: same faults
+    c = inj.counts
+    assert inj.pending() == 0
+    # Every frame comes out as many times as it was copied, minus drops; nothing is invented.
+    assert len(out) == 200 - c.dropped + c.duplicated
+    assert set(out) <= set(range(200))
+    assert all(out.count(i) <= 2 for i in set(out))
+    if drop == 0 and dup == 0:
+        assert sorted(out) == list(range(200))
+    if not rates.any:
+        assert out == list(range(200))

@@ -1,0 +1,169 @@
+"""The mock vehicle's replay: flown length against the plan, errors at each correction against
+the planned ones, losses, and the Monte Carlo against the exact success probability."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from gcs_planner.core.probability import success_probability
+from gcs_planner.core.route import Leg, evaluate_route
+from gcs_planner.geometry.dubins import cs_leg
+from gcs_planner.mission.builder import arc_waypoints
+from gcs_planner.mission.georef import LocalFrame
+from gcs_planner.mission.items import MissionItem
+from gcs_planner.scenario.generate import DATASET1, random_scenario
+from gcs_planner.scenario.model import Kind, Origin, Scenario
+from sim.replay import CHORD_SHORTFALL, QUANTISATION_M, replay
+
+ORIGIN = Origin(30.5, 123.5, 0.0)
+
+
+def line_scenario(kinds: str, unreliable: str = "", spacing: float = 12_000.0) -> Scenario:
+    """A, the given correction kinds, B, on a gently bent line ``spacing`` metres apart."""
+    n = len(kinds) + 2
+    xyz = np.array([[i * spacing, 300.0 * (i % 2), 5000.0 + 10 * i] for i in range(n)])
+    kind = [Kind.A] + [Kind.V if k == "V" else Kind.H for k in kinds] + [Kind.B]
+    flags = [False] + [c == "u" for c in unreliable.ljust(len(kinds), ".")] + [False]
+    return Scenario(
+        ids=tuple(f"P{i}" for i in range(n)),
+        xyz=xyz,
+        kind=np.array(kind, dtype=np.uint8),
+        unreliable=np.array(flags),
+        params=DATASET1,
+        origin=ORIGIN,
+    )
+
+
+def mission_through(points_xyz: np.ndarray, *, home: bool, relative: bool = False) -> list:
+    """Waypoints through local points, as MAVLink items (an ArduPilot-style home at seq 0)."""
+    frame = LocalFrame(ORIGIN)
+    items: list[MissionItem] = []
+    lat, lon, alt = frame.to_geodetic(*points_xyz[0])
+    if home:
+        items.append(MissionItem(0, 0, 16, x=round(lat * 1e7), y=round(lon * 1e7), z=alt))
+    items.append(MissionItem(len(items), 2, 178, param2=25.0))
+    for p in points_xyz:
+        la, lo, al = frame.to_geodetic(*p)
+        z = al - alt if relative else al
+        items.append(
+            MissionItem(
+                len(items), 3 if relative else 0, 16, x=round(la * 1e7), y=round(lo * 1e7), z=z
+            )
+        )
+    return items
+
+
+@pytest.mark.parametrize("home, relative", [(True, False), (False, False), (True, True)])
+def test_straight_route_flies_its_planned_length_and_errors(home, relative):
+    sc = line_scenario("VHVHVH")
+    route = list(range(sc.n))
+    planned = evaluate_route(sc, route)
+    assert planned.feasible
+    items = mission_through(sc.xyz[route], home=home, relative=relative)
+    rep = replay(items, sc, home_at_seq0=home)
+    tol = QUANTISATION_M * len(items)
+    assert rep.arrived and not rep.run.lost
+    assert abs(rep.flown_length - planned.length) <= tol
+    assert [c.id for c in rep.run.corrections] == planned.ids()[1:-1]
+    for row, stop in zip(rep.run.corrections, planned.stops[1:-1], strict=True):
+        assert row.within_limits and row.succeeded
+        assert abs(row.v_before - stop.v_arrival) <= sc.params.delta * tol
+        assert abs(row.h_before - stop.h_arrival) <= sc.params.delta * tol
+        assert row.v_margin == pytest.approx(stop.v_margin, abs=sc.params.delta * tol)
+    last = planned.stops[-1]
+    assert abs(rep.run.v_at_end - last.v_arrival) <= sc.params.delta * tol
+
+
+def test_dubins_route_flown_on_densified_arcs_within_the_chord_tolerance():
+    sc = line_scenario("VHVHV", spacing=10_000.0)
+    # Bend the route so that each leg starts with a real turn.
+    xyz = sc.xyz.copy()
+    xyz[:, 1] = [0, 1500, -1000, 1200, -800, 1500, 0]
+    sc = replace(sc, xyz=xyz)
+    radius = 800.0
+    heading = np.array([1.0, 0.0, 0.0])
+    legs, waypoints = [], [xyz[0]]
+    for i in range(sc.n - 1):
+        leg = cs_leg(xyz[i], heading, xyz[i + 1], radius)
+        assert leg.reachable
+        legs.append(leg)
+        arc = arc_waypoints(leg)
+        if len(arc) and np.linalg.norm(arc[-1] - xyz[i + 1]) < 1.0:
+            arc = arc[:-1]
+        waypoints.extend(arc)
+        waypoints.append(xyz[i + 1])
+        heading = leg.heading_out
+    planned = evaluate_route(
+        sc, range(sc.n), [Leg(leg.length, leg.arc_length, leg.arc_angle) for leg in legs], radius
+    )
+    assert planned.feasible
+    arcs = sum(leg.arc_length for leg in legs)
+    assert arcs > 1000.0  # the test is about turns
+    items = mission_through(np.array(waypoints), home=False)
+    rep = replay(items, sc)
+    tol = CHORD_SHORTFALL * arcs + QUANTISATION_M * len(items)
+    assert rep.flown_length <= planned.length + QUANTISATION_M * len(items)  # chords are shorter
+    assert planned.length - rep.flown_length <= tol
+    assert rep.arrived
+    for row, stop in zip(rep.run.corrections, planned.stops[1:-1], strict=True):
+        assert row.id == stop.id
+        assert abs(row.v_before - stop.v_arrival) <= sc.params.delta * tol
+        assert abs(row.h_before - stop.h_arrival) <= sc.params.delta * tol
+
+
+def test_skipping_a_correction_gets_the_vehicle_lost_where_the_limit_breaks():
+    sc = line_scenario("VHVHVH")
+    route = [0, 1, 2, 4, 5, 6, 7]  # leaves out the V at index 3
+    planned = evaluate_route(sc, route)
+    assert not planned.feasible
+    rep = replay(mission_through(sc.xyz[route], home=False), sc)
+    assert rep.run.lost and not rep.arrived
+    assert rep.run.corrections[-1].id == planned.first_violation().id
+    assert not rep.run.corrections[-1].within_limits
+    assert "lost at" in rep.run.lost_reason
+
+
+def test_a_mission_that_stops_short_of_b_does_not_arrive():
+    sc = line_scenario("VH")
+    rep = replay(mission_through(sc.xyz[:3], home=False), sc)
+    assert not rep.arrived and not rep.run.reached_b
+    assert "from B" in rep.run.lost_reason
+
+
+def test_passing_close_to_a_landmark_corrects_there_once():
+    sc = line_scenario("VHV")
+    # Fly A -> P2 -> P1 -> P2 -> ... : P2 is passed twice but used once.
+    route = [0, 2, 1, 2, 3, 4]
+    rep = replay(mission_through(sc.xyz[route], home=False), sc)
+    assert [c.id for c in rep.run.corrections].count("P2") == 1
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_monte_carlo_agrees_with_the_exact_probability(seed):
+    # Unreliable V points whose failure matters (12 km legs, alpha1 = 25, r = 5).
+    sc = line_scenario("VHVHVHV", unreliable="u.u.u..")
+    route = list(range(sc.n))
+    exact = success_probability(sc, route).probability
+    assert 0.1 < exact < 0.95
+    rep = replay(mission_through(sc.xyz, home=True), sc, home_at_seq0=True, runs=20_000, seed=seed)
+    mc = rep.monte_carlo
+    assert mc is not None and mc.runs == 20_000
+    assert mc.ci_low <= exact <= mc.ci_high
+    # One replay with drawn outcomes: failures only where points are unreliable.
+    assert all(r.succeeded or r.unreliable for r in rep.run.corrections if r.succeeded is not None)
+
+
+def test_monte_carlo_on_random_scenario_route_all_reliable_is_certain():
+    sc = random_scenario(30, seed=5, unreliable_fraction=0.0)
+    sc = replace(sc, origin=ORIGIN)
+    # A greedy chain within reach: nearest point of the needed kind towards B.
+    route = [sc.start, sc.end]
+    rep = replay(mission_through(sc.xyz[route], home=False), sc, runs=500)
+    planned = evaluate_route(sc, route)
+    assert rep.arrived == planned.feasible
+    assert rep.monte_carlo.success_rate == (1.0 if planned.feasible else 0.0)
+    assert math.isclose(rep.flown_length, planned.length, abs_tol=0.05)
