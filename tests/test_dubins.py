@@ -136,7 +136,7 @@ def test_leg_geometry(case):
     if leg.centre is None:
         assert leg.arc_angle == 0.0 and leg.sense == 0
         assert np.allclose(leg.tangent_point, p)
-        if chord > 0:
+        if chord > 1e-9:  # closer points are one point, flown with the heading unchanged
             assert np.allclose(leg.heading_out, (q - p) / chord, atol=1e-9)
         return
     n, centre, tp = leg.normal, leg.centre, leg.tangent_point
@@ -154,7 +154,7 @@ def test_leg_geometry(case):
     assert abs((q - p) @ np.cross(u, n)) < 1e-8 * scale
     assert leg.sense in (-1, 0, 1)
     z = np.cross(u, n)[2]
-    if abs(z) > 1e-9:
+    if abs(z) > 1e-9 and leg.arc_angle > 0.0:
         assert leg.sense == (1 if z > 0 else -1)
 
 
@@ -374,6 +374,16 @@ def test_straight_ahead_and_coincident():
     same = cs_leg([1.0, 2.0, 3.0], [1.0, 0.0, 0.0], [1.0, 2.0, 3.0], 200.0)
     assert same.reachable and same.length == 0.0
     assert np.array_equal(same.sample(10.0), [[1.0, 2.0, 3.0], [1.0, 2.0, 3.0]])
+    # a few ulp away, behind or to the side: still one point, not a full circle
+    for end, heading in (
+        ([0.0, -5e-324, 0.0], [0.0, 1.0, 0.0]),
+        ([-4.85586749347193e-42, 0.0, 0.0], [-1.0, 0.0, 1.17549435e-38]),
+        ([0.0, 1e-10, 0.0], [1.0, 0.0, 0.0]),
+    ):
+        near = cs_leg(np.zeros(3), heading, end, 200.0)
+        assert near.reachable and near.centre is None and near.length < 1e-9
+        lengths, outs = cs_lengths(np.zeros(3), np.array(heading), np.array([end]), 200.0)
+        assert lengths[0] == near.length and np.array_equal(outs[0], near.heading_out)
 
 
 def test_a_tiny_offset_behind_needs_almost_a_full_turn():
@@ -406,3 +416,28 @@ def test_bad_arguments():
     assert isinstance(leg, CSLeg)
     with pytest.raises(ValueError):
         leg.start[0] = 1.0  # read-only
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    st.tuples(coord, coord, coord).map(np.array),
+    unit_vectors(),
+    unit_vectors(),
+    st.floats(1e-3, 3e4),
+    st.floats(-16.0, -4.0),
+    st.floats(1.0, 2000.0),
+)
+def test_nearly_ahead_never_wraps_to_a_full_circle(p, u, side, a, log_ratio, r):
+    side = side - (side @ u) * u
+    assume(np.linalg.norm(side) > 0.1)
+    side /= np.linalg.norm(side)
+    b = a * 10.0**log_ratio
+    assume(b * b < a * a * 1e-3 and a * a + b * b - 2 * b * r > 1e-6 * a * a)  # outside the circle
+    q = p + a * u + b * side
+    leg = cs_leg(p, u, q, r)
+    chord = float(np.linalg.norm(q - p))
+    assert leg.reachable
+    assert leg.arc_angle < 0.5 * math.pi
+    assert leg.length == pytest.approx(chord, rel=1e-3, abs=1e-6)
+    lengths, _ = cs_lengths(p, u, q[None, :], r)
+    assert lengths[0] < 1.01 * chord + 1e-6

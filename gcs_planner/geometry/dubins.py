@@ -18,15 +18,18 @@ of it, which is cos(psi - theta) = R/c with sin(psi - theta) > 0, so theta = psi
 code evaluates the same angle as one atan2 of the rotated vector (R - b + i a)(R - i t), whose
 modulus is c^2, and computes t^2 = a^2 + b^2 - 2 b R, which loses less than c^2 - R^2 does.
 
-Rounding near phi = 0 = 2 pi: a target ahead (a > 0) can only need phi in [0, 3 pi/2], and a
-target behind (a < 0) only phi in [pi/2, 2 pi) (the tangent point and direction both point
-forward for phi < pi/2, and both backward for phi > 3 pi/2). An atan2 result on the wrong side of
-zero by a rounding is therefore put back to 0 (a > 0) or 2 pi (a < 0).
+The "mod 2 pi" puts the angle in [0, 2 pi]; the only delicate place is phi near 0 = 2 pi,
+where a rounding of sin(phi) across zero would turn "no turn" into "a full circle". A target
+ahead (a > 0) can only need phi in [0, 3 pi/2] and one behind (a < 0) only phi in [pi/2, 2 pi)
+(for phi < pi/2 the tangent point and direction both lead forward, for phi > 3 pi/2 both lead
+back). Behind, and with b < R, sin(phi) is a difference of a negative and a positive term and
+its sign cannot round wrong; ahead, a - t is rewritten without cancellation (see the code), so
+sin(phi) >= 0 whenever b <= 2R and the angle never wraps to 2 pi by accident.
 
 Special cases:
 
-* Straight ahead (b <= 1e-10 |w| and a >= 0): no arc, length |w|, heading unchanged. Coincident
-  points (w = 0) are a straight leg of length 0.
+* Straight ahead (b <= 1e-10 |w| and a >= 0): no arc, length |w|, heading unchanged. Points
+  closer than 1e-9 m are coincident: a straight leg of length |w| (~0), heading unchanged.
 * Straight behind (b <= 1e-10 |w| and a < 0): the plane (u, w) is undefined and the length does
   not depend on it (it is R (2 pi - 2 atan(|a|/R)) + |a|). The normal is then chosen
   deterministically as the horizontal unit vector orthogonal to u on its left, n = z x u / |z x u|
@@ -52,7 +55,10 @@ import numpy as np
 TWO_PI = 2.0 * math.pi
 # Relative off-axis distance under which a target counts as on the line of the heading. Well above
 # the rounding of |u x w| (a few ulp of |w|), well below any distance a route cares about.
-STRAIGHT_TOL = 1e-4
+STRAIGHT_TOL = 1e-10
+# Points closer than this (metres) are one point: a straight leg of that length, heading unchanged.
+# Without it, targets a few ulp away would ask for full circles or underflow t^2 to nonsense.
+COINCIDENT_M = 1e-9
 
 
 def _unit(v: np.ndarray, what: str) -> np.ndarray:
@@ -93,7 +99,6 @@ class _Core:
 
     length: np.ndarray
     phi: np.ndarray
-    t: np.ndarray
     normal: np.ndarray  # (m, 3); meaningless where straight
     heading_out: np.ndarray  # (m, 3); NaN where unreachable
     reachable: np.ndarray
@@ -114,7 +119,6 @@ def _core(start: np.ndarray, u: np.ndarray, ends: np.ndarray, radius: float) -> 
         return _Core(
             length=chord,
             phi=zeros,
-            t=chord,
             normal=np.zeros((m, 3)),
             heading_out=heading,
             reachable=np.ones(m, dtype=bool),
@@ -128,8 +132,8 @@ def _core(start: np.ndarray, u: np.ndarray, ends: np.ndarray, radius: float) -> 
     cz = ux * wy - uy * wx
     b = np.sqrt(cx * cx + cy * cy + cz * cz)
 
-    on_axis = b <= STRAIGHT_TOL * chord
-    straight = on_axis & (a >= 0.0)
+    coincident = chord <= COINCIDENT_M
+    on_axis = (b <= STRAIGHT_TOL * chord) & ~coincident
     behind = on_axis & (a < 0.0)
     b = np.where(behind, 0.0, b)
 
@@ -142,13 +146,19 @@ def _core(start: np.ndarray, u: np.ndarray, ends: np.ndarray, radius: float) -> 
 
     R = radius
     t2 = a * a + b * (b - 2.0 * R)
-    reachable = t2 >= 0.0
-    t = np.sqrt(np.where(reachable, t2, 0.0))
+    reachable = (t2 >= 0.0) | coincident
+    # straight ahead only when reachable: a few nanometres ahead and off the axis by more than
+    # a^2 / 2R is still inside the circle
+    straight = (on_axis & (a >= 0.0) & reachable) | coincident
+    t = np.sqrt(np.maximum(t2, 0.0))
 
-    phi = np.arctan2(a * R - (R - b) * t, (R - b) * R + a * t)
-    phi = np.where(phi < 0.0, phi + TWO_PI, phi)
-    phi = np.where((a > 0.0) & (phi > 1.75 * math.pi), 0.0, phi)
-    phi = np.where((a < 0.0) & (phi < 0.25 * math.pi), TWO_PI, phi)
+    # sin(phi) ~ a R - (R - b) t. Ahead (a > 0) the two terms nearly cancel; a - t is written
+    # b (2R - b) / (a + t) there, so that the sign of sin(phi) near phi = 0 is exact.
+    # (Only where reachable: inside the circle a + t can be subnormal and the quotient overflow.)
+    ahead = (a > 0.0) & (t2 >= 0.0)
+    a_minus_t = np.where(ahead, b * (2.0 * R - b) / np.where(ahead, a + t, 1.0), a - t)
+    phi = np.arctan2(R * a_minus_t + b * t, (R - b) * R + a * t)
+    phi = np.where(phi < 0.0, phi + TWO_PI, phi) + 0.0  # + 0.0: no -0.0 angles
     phi = np.where(straight, 0.0, phi)
     t = np.where(straight, chord, t)
 
@@ -164,7 +174,6 @@ def _core(start: np.ndarray, u: np.ndarray, ends: np.ndarray, radius: float) -> 
     return _Core(
         length=length,
         phi=np.where(reachable, phi, 0.0),
-        t=np.where(reachable, t, math.inf),
         normal=normal,
         heading_out=heading,
         reachable=reachable,
