@@ -384,6 +384,9 @@ def test_straight_ahead_and_coincident():
         assert near.reachable and near.centre is None and near.length < 1e-9
         lengths, outs = cs_lengths(np.zeros(3), np.array(heading), np.array([end]), 200.0)
         assert lengths[0] == near.length and np.array_equal(outs[0], near.heading_out)
+    # with R = 0 too (the chord's direction would be rounding noise: its square is subnormal)
+    tiny = cs_leg(np.zeros(3), [0.0, 1.0, 0.0], [0.0, 0.0, 1.09483012e-158], 0.0)
+    assert np.array_equal(tiny.heading_out, [0.0, 1.0, 0.0])
 
 
 def test_a_tiny_offset_behind_needs_almost_a_full_turn():

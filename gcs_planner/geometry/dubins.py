@@ -34,7 +34,8 @@ Special cases:
   not depend on it (it is R (2 pi - 2 atan(|a|/R)) + |a|). The normal is then chosen
   deterministically as the horizontal unit vector orthogonal to u on its left, n = z x u / |z x u|
   (a counter-clockwise turn seen from above); for a vertical u, n = y x u.
-* R = 0: every leg is the straight chord; the heading at j is the chord direction.
+* R = 0: every leg is the straight chord; the heading at j is the chord direction (unchanged
+  for coincident points).
 * Target inside the turning circle (c < R, i.e. t^2 < 0): no CS leg reaches it. Policy of this
   project: such a leg is NOT ALLOWED. It is reported with ``reachable=False`` and length
   ``math.inf`` (``cs_lengths`` gives inf and a NaN heading), and the planner never uses it; it
@@ -113,8 +114,8 @@ def _core(start: np.ndarray, u: np.ndarray, ends: np.ndarray, radius: float) -> 
     m = w.shape[0]
 
     if radius == 0.0:
-        safe = np.where(chord > 0.0, chord, 1.0)[:, None]
-        heading = np.where(chord[:, None] > 0.0, w / safe, u[None, :])
+        apart = chord > COINCIDENT_M
+        heading = np.where(apart[:, None], w / np.where(apart, chord, 1.0)[:, None], u[None, :])
         zeros = np.zeros(m)
         return _Core(
             length=chord,
@@ -318,7 +319,7 @@ def straight_leg(
     q = _point(end, "end")
     w = q - p
     chord = math.sqrt(float(w @ w))
-    if chord > 0.0:
+    if chord > COINCIDENT_M:
         u = w / chord
     elif heading is not None:
         u = _unit(heading, "heading")

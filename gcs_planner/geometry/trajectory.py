@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gcs_planner.geometry.dubins import CSLeg, cs_leg, straight_leg
+from gcs_planner.geometry.dubins import COINCIDENT_M, CSLeg, cs_leg, straight_leg
 
 
 @dataclass(frozen=True, eq=False)
@@ -73,11 +73,11 @@ def route_trajectory(
 
 def _first_direction(pts: np.ndarray) -> np.ndarray:
     """Heading at A when it is free and A coincides with the next point: the first chord that
-    is not zero, else east."""
+    is not zero (longer than COINCIDENT_M), else east."""
     for k in range(1, pts.shape[0]):
         w = pts[k] - pts[0]
         norm = math.sqrt(float(w @ w))
-        if norm > 0.0:
+        if norm > COINCIDENT_M:
             return w / norm
     return np.array([1.0, 0.0, 0.0])
 
