@@ -6,7 +6,8 @@ import argparse
 import math
 
 from gcs_planner.errors import InputError
-from gcs_planner.scenario.model import Origin, Scenario
+from gcs_planner.mission.georef import parse_origin
+from gcs_planner.scenario.model import Scenario
 
 # flag -> Parameters field
 PARAMETER_FLAGS = {
@@ -31,7 +32,7 @@ def add_scenario_arguments(parser: argparse.ArgumentParser, positional: bool = T
     group.add_argument(
         "--heading-at-a", type=_vector, help="initial heading at A as X,Y,Z (default: free)"
     )
-    group.add_argument("--origin", type=parse_origin, help="georeference LAT,LON[,ALT]")
+    group.add_argument("--origin", help="georeference LAT,LON[,ALT]")
 
 
 def _vector(text: str) -> tuple[float, float, float]:
@@ -44,26 +45,13 @@ def _vector(text: str) -> tuple[float, float, float]:
     return parts  # type: ignore[return-value]
 
 
-def parse_origin(text: str) -> Origin:
-    try:
-        parts = [float(t) for t in text.split(",")]
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected LAT,LON[,ALT], got {text!r}") from None
-    if len(parts) not in (2, 3) or not all(math.isfinite(p) for p in parts):
-        raise argparse.ArgumentTypeError(f"expected LAT,LON[,ALT] numbers, got {text!r}")
-    if not -90 <= parts[0] <= 90 or not -180 <= parts[1] <= 180:
-        raise argparse.ArgumentTypeError(
-            f"latitude must be within ±90 and longitude ±180: {text!r}"
-        )
-    return Origin(*parts)
-
-
 def load_scenario_from_args(args: argparse.Namespace, path: str | None = None) -> Scenario:
     from gcs_planner.scenario.readers import load_scenario
 
     overrides: dict = {name: getattr(args, name, None) for name in PARAMETER_FLAGS}
     overrides["heading_at_a"] = getattr(args, "heading_at_a", None)
-    overrides["origin"] = getattr(args, "origin", None)
+    origin = getattr(args, "origin", None)
+    overrides["origin"] = None if origin is None else parse_origin(origin)
     path = path if path is not None else args.scenario
     if path is None:
         raise InputError("no scenario given")

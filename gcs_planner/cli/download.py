@@ -11,6 +11,7 @@ from gcs_planner.atomic import write_atomic
 from gcs_planner.cli.upload import add_link_arguments, connect_client
 from gcs_planner.errors import InputError
 from gcs_planner.mission.items import MissionItem
+from gcs_planner.mission.waypoints import dumps_items
 
 
 def _items_json(items: list[MissionItem], firmware: str) -> str:
@@ -36,37 +37,18 @@ def run(args: argparse.Namespace) -> int:
     if suffix == ".json":
         write_atomic(out, _items_json(items, firmware))
     else:
-        write_atomic(out, _waypoints_text(items))
+        write_atomic(out, dumps_items(items, firmware, _home(items, firmware)))
     print(f"downloaded {len(items)} items from system {client.target_system} to {out}")
     return 0
 
 
-_GLOBAL_FRAMES = (0, 3, 5, 6, 10, 11)
-
-
-def _lat_lon(it: MissionItem) -> tuple[str, str]:
-    if it.frame in _GLOBAL_FRAMES:
-        return f"{it.x / 1e7:.8f}", f"{it.y / 1e7:.8f}"
-    return f"{it.x:.8f}", f"{it.y:.8f}"
-
-
-def _waypoints_text(items: list[MissionItem]) -> str:
-    """Mission Planner's QGC WPL 110: index, current, frame, command, params 1-4, lat, lon,
-    alt, autocontinue, tab-separated."""
-    lines = ["QGC WPL 110"]
-    for i, it in enumerate(items):
-        fields = [
-            i,
-            it.current,
-            it.frame,
-            it.command,
-            *(f"{p:.8f}" for p in (it.param1, it.param2, it.param3, it.param4)),
-            *_lat_lon(it),
-            f"{it.z:.6f}",
-            it.autocontinue,
-        ]
-        lines.append("\t".join(str(f) for f in fields))
-    return "\n".join(lines) + "\n"
+def _home(items: list[MissionItem], firmware: str) -> tuple[float, float, float]:
+    """Row 0 of a .waypoints file is home. ArduPilot sends it as item 0; PX4 has no home item,
+    so the first item's position stands in for it (what a reader of the file sees as home)."""
+    if not items:
+        return (0.0, 0.0, 0.0)
+    first = items[0]
+    return (first.x / 1e7, first.y / 1e7, first.z)
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:

@@ -86,7 +86,6 @@ def bnb_front(
     xyz = scenario.xyz
     kinds = scenario.kind
     kind_of = [Kind(int(c)) for c in kinds]  # Enum construction is slow in the inner loop
-    g_ptr, g_e, g_r = G.indptr, G.e_max, G.r_suffix_min
     unreliable = scenario.unreliable if probability else np.zeros(scenario.n, dtype=bool)
     start, end = graph.start, graph.end
     heading_a = None if scenario.heading_at_a is None else np.asarray(scenario.heading_at_a, float)
@@ -96,7 +95,7 @@ def bnb_front(
     # Entry: (f, tiebreak, L, node, k, states, heading, path)
     heap: list = [
         (
-            G_start(G, graph, start),
+            float(graph.to_end[start]),  # A carries no error: |A - B| is the bound
             next(counter),
             0.0,
             start,
@@ -155,9 +154,7 @@ def bnb_front(
                 continue
             is_v = kind_of[j] == Kind.V
             e_min = min(st[1] if is_v else st[0] for st in new_states)
-            lo_g, hi_g = g_ptr[j], g_ptr[j + 1]
-            i_g = lo_g + int(np.searchsorted(g_e[lo_g:hi_g], e_min))
-            h = float(g_r[i_g]) if i_g < hi_g else math.inf
+            h = G(j, e_min)  # G is non-decreasing in e: the least carried error bounds all
             nf = nL + h
             if not math.isfinite(nf) or _dominated(found, nf, k + 1, new_mass):
                 continue
@@ -186,11 +183,6 @@ def bnb_front(
     return BnbResult(
         found, lower, complete, labels, time.perf_counter() - t0, exhausted, len(live), open_bound
     )
-
-
-def G_start(G, graph, start: int) -> float:  # noqa: N802 - G is the bound's name in the docs
-    """f at A: the straight distance to B (A carries no error, so nothing tighter is needed)."""
-    return float(graph.to_end[start])
 
 
 def flown_route(scenario: Scenario, points: tuple[int, ...]) -> Route:

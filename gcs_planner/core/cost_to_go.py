@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from gcs_planner.core.reach import ReachGraph
-from gcs_planner.core.search import _not_dominated
+from gcs_planner.core.search import not_dominated
 from gcs_planner.scenario.model import Kind, Scenario
 
 
@@ -54,7 +54,7 @@ def cost_to_go(scenario: Scenario, graph: ReachGraph) -> CostToGo:
     ok = E >= 0
     node, R, E = node[ok], R[ok], E[ok]
     # Archive for dominance: "e" of the generic filter is -E (smaller is better).
-    keep = _not_dominated(
+    keep = not_dominated(
         node,
         R,
         -E,
@@ -101,7 +101,7 @@ def cost_to_go(scenario: Scenario, graph: ReachGraph) -> CostToGo:
         feasible &= newE >= 0
         j, newR, newE = j[feasible], newR[feasible], newE[feasible]
         empty = np.zeros((len(j), 0), np.uint64)
-        keep = _not_dominated(
+        keep = not_dominated(
             j,
             newR,
             -newE,

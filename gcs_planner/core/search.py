@@ -184,7 +184,7 @@ def _layered_search(
             rows = np.flatnonzero(w >= 0)
             nmask[rows, w[rows]] |= crit_bit[j[rows]]
 
-        survive = _not_dominated(j, nL, ne, nmask, arch_node, arch_L, arch_e, arch_mask)
+        survive = not_dominated(j, nL, ne, nmask, arch_node, arch_L, arch_e, arch_mask)
         src, j, nL, ne, nmask, jv = (a[survive] for a in (src, j, nL, ne, nmask, jv))
 
         new_gid = n_stored + np.arange(len(j), dtype=np.int64)
@@ -214,7 +214,7 @@ def _layered_search(
     return front, closest
 
 
-def _not_dominated(
+def not_dominated(
     j: np.ndarray,
     L: np.ndarray,
     e: np.ndarray,

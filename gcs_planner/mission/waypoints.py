@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 import os
+from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
 
@@ -73,7 +74,15 @@ def _row(index: int, current: int, item: MissionItem) -> str:
 
 
 def dumps_waypoints(mission: Mission) -> str:
-    lat, lon, alt = mission.home
+    return dumps_items(mission.items, mission.firmware, mission.home)
+
+
+def dumps_items(
+    items: Sequence[MissionItem], firmware: str, home: tuple[float, float, float]
+) -> str:
+    """Items as the firmware stores them (ArduPilot: home at seq 0) as a .waypoints text, whose
+    row 0 is always home."""
+    lat, lon, alt = home
     home = MissionItem(
         seq=0,
         frame=MAV_FRAME_GLOBAL,
@@ -82,7 +91,7 @@ def dumps_waypoints(mission: Mission) -> str:
         y=int(round(lon * 1e7)),
         z=alt,
     )
-    rest = mission.items[1:] if mission.firmware == "ardupilot" else mission.items
+    rest = items[1:] if firmware == "ardupilot" else items
     lines = [HEADER, _row(0, 1, home)]
     lines += [_row(k + 1, item.current, item) for k, item in enumerate(rest)]
     return "\n".join(lines) + "\n"
