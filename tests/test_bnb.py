@@ -119,9 +119,19 @@ def test_budget_reports_gaps_instead_of_claiming_optimality(dataset_paths) -> No
     from gcs_planner.scenario.readers import load_scenario
 
     scenario = load_scenario(dataset_paths[1], DATASET1.to_dict())
-    result = bnb_front(scenario, probability=False, max_labels=50)
-    assert not result.optimal
+    full = bnb_front(scenario, probability=True, max_labels=10**6)
+    assert full.optimal
+    result = bnb_front(scenario, probability=True, max_labels=max(1, full.labels // 5))
+    assert not result.optimal and result.open_labels > 0
     for f, lb in zip(result.front, result.lower_bounds):
         assert lb <= f.length + 1e-9
+        # A proven lower bound: no route of the exact front that is as good on corrections and
+        # probability is shorter than it.
+        exact = min(
+            g.length
+            for g in full.front
+            if g.corrections <= f.corrections and g.probability >= f.probability - 1e-12
+        )
+        assert lb <= exact + 1e-6
         again = flown_route(scenario, f.points)
         assert again.feasible and again.length == pytest.approx(f.length, abs=1e-6)

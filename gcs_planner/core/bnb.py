@@ -67,6 +67,47 @@ def _dominated(found: list[Found], length: float, k: int, prob: float) -> bool:
     return False
 
 
+class _Incumbents:
+    """The routes found so far, asked one question many times: is every route a partial route
+    can still become — (at least L + G_j(e, m) metres, k + m corrections, at most its mass) for
+    each m — already matched by a found route?"""
+
+    def __init__(self, kmax: int) -> None:
+        self.kmax = kmax
+        self.found: list[Found] = []
+        self._best: dict[float, np.ndarray] = {}
+
+    def add(self, new: Found) -> None:
+        self.found = [
+            g for g in self.found if not _dominated([new], g.length, g.corrections, g.probability)
+        ]
+        self.found.append(new)
+        self._best.clear()
+
+    def best(self, mass: float) -> np.ndarray:
+        """best[c] = the least length of a found route with <= c corrections and a probability
+        of at least ``mass`` (inf if none)."""
+        b = self._best.get(mass)
+        if b is None:
+            b = np.full(self.kmax + 1, np.inf)
+            for f in self.found:
+                if f.probability >= mass - PROB_EPS and f.corrections <= self.kmax:
+                    b[f.corrections] = min(b[f.corrections], f.length)
+            np.minimum.accumulate(b, out=b)
+            self._best[mass] = b
+        return b
+
+    def covers(self, length: float, k: int, to_go: np.ndarray | None, mass: float) -> bool:
+        """Whether every completion of a partial route (length L so far, k corrections, the
+        bound ``to_go`` = G_j(e, m) per m) is dominated by a found route, or none exists."""
+        if to_go is None:
+            return True
+        m = min(len(to_go), self.kmax - k + 1)
+        if m <= 0:
+            return True
+        return bool(np.all(length + to_go[:m] >= self.best(mass)[k : k + m]))
+
+
 def bnb_front(
     scenario: Scenario,
     *,
@@ -90,12 +131,13 @@ def bnb_front(
     start, end = graph.start, graph.end
     heading_a = None if scenario.heading_at_a is None else np.asarray(scenario.heading_at_a, float)
 
-    found: list[Found] = []
+    inc = _Incumbents(kmax)
     counter = itertools.count()
-    # Entry: (f, tiebreak, L, node, k, states, heading, path)
+    # Entry: (f, tiebreak, L, node, k, states, heading, path, to_go). A carries no error and
+    # makes no correction: |A - B| bounds every route, whatever its corrections.
     heap: list = [
         (
-            float(graph.to_end[start]),  # A carries no error: |A - B| is the bound
+            float(graph.to_end[start]),
             next(counter),
             0.0,
             start,
@@ -103,18 +145,21 @@ def bnb_front(
             {(0.0, 0.0): 1.0},
             heading_a,
             (start,),
+            np.array([graph.to_end[start]]),
         )
     ]
     labels = 0
     exhausted = True
     while heap:
-        f, _, L, node, k, states, heading, path = heapq.heappop(heap)
+        entry = heapq.heappop(heap)
+        f, _, L, node, k, states, heading, path, to_go = entry
         mass = sum(states.values())
-        if _dominated(found, f, k, mass):
+        # Routes found since this label was queued may now cover it.
+        if inc.covers(L, k, to_go, mass):
             continue
         labels += 1
         if labels > max_labels:
-            heapq.heappush(heap, (f, next(counter), L, node, k, states, heading, path))
+            heapq.heappush(heap, entry)
             exhausted = False
             break
         lo, hi = graph.indptr[node], graph.indptr[node + 1]
@@ -143,20 +188,14 @@ def bnb_front(
             nL = L + d
             if is_end:
                 new_mass = min(1.0, new_mass)
-                if not _dominated(found, nL, k, new_mass):
-                    new = Found(nL, k, new_mass, path + (j,))
-                    found = [
-                        g
-                        for g in found
-                        if not _dominated([new], g.length, g.corrections, g.probability)
-                    ]
-                    found.append(new)
+                if not _dominated(inc.found, nL, k, new_mass):
+                    inc.add(Found(nL, k, new_mass, path + (j,)))
                 continue
             is_v = kind_of[j] == Kind.V
+            # G is non-decreasing in e: the least carried error bounds every state.
             e_min = min(st[1] if is_v else st[0] for st in new_states)
-            h = G(j, e_min)  # G is non-decreasing in e: the least carried error bounds all
-            nf = nL + h
-            if not math.isfinite(nf) or _dominated(found, nf, k + 1, new_mass):
+            g = G.by_corrections(j, e_min)
+            if inc.covers(nL, k + 1, g, new_mass):
                 continue
             if headings is not None:
                 new_heading = headings[idx]
@@ -165,19 +204,32 @@ def bnb_front(
             else:
                 new_heading = None
             heapq.heappush(
-                heap, (nf, next(counter), nL, j, k + 1, new_states, new_heading, path + (j,))
+                heap,
+                (
+                    nL + float(g[-1]),
+                    next(counter),
+                    nL,
+                    j,
+                    k + 1,
+                    new_states,
+                    new_heading,
+                    path + (j,),
+                    g,
+                ),
             )
-    found.sort(key=lambda g: (g.corrections, g.length))
-    live = [e for e in heap if not _dominated(found, e[0], e[4], sum(e[5].values()))]
+    found = sorted(inc.found, key=lambda g: (g.corrections, g.length))
+    live = [e for e in heap if not inc.covers(e[2], e[4], e[8], sum(e[5].values()))]
     open_bound = min((e[0] for e in live), default=math.inf)
-    heap = live
     lower = []
     for g in found:
+        # The least length an open label can still reach with <= g's corrections and at least
+        # g's probability: the proven lower bound of g's point of the front.
         lb = g.length
-        for entry in heap:
-            ef, ek, est = entry[0], entry[4], entry[5]
-            if ek <= g.corrections and sum(est.values()) >= g.probability:
-                lb = min(lb, ef)
+        for e in live:
+            L, k, to_go = e[2], e[4], e[8]
+            m = min(len(to_go), g.corrections - k + 1)
+            if m > 0 and sum(e[5].values()) >= g.probability - PROB_EPS:
+                lb = min(lb, L + float(np.min(to_go[:m])))
         lower.append(lb)
     complete = not live
     return BnbResult(

@@ -10,6 +10,12 @@ component j reset only makes the continuation harder, so assuming it 0 stays a l
 Computed backwards from B in layers of legs, as labels (R, E) at j: "R metres to B, feasible iff
 e <= E", kept Pareto-minimal (smaller R, larger E). A walk of a simple-route's length has at most
 n - 1 legs, so n layers suffice for the bound to hold over every simple route.
+
+The layer a label is made in is the number m of corrections it makes after j before B (a label
+j -> B is layer 0). Keeping it gives the bound per number of further corrections,
+G_j(e, m) = the least length with at most m more corrections, which is what prunes a partial
+route with k corrections: it can only end as (>= L + G_j(e, m), k + m), and that is dominated as
+soon as, for each m, a route already found has <= k + m corrections and length <= L + G_j(e, m).
 """
 
 from __future__ import annotations
@@ -25,16 +31,32 @@ from gcs_planner.scenario.model import Kind, Scenario
 
 @dataclass(frozen=True)
 class CostToGo:
-    # Per point j: labels sorted by E ascending with the suffix minimum of R, so that
-    # G_j(e) = suffix_min_R[first index with E >= e].
+    # Per point j: its labels sorted by E ascending (rows indptr[j]:indptr[j+1]); table[i, m] is
+    # the least R over labels of j with E >= e_max[i] made in layer <= m. So
+    # G_j(e, m) = table[first i with e_max[i] >= e, m], non-increasing in m.
     indptr: np.ndarray
     e_max: np.ndarray
-    r_suffix_min: np.ndarray
+    table: np.ndarray  # shape (labels, layers)
 
-    def __call__(self, j: int, e: float) -> float:
+    @property
+    def layers(self) -> int:
+        return self.table.shape[1]
+
+    def _row(self, j: int, e: float) -> int:
         lo, hi = self.indptr[j], self.indptr[j + 1]
         i = lo + int(np.searchsorted(self.e_max[lo:hi], e, side="left"))
-        return float(self.r_suffix_min[i]) if i < hi else float("inf")
+        return i if i < hi else -1
+
+    def __call__(self, j: int, e: float) -> float:
+        """G_j(e): the least length to B with any number of further corrections."""
+        i = self._row(j, e)
+        return float(self.table[i, -1]) if i >= 0 else float("inf")
+
+    def by_corrections(self, j: int, e: float) -> np.ndarray | None:
+        """G_j(e, m) for m = 0 .. layers-1 (inf where B is out of reach with <= m more
+        corrections; the last entry holds for every larger m), or None when B is out of reach."""
+        i = self._row(j, e)
+        return self.table[i] if i >= 0 else None
 
 
 def cost_to_go(scenario: Scenario, graph: ReachGraph) -> CostToGo:
@@ -66,6 +88,7 @@ def cost_to_go(scenario: Scenario, graph: ReachGraph) -> CostToGo:
     )
     node, R, E = node[keep], R[keep], E[keep]
     arch_node, arch_R, arch_E = node.copy(), R.copy(), E.copy()
+    arch_layer = np.zeros(len(node), dtype=np.int64)
 
     # Reverse CSR over arcs between correction points.
     inner = (tgt != end) & (src != graph.start)
@@ -77,7 +100,7 @@ def cost_to_go(scenario: Scenario, graph: ReachGraph) -> CostToGo:
     np.cumsum(r_ptr, out=r_ptr)
     r_deg = np.diff(r_ptr)
 
-    for _ in range(n):
+    for layer in range(1, n):
         if not len(node):
             break
         counts = r_deg[node]
@@ -115,17 +138,22 @@ def cost_to_go(scenario: Scenario, graph: ReachGraph) -> CostToGo:
         arch_node = np.concatenate([arch_node, node])
         arch_R = np.concatenate([arch_R, R])
         arch_E = np.concatenate([arch_E, E])
+        arch_layer = np.concatenate([arch_layer, np.full(len(node), layer)])
 
     # A label can be dominated by a later one (the filter only drops new labels); the suffix
-    # minimum below makes that harmless.
+    # minima below make that harmless.
     order = np.lexsort((arch_E, arch_node))
-    a_node, a_E, a_R = arch_node[order], arch_E[order], arch_R[order]
+    a_node, a_E, a_R, a_layer = arch_node[order], arch_E[order], arch_R[order], arch_layer[order]
+    layers = int(a_layer.max()) + 1 if len(a_layer) else 1
     indptr = np.zeros(n + 1, dtype=np.int64)
     np.add.at(indptr, a_node + 1, 1)
     np.cumsum(indptr, out=indptr)
-    suffix = a_R.copy()
-    for j in range(n):
+    # Each label's R at its layer, then a running minimum over layers (<= m) and a suffix
+    # minimum over E (>= e) per point.
+    table = np.full((len(a_R), layers), np.inf)
+    table[np.arange(len(a_R)), a_layer] = a_R
+    np.minimum.accumulate(table, axis=1, out=table)
+    for j in np.flatnonzero(np.diff(indptr)):
         lo, hi = indptr[j], indptr[j + 1]
-        if hi > lo:
-            suffix[lo:hi] = np.minimum.accumulate(a_R[lo:hi][::-1])[::-1]
-    return CostToGo(indptr, a_E, suffix)
+        table[lo:hi] = np.minimum.accumulate(table[lo:hi][::-1], axis=0)[::-1]
+    return CostToGo(indptr, a_E, table)
