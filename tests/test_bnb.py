@@ -135,3 +135,84 @@ def test_budget_reports_gaps_instead_of_claiming_optimality(dataset_paths) -> No
         assert lb <= exact + 1e-6
         again = flown_route(scenario, f.points)
         assert again.feasible and again.length == pytest.approx(f.length, abs=1e-6)
+
+
+def uncertain_straight_scenario(seed: int):
+    """Small straight-leg scenarios with many unreliable points, dense or corridor-sparse."""
+    rng = np.random.default_rng(10_000 + seed)
+    n = int(rng.integers(1, 6))
+    a1, a2, b1, b2 = rng.uniform(6, 30, 4)
+    params = Parameters(
+        a1,
+        a2,
+        b1,
+        b2,
+        rng.uniform(6, 30),
+        0.001,
+        turn_radius=0.0,
+        p_success=float(rng.choice([0.0, 0.5, 0.8, 0.95])),
+        fail_residual=float(rng.uniform(1, 12)),
+    )
+    length = rng.uniform(8_000, 45_000)
+    width = rng.uniform(0.1, 1.0) if seed % 2 else 0.3
+    return random_scenario(
+        n,
+        seed,
+        params=params,
+        box=(length, length * width, length * 0.05),
+        unreliable_fraction=float(rng.uniform(0.3, 1.0)),
+    )
+
+
+def enumerate_straight_front(scenario):
+    """Every simple route with straight legs: length from the coordinates, probability from the
+    exact chain (0 when the route cannot arrive)."""
+    xyz = scenario.xyz
+    values = []
+    for pts in all_routes(scenario):
+        p = success_probability(scenario, pts).probability
+        if p > 0:
+            length = float(np.linalg.norm(np.diff(xyz[list(pts)], axis=0), axis=1).sum())
+            values.append((round(length, 6), len(pts) - 2, round(-p, 12)))
+    return pareto(values)
+
+
+def test_straight_three_objective_front_equals_enumeration() -> None:
+    """With straight legs the search compares partial routes by dominance (length,
+    corrections, error-state distribution) over walks, made exact by decremental relaxation:
+    it must still give exactly the front of simple routes."""
+    nonempty = uncertain = relaxed = 0
+    for seed in range(800):
+        scenario = uncertain_straight_scenario(seed)
+        result = bnb_front(scenario, probability=True, max_labels=10**6)
+        assert result.optimal
+        got = [
+            (round(f.length, 6), f.corrections, round(-f.probability, 12)) for f in result.front
+        ]
+        want = enumerate_straight_front(scenario)
+        assert [g[1:] for g in got] == [w[1:] for w in want], seed
+        np.testing.assert_allclose([g[0] for g in got], [w[0] for w in want], atol=1e-6)
+        for f in result.front:
+            assert len(set(f.points)) == len(f.points)
+        nonempty += bool(want)
+        uncertain += any(-1 < w[2] < 0 for w in want)
+        relaxed += result.rounds > 1
+    assert nonempty >= 200
+    assert uncertain >= 25, "failures must matter in some scenarios"
+    assert relaxed >= 5, "some scenarios must need the decremental relaxation"
+
+
+def test_dominance_on_real_data_agrees_with_the_search_over_simple_routes(dataset_paths) -> None:
+    from gcs_planner.scenario.generate import DATASET1
+    from gcs_planner.scenario.readers import load_scenario
+
+    scenario = load_scenario(dataset_paths[1], DATASET1.to_dict() | {"turn_radius": 0.0})
+    fast = bnb_front(scenario, probability=True)
+    plain = bnb_front(scenario, probability=True, dominance=False, max_labels=10**6)
+    assert fast.optimal and plain.optimal
+    assert [(f.corrections, f.probability) for f in fast.front] == [
+        (f.corrections, f.probability) for f in plain.front
+    ]
+    np.testing.assert_allclose(
+        [f.length for f in fast.front], [f.length for f in plain.front], atol=1e-6
+    )

@@ -17,12 +17,13 @@ import heapq
 import itertools
 import math
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from gcs_planner.core.cost_to_go import cost_to_go
-from gcs_planner.core.probability import propagate
+from gcs_planner.core.probability import propagate, success_probability
 from gcs_planner.core.reach import build_reach_graph
 from gcs_planner.core.route import Leg, Route, evaluate_route
 from gcs_planner.geometry.dubins import cs_lengths
@@ -52,6 +53,9 @@ class BnbResult:
     # still reach (inf when there are none: the front is then complete).
     open_labels: int = 0
     open_bound: float = math.inf
+    # Straight legs: rounds of decremental state-space relaxation and the critical points.
+    rounds: int = 1
+    critical: tuple[int, ...] = ()
 
 
 # Probabilities reached along different routes are products taken in different orders: equal
@@ -114,24 +118,132 @@ def bnb_front(
     probability: bool,
     max_corrections: int | None = None,
     max_labels: int = DEFAULT_MAX_LABELS,
+    seeds: Sequence[Sequence[int]] = (),
+    dominance: bool = True,
 ) -> BnbResult:
     """Exact Pareto front of (length, corrections[, probability]) with the scenario's turning
     radius, by best-first branch and bound. ``probability`` False treats every correction as
-    certain (the two-objective model)."""
+    certain (the two-objective model). ``seeds`` are routes known beforehand (for example from
+    an easier model): the feasible ones start as incumbents, which only speeds the proof.
+    ``dominance`` False keeps whole simple routes even with straight legs (a reference).
+
+    With straight legs a partial route is its point, length, corrections and error-state
+    distribution: one that is no better on each of them than another at the same point cannot
+    lead anywhere the other cannot, so it is dropped. That ignores where the routes have been,
+    so it solves a relaxation over walks; decremental state-space relaxation (as in
+    ``search.straight_front``) makes it exact: points that front walks repeat become critical,
+    and partial routes that visited different critical points are never compared. With turns
+    the heading makes partial routes incomparable, and the search keeps whole simple routes.
+    """
     t0 = time.perf_counter()
-    params = scenario.params
-    R = params.turn_radius
-    graph = build_reach_graph(scenario)
-    G = cost_to_go(scenario, graph)
-    kmax = scenario.n - 2 if max_corrections is None else max_corrections
+    ctx = _Context(scenario, probability, max_corrections)
+    if ctx.R > 0 or not dominance:
+        res = _search(ctx, None, max_labels, seeds)
+    else:
+        critical: frozenset[int] = frozenset()
+        spent = rounds = 0
+        while True:
+            rounds += 1
+            res = _search(ctx, critical, max_labels - spent, seeds)
+            res.rounds, res.critical = rounds, tuple(sorted(critical))
+            spent += res.labels
+            repeated = {p for f in res.front for p in f.points if f.points.count(p) > 1}
+            if not repeated:
+                break
+            if not res.exhausted or spent >= max_labels:
+                # A budget ended a relaxed round: its walks are no routes, so fall back to the
+                # search over simple routes, which is sound at any budget.
+                res = _search(ctx, None, max_labels, seeds)
+                break
+            critical |= repeated
+        res.labels = spent if res.exhausted else res.labels
+    res.seconds = time.perf_counter() - t0
+    return res
+
+
+class _Context:
+    """What every round of the search shares: the graph, the cost-to-go, the model."""
+
+    def __init__(self, scenario: Scenario, probability: bool, max_corrections: int | None) -> None:
+        self.scenario = scenario
+        self.probability = probability
+        self.params = scenario.params
+        self.R = self.params.turn_radius
+        self.graph = build_reach_graph(scenario)
+        self.G = cost_to_go(scenario, self.graph)
+        self.kmax = scenario.n - 2 if max_corrections is None else max_corrections
+        self.kind_of = [Kind(int(c)) for c in scenario.kind]  # Enum() is slow in the loop
+        self.unreliable = scenario.unreliable if probability else np.zeros(scenario.n, dtype=bool)
+
+    def seed(self, points: Sequence[int]) -> Found | None:
+        """A known route as an incumbent, evaluated under this search's model."""
+        points = tuple(int(i) for i in points)
+        route = flown_route(self.scenario, points)
+        if not route.feasible:
+            return None
+        prob = 1.0
+        if self.probability:
+            legs = [s.leg for s in route.stops[1:]]
+            prob = success_probability(self.scenario, points, legs).probability
+        return Found(route.length, route.corrections, min(1.0, prob), points) if prob > 0 else None
+
+
+def _stochastically_dominates(d1: dict, d2: dict) -> bool:
+    """Whether every continuation succeeds at least as often from the error-state distribution
+    ``d1`` as from ``d2``. Success from a state only falls as either error grows, so this holds
+    when d2's mass can be moved, unit by unit, onto d1's states no worse in both components:
+    by Hall's theorem, when every set S of d2's states weighs no more than d1's states lying
+    below some state of S. Large supports are not compared (False is always safe)."""
+    if len(d2) > 8:
+        return False
+    s1 = list(d1.items())
+    s2 = list(d2.items())
+    below = []
+    for (v2, h2), _ in s2:
+        bits = 0
+        for i, ((v1, h1), _) in enumerate(s1):
+            if v1 <= v2 and h1 <= h2:
+                bits |= 1 << i
+        if not bits:
+            return False
+        below.append(bits)
+    for subset in range(1, 1 << len(s2)):
+        need = 0.0
+        reach = 0
+        for i, (_, m2) in enumerate(s2):
+            if subset >> i & 1:
+                need += m2
+                reach |= below[i]
+        have = sum(m1 for i, (_, m1) in enumerate(s1) if reach >> i & 1)
+        if need > have + PROB_EPS:
+            return False
+    return True
+
+
+def _search(
+    ctx: _Context,
+    critical: frozenset[int] | None,
+    max_labels: int,
+    seeds: Sequence[Sequence[int]],
+) -> BnbResult:
+    """One best-first search. ``critical`` None: whole simple routes, no dominance (turns, or
+    the sound fallback). Otherwise walks that may not revisit a critical point, with dominance
+    among partial routes at the same point that visited the same critical points."""
+    t0 = time.perf_counter()
+    scenario, params, R, graph, G = ctx.scenario, ctx.params, ctx.R, ctx.graph, ctx.G
+    kmax, kind_of, unreliable = ctx.kmax, ctx.kind_of, ctx.unreliable
     xyz = scenario.xyz
-    kinds = scenario.kind
-    kind_of = [Kind(int(c)) for c in kinds]  # Enum construction is slow in the inner loop
-    unreliable = scenario.unreliable if probability else np.zeros(scenario.n, dtype=bool)
     start, end = graph.start, graph.end
     heading_a = None if scenario.heading_at_a is None else np.asarray(scenario.heading_at_a, float)
+    relaxed = critical is not None
+    # Per (point, critical points visited): the partial routes kept, as (L, k, states, mass).
+    archive: dict[tuple[int, frozenset[int]], list[tuple[float, int, dict, float]]] = {}
 
     inc = _Incumbents(kmax)
+    for points in seeds:
+        seed = ctx.seed(points)
+        if seed is not None and not _dominated(inc.found, *_values(seed)):
+            inc.add(seed)
     counter = itertools.count()
     # Entry: (f, tiebreak, L, node, k, states, heading, path, to_go). A carries no error and
     # makes no correction: |A - B| bounds every route, whatever its corrections.
@@ -175,7 +287,7 @@ def bnb_front(
         ok = (v_min + flown <= graph.lim_v[targets]) & (h_min + flown <= graph.lim_h[targets])
         for idx in np.flatnonzero(ok):
             j = int(targets[idx])
-            if j in path:
+            if j in path and (not relaxed or j in critical):
                 continue
             d = float(flown[idx])
             is_end = j == end
@@ -197,6 +309,18 @@ def bnb_front(
             g = G.by_corrections(j, e_min)
             if inc.covers(nL, k + 1, g, new_mass):
                 continue
+            if relaxed:
+                key = (j, frozenset(critical.intersection(path)) if critical else frozenset())
+                kept = archive.setdefault(key, [])
+                if any(
+                    aL <= nL
+                    and ak <= k + 1
+                    and am >= new_mass - PROB_EPS
+                    and _stochastically_dominates(ast, new_states)
+                    for aL, ak, ast, am in kept
+                ):
+                    continue
+                kept.append((nL, k + 1, new_states, new_mass))
             if headings is not None:
                 new_heading = headings[idx]
             elif R > 0:
@@ -235,6 +359,10 @@ def bnb_front(
     return BnbResult(
         found, lower, complete, labels, time.perf_counter() - t0, exhausted, len(live), open_bound
     )
+
+
+def _values(f: Found) -> tuple[float, int, float]:
+    return f.length, f.corrections, f.probability
 
 
 def flown_route(scenario: Scenario, points: tuple[int, ...]) -> Route:
