@@ -87,6 +87,8 @@ def plan_to_dict(plan: Plan) -> dict[str, Any]:
         "front": [route_to_dict(s, r, lb) for r, lb in zip(plan.routes, plan.lower_bounds)],
         "chosen": plan.chosen,
         "choice": plan.choice,
+        "shortest_certain": plan.shortest_certain,
+        "most_reliable": plan.most_reliable,
         "optimality": {"optimal": plan.optimal, "statement": plan.statement},
         "stats": plan.stats,
         "points": [

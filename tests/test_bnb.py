@@ -186,9 +186,7 @@ def test_straight_three_objective_front_equals_enumeration() -> None:
         scenario = uncertain_straight_scenario(seed)
         result = bnb_front(scenario, probability=True, max_labels=10**6)
         assert result.optimal
-        got = [
-            (round(f.length, 6), f.corrections, round(-f.probability, 12)) for f in result.front
-        ]
+        got = [(round(f.length, 6), f.corrections, round(-f.probability, 12)) for f in result.front]
         want = enumerate_straight_front(scenario)
         assert [g[1:] for g in got] == [w[1:] for w in want], seed
         np.testing.assert_allclose([g[0] for g in got], [w[0] for w in want], atol=1e-6)

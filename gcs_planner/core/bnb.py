@@ -137,27 +137,64 @@ def bnb_front(
     """
     t0 = time.perf_counter()
     ctx = _Context(scenario, probability, max_corrections)
-    if ctx.R > 0 or not dominance:
+    if not dominance:
         res = _search(ctx, None, max_labels, seeds)
+    elif ctx.R == 0:
+        res = _relaxed(ctx, max_labels, seeds)
     else:
-        critical: frozenset[int] = frozenset()
-        spent = rounds = 0
-        while True:
-            rounds += 1
-            res = _search(ctx, critical, max_labels - spent, seeds)
-            res.rounds, res.critical = rounds, tuple(sorted(critical))
-            spent += res.labels
-            repeated = {p for f in res.front for p in f.points if f.points.count(p) > 1}
-            if not repeated:
-                break
-            if not res.exhausted or spent >= max_labels:
-                # A budget ended a relaxed round: its walks are no routes, so fall back to the
-                # search over simple routes, which is sound at any budget.
-                res = _search(ctx, None, max_labels, seeds)
-                break
-            critical |= repeated
-        res.labels = spent if res.exhausted else res.labels
+        # With turns: first the exact front with straight legs. Every route flown with turns is
+        # the same route with straight legs made longer and less likely to arrive, so that
+        # front bounds each turned front point from below. Then dominance that ignores the
+        # heading: no proof, but it finds good routes fast (the certain one, the most reliable
+        # ones). Both seed the search over simple routes, whose exhaustion, or gaps, is what is
+        # reported.
+        floor_ctx = _Context(scenario.with_params(turn_radius=0.0), probability, max_corrections)
+        floor = _relaxed(floor_ctx, max_labels, ())
+        guide = _relaxed(ctx, max_labels, [*seeds, *(f.points for f in floor.front)])
+        simple = [f.points for f in guide.front if len(set(f.points)) == len(f.points)]
+        res = _search(ctx, None, max_labels, [*seeds, *simple])
+        res.labels += guide.labels + floor.labels
+        if floor.optimal:
+            res.lower_bounds = [
+                max(lb, _least_length(floor.front, g.corrections, g.probability))
+                for g, lb in zip(res.front, res.lower_bounds)
+            ]
     res.seconds = time.perf_counter() - t0
+    return res
+
+
+def _least_length(front: Sequence[Found], corrections: int, probability: float) -> float:
+    """The least length on ``front`` with at most ``corrections`` and at least ``probability``."""
+    return min(
+        (
+            f.length
+            for f in front
+            if f.corrections <= corrections and f.probability >= probability - PROB_EPS
+        ),
+        default=math.inf,
+    )
+
+
+def _relaxed(ctx: _Context, max_labels: int, seeds: Sequence[Sequence[int]]) -> BnbResult:
+    """Dominance over walks, with decremental state-space relaxation until the front routes are
+    simple (exact with straight legs)."""
+    critical: frozenset[int] = frozenset()
+    spent = rounds = 0
+    while True:
+        rounds += 1
+        res = _search(ctx, critical, max_labels - spent, seeds)
+        res.rounds, res.critical = rounds, tuple(sorted(critical))
+        spent += res.labels
+        repeated = {p for f in res.front for p in f.points if f.points.count(p) > 1}
+        if not repeated:
+            break
+        if not res.exhausted or spent >= max_labels:
+            # A budget ended a relaxed round: its walks are no routes, so fall back to the
+            # search over simple routes, which is sound at any budget.
+            res = _search(ctx, None, max_labels, seeds)
+            break
+        critical |= repeated
+    res.labels = spent if res.exhausted else res.labels
     return res
 
 

@@ -54,7 +54,8 @@ def choose(
     elif how == "most-reliable":
         if probabilities is None:
             raise ValueError("most-reliable needs the probability objective")
-        key = -values[:, 2]
+        # Equal probabilities reached by products in different orders differ in the last bits.
+        key = -np.round(values[:, 2], 12)
     elif how == "compromise":
         if weights is not None:
             gamma = _weighted(values, maximise, weights)

@@ -1,8 +1,8 @@
 """From a scenario to a Plan: the front of the chosen objectives and one route chosen from it.
 
 Which search runs follows from the model: straight legs (turn radius 0) use the exact layered
-search; turns use the branch and bound of ``dubins_search`` on top of it; the probability
-objective uses ``reliability_search``. Each says whether its front is proven optimal.
+search; turns and the probability objective use the branch and bound of ``bnb``. Each says
+whether its front is proven optimal.
 """
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
-from gcs_planner.core.bnb import DEFAULT_MAX_LABELS, bnb_front, flown_route
+from gcs_planner.core.bnb import DEFAULT_MAX_LABELS, PROB_EPS, bnb_front, flown_route
 from gcs_planner.core.choose import choose as choose_route
 from gcs_planner.core.probability import success_probability
 from gcs_planner.core.route import Route, evaluate_route
@@ -41,6 +41,26 @@ class Plan:
 
     def gaps(self) -> tuple[float, ...]:
         return tuple(max(0.0, r.length - lb) for r, lb in zip(self.routes, self.lower_bounds))
+
+    @property
+    def shortest_certain(self) -> int | None:
+        """Index of the shortest route that arrives with probability 1 (fewest corrections on a
+        tie), None when the front has none."""
+        certain = [i for i, r in enumerate(self.routes) if r.probability >= 1.0 - PROB_EPS]
+        return min(
+            certain, key=lambda i: (self.routes[i].length, self.routes[i].corrections), default=None
+        )
+
+    @property
+    def most_reliable(self) -> int:
+        """Index of the route most likely to arrive (the shortest, then fewest corrections, of
+        those)."""
+        return choose_route(
+            [r.length for r in self.routes],
+            [r.corrections for r in self.routes],
+            [r.probability for r in self.routes],
+            "most-reliable",
+        )
 
 
 def plan(
@@ -125,7 +145,13 @@ def _branch_and_bound(
         max_corrections=max_corrections,
         max_labels=max_labels,
     )
-    stats = {"search_seconds": res.seconds, "labels": res.labels, "open_labels": res.open_labels}
+    stats = {
+        "search_seconds": res.seconds,
+        "labels": res.labels,
+        "open_labels": res.open_labels,
+        "relaxation_rounds": res.rounds,
+        "critical_points": len(res.critical),
+    }
     radius = scenario.params.turn_radius
     model = (
         f"turning radius {radius:g} m (3D Dubins CS legs)" if radius > 0 else "straight legs"
@@ -147,14 +173,22 @@ def _branch_and_bound(
     # probability come from the route, not from the search's labels.
     routes = [_with_probability(scenario, flown_route(scenario, g.points)) for g in res.front]
     if res.optimal:
+        how = (
+            "dominance on length, corrections and error-state distribution, made exact over "
+            "simple routes by decremental state-space relaxation"
+            if radius == 0
+            else "over whole simple routes (headings make partial routes incomparable)"
+        )
         statement = (
             f"exact: the Pareto front over all simple feasible routes with {model}, proven by "
-            f"exhaustive branch and bound ({res.labels} labels) on the straight-leg cost-to-go"
+            f"exhaustive branch and bound ({res.labels} labels; bound: straight-leg cost-to-go "
+            f"per number of further corrections; {how})"
         )
     else:
         statement = (
-            f"budget reached ({max_labels} labels): each route's gap to its proven lower bound "
-            f"is given; routes not on this front may exist only with a length of at least "
-            f"{res.open_bound:,.1f} m"
+            f"not proven within the budget of {max_labels} labels per search: each route's "
+            f"gap to its proven lower bound (from the open partial routes and the exact "
+            f"straight-leg front) is given; routes missing from this front are at least "
+            f"{res.open_bound:,.1f} m long"
         )
     return routes, res.lower_bounds, res.optimal, statement, stats
