@@ -1,13 +1,19 @@
-"""Arguments shared by the commands that read a scenario (plan, mock-vehicle, dry-run)."""
+"""Arguments shared by the commands that read a scenario (plan, mock-vehicle, dry-run) and by
+the commands that plan one (plan, dry-run)."""
 
 from __future__ import annotations
 
 import argparse
 import math
+from typing import TYPE_CHECKING
 
+from gcs_planner.core.choose import CHOICES
 from gcs_planner.errors import InputError
 from gcs_planner.mission.georef import parse_origin
 from gcs_planner.scenario.model import Scenario
+
+if TYPE_CHECKING:
+    from gcs_planner.core.planner import Plan
 
 # flag -> Parameters field
 PARAMETER_FLAGS = {
@@ -56,3 +62,56 @@ def load_scenario_from_args(args: argparse.Namespace, path: str | None = None) -
     if path is None:
         raise InputError("no scenario given")
     return load_scenario(path, overrides)
+
+
+def add_plan_arguments(parser: argparse.ArgumentParser) -> None:
+    """The flags that say what to plan and which route to choose (plan, dry-run)."""
+    parser.add_argument(
+        "--objectives",
+        help="comma-separated subset of length,corrections,probability (default: "
+        "length,corrections, plus probability when the scenario has unreliable points)",
+    )
+    parser.add_argument("--choose", default="compromise", choices=CHOICES, help="route choice")
+    parser.add_argument(
+        "--weights", help="weights of the objectives for a weighted compromise, e.g. 1,0.5"
+    )
+    parser.add_argument(
+        "--max-corrections", type=int, help="consider routes with at most K corrections"
+    )
+
+
+def plan_from_args(args: argparse.Namespace, scenario: Scenario) -> Plan:
+    """Plan ``scenario`` with the flags of :func:`add_plan_arguments`; bad flags are InputError."""
+    from gcs_planner.core.planner import OBJECTIVES, plan
+
+    if args.objectives:
+        objectives = tuple(o.strip() for o in args.objectives.split(",") if o.strip())
+        unknown = [o for o in objectives if o not in OBJECTIVES]
+        if unknown or not objectives:
+            raise InputError(
+                f"unknown objective(s) {', '.join(unknown) or '(none)'}; "
+                f"choose from {', '.join(OBJECTIVES)}",
+                field="--objectives",
+            )
+    else:
+        objectives = ("length", "corrections")
+        if scenario.unreliable.any():
+            objectives += ("probability",)
+    weights = None
+    if args.weights:
+        try:
+            weights = [float(w) for w in args.weights.split(",")]
+        except ValueError:
+            raise InputError(f"not numbers: {args.weights!r}", field="--weights") from None
+    if args.choose == "most-reliable" and "probability" not in objectives:
+        objectives += ("probability",)
+    try:
+        return plan(
+            scenario,
+            objectives=objectives,
+            choice=args.choose,
+            weights=weights,
+            max_corrections=args.max_corrections,
+        )
+    except ValueError as exc:
+        raise InputError(str(exc)) from None

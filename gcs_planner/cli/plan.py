@@ -8,11 +8,14 @@ import sys
 from pathlib import Path
 
 from gcs_planner.atomic import write_atomic
-from gcs_planner.cli.common import add_scenario_arguments, load_scenario_from_args
-from gcs_planner.core.choose import CHOICES
-from gcs_planner.core.planner import OBJECTIVES, Plan, plan
+from gcs_planner.cli.common import (
+    add_plan_arguments,
+    add_scenario_arguments,
+    load_scenario_from_args,
+    plan_from_args,
+)
+from gcs_planner.core.planner import Plan
 from gcs_planner.core.route import Route
-from gcs_planner.errors import InputError
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -22,16 +25,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         description="Compute the Pareto front of INS-feasible routes and choose one.",
     )
     add_scenario_arguments(p)
-    p.add_argument(
-        "--objectives",
-        help="comma-separated subset of length,corrections,probability (default: "
-        "length,corrections, plus probability when the scenario has unreliable points)",
-    )
-    p.add_argument("--choose", default="compromise", choices=CHOICES, help="route choice")
-    p.add_argument(
-        "--weights", help="weights of the objectives for a weighted compromise, e.g. 1,0.5"
-    )
-    p.add_argument("--max-corrections", type=int, help="consider routes with at most K corrections")
+    add_plan_arguments(p)
     p.add_argument("--json", action="store_true", help="print one JSON object, nothing else")
     p.add_argument("--out", type=Path, help="folder for plan.json, route.csv and the mission files")
     p.set_defaults(func=run)
@@ -39,37 +33,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     scenario = load_scenario_from_args(args)
-    if args.objectives:
-        objectives = tuple(o.strip() for o in args.objectives.split(",") if o.strip())
-        unknown = [o for o in objectives if o not in OBJECTIVES]
-        if unknown or not objectives:
-            raise InputError(
-                f"unknown objective(s) {', '.join(unknown) or '(none)'}; "
-                f"choose from {', '.join(OBJECTIVES)}",
-                field="--objectives",
-            )
-    else:
-        objectives = ("length", "corrections")
-        if scenario.unreliable.any():
-            objectives += ("probability",)
-    weights = None
-    if args.weights:
-        try:
-            weights = [float(w) for w in args.weights.split(",")]
-        except ValueError:
-            raise InputError(f"not numbers: {args.weights!r}", field="--weights") from None
-    if args.choose == "most-reliable" and "probability" not in objectives:
-        objectives += ("probability",)
-    try:
-        result = plan(
-            scenario,
-            objectives=objectives,
-            choice=args.choose,
-            weights=weights,
-            max_corrections=args.max_corrections,
-        )
-    except ValueError as exc:
-        raise InputError(str(exc)) from None
+    result = plan_from_args(args, scenario)
 
     from gcs_planner import plan_json
 
@@ -106,6 +70,7 @@ COLUMNS = (
     ("kind", "{:>4}"),
     ("leg m", "{:>10.1f}"),
     ("arc m", "{:>7.1f}"),
+    ("turn °", "{:>6.1f}"),
     ("total m", "{:>10.1f}"),
     ("v err", "{:>7.3f}"),
     ("h err", "{:>7.3f}"),
@@ -120,11 +85,25 @@ def table_rows(route: Route) -> list[list]:
     for n, s in enumerate(route.stops):
         leg = s.leg.length if s.leg else 0.0
         arc = s.leg.arc if s.leg else 0.0
+        turn = math.degrees(s.leg.turn_angle) if s.leg else 0.0
         vm = s.v_margin if math.isfinite(s.v_margin) else float("nan")
         hm = s.h_margin if math.isfinite(s.h_margin) else float("nan")
         kind = s.kind.name + ("*" if s.unreliable else "")
         rows.append(
-            [n, s.id, kind, leg, arc, s.cumulative, s.v_arrival, s.h_arrival, vm, hm, s.p_arrive]
+            [
+                n,
+                s.id,
+                kind,
+                leg,
+                arc,
+                turn,
+                s.cumulative,
+                s.v_arrival,
+                s.h_arrival,
+                vm,
+                hm,
+                s.p_arrive,
+            ]
         )
     return rows
 
@@ -162,11 +141,24 @@ def render(result: Plan) -> str:
         f"Pareto front ({len(result.routes)} routes; * = chosen by {result.choice}):",
         f"  {'':1} {'length m':>11} {'corr':>4} {'P success':>9} {'gap m':>7}  route",
     ]
+    certain, reliable = result.shortest_certain, result.most_reliable
     for i, (r, gap) in enumerate(zip(result.routes, result.gaps())):
         mark = "*" if i == result.chosen else " "
         ids = " ".join(r.ids())
         row = f"{r.length:>11.1f} {r.corrections:>4} {r.probability:>9.4f} {gap:>7.1f}"
         out.append(f"  {mark} {row}  {ids}")
+    if "probability" in result.objectives:
+        out.append(
+            "  shortest certain route: "
+            + (
+                f"{result.routes[certain].length:,.1f} m, {result.routes[certain].corrections} "
+                "corrections"
+                if certain is not None
+                else "none on this front"
+            )
+            + f"; most reliable: P={result.routes[reliable].probability:.4f}, "
+            f"{result.routes[reliable].length:,.1f} m"
+        )
     out += [
         "",
         f"chosen route ({result.route.corrections} corrections, "

@@ -1,0 +1,180 @@
+"""`gcs-planner dry-run SCENARIO`: plan, export, upload to a mock vehicle on loopback, read back,
+replay the stored mission, report."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+from gcs_planner.cli.common import (
+    add_plan_arguments,
+    add_scenario_arguments,
+    load_scenario_from_args,
+    plan_from_args,
+)
+from gcs_planner.dry_run import EXIT_LOST, DryRunReport, dry_run
+from gcs_planner.errors import InputError, LinkError
+from gcs_planner.link.mission_client import FIRMWARES
+from gcs_planner.link.protocol import DEFAULT_TIMEOUT_S
+from sim.replay import CHORD_SHORTFALL, QUANTISATION_M
+
+EPILOG = f"""exit codes: 0 the mission verified and the replay arrived; 2 bad input; 3 no feasible
+route; {LinkError.exit_code} the upload failed or the read-back differs; {EXIT_LOST} the mission
+verified but the replay was lost (the output says where and which limit)."""
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "dry-run",
+        help="plan, upload to a mock vehicle over loopback, read back, replay and report",
+        description="Plan the scenario, export the chosen route, upload it with the project's "
+        "MAVLink client to a mock vehicle on 127.0.0.1 (its landmarks: the scenario, loaded on "
+        "its own), read it back and compare, then replay the mission the vehicle stored with "
+        "INS drift and corrections.",
+        epilog=EPILOG,
+    )
+    add_scenario_arguments(p)
+    add_plan_arguments(p)
+    g = p.add_argument_group("dry run")
+    g.add_argument("--firmware", choices=FIRMWARES, default="ardupilot", help="vehicle flavour")
+    g.add_argument("--runs", default="0", metavar="N", help="Monte Carlo replays (default 0)")
+    g.add_argument(
+        "--loss",
+        default="0",
+        metavar="RATE",
+        help="fraction of MAVLink messages the vehicle drops, both ways, seeded (default 0)",
+    )
+    g.add_argument(
+        "--seed", default="0", metavar="S", help="seeds the losses and the replay's draws"
+    )
+    g.add_argument(
+        "--timeout",
+        default=str(DEFAULT_TIMEOUT_S),
+        metavar="SECONDS",
+        help=f"ground station's wait per message (default {DEFAULT_TIMEOUT_S:g})",
+    )
+    g.add_argument("--json", action="store_true", help="print one JSON object, nothing else")
+    p.set_defaults(func=run)
+
+
+def _number(text: str, flag: str, kind: type, low: float, high: float | None = None) -> float:
+    """A flag's value checked here, not by argparse, so a bad one is one line and exit 2."""
+    try:
+        value = kind(text)
+    except ValueError:
+        raise InputError(f"not a number: {text!r}", field=flag) from None
+    if not (value >= low and (high is None or value < high)):
+        bound = f">= {low:g}" if high is None else f"in [{low:g}, {high:g})"
+        raise InputError(f"must be {bound}, got {text!r}", field=flag)
+    return value
+
+
+def run(args: argparse.Namespace) -> int:
+    runs = int(_number(args.runs, "--runs", int, 0))
+    loss = _number(args.loss, "--loss", float, 0.0, 1.0)
+    seed = int(_number(args.seed, "--seed", int, 0))
+    timeout = _number(args.timeout, "--timeout", float, 1e-3)
+    scenario = load_scenario_from_args(args)
+    result = plan_from_args(args, scenario)
+    # The vehicle's landmark database comes from the file again, not from the planner.
+    landmarks = load_scenario_from_args(args)
+    report = dry_run(
+        result,
+        landmarks,
+        flavour=args.firmware,
+        runs=runs,
+        loss=loss,
+        seed=seed,
+        timeout=timeout,
+    )
+    if args.json:
+        sys.stdout.write(json.dumps(report.to_dict(), indent=2) + "\n")
+    else:
+        print(render(report))
+    if not report.verified:
+        print(f"gcs-planner: error: {report.link_error}", file=sys.stderr)
+        return LinkError.exit_code
+    if not report.arrived:
+        print(f"gcs-planner: lost: {report.why}", file=sys.stderr)
+        return EXIT_LOST
+    return 0
+
+
+def render(r: DryRunReport) -> str:
+    corrections = len(r.route) - 2
+    out = [
+        f"dry run of {r.scenario} on a mock {r.flavour} vehicle over UDP 127.0.0.1 "
+        f"(loss {r.loss:g}, seed {r.seed})",
+        f"route: {' '.join(r.route)} ({corrections} corrections, planned "
+        f"{r.planned_length:,.1f} m, planned probability {r.planned_probability:.4f})",
+    ]
+    if r.verified:
+        out.append(
+            f"upload: {r.items} items, read back and equal (verified) in {r.upload_seconds:.2f} s"
+            f", {r.resends} resends, {r.messages_dropped} messages dropped"
+        )
+    else:
+        out.append(f"upload: NOT verified after {r.upload_attempts} attempt(s): {r.link_error}")
+    for n, error in enumerate(r.upload_errors[: r.upload_attempts - 1 if r.verified else -1], 1):
+        out.append(f"  attempt {n} failed: {error}")
+    out += ["", _table(r), ""]
+    within = "within" if r.length_within_tolerance else "OUTSIDE"
+    out.append(
+        f"length: the stored mission flies {r.mission_length:,.1f} m from A to B, planned "
+        f"{r.planned_length:,.1f} m: difference {r.length_difference:+.2f} m, {within} the "
+        f"tolerance {r.length_tolerance:.2f} m ({CHORD_SHORTFALL:.3%} of {r.arc_length:,.1f} m "
+        f"of arcs + {QUANTISATION_M * 100:g} cm x {r.waypoints} waypoints)"
+    )
+    if not r.arrived:
+        out.append(f"flown {r.flown_length:,.1f} m before the vehicle was lost")
+    if not r.corrections_as_planned:
+        out.append("corrections: NOT the planned points in the planned order (see the rows)")
+    if r.runs > 0 and r.success_rate is not None and r.success_ci is not None:
+        low, high = r.success_ci
+        verdict = "within" if r.probability_within_ci else "OUTSIDE"
+        out.append(
+            f"success rate {r.success_rate:.3f} over {r.runs} replays "
+            f"({(r.confidence or 0) * 100:g} % Wilson interval {low:.3f}-{high:.3f}); "
+            f"planned probability {r.planned_probability:.4f}: {verdict} the interval"
+        )
+    if r.planned_probability < 1.0:
+        out.append(
+            f"note: the planned probability is {r.planned_probability:.4f} < 1: this replay is "
+            f"one seeded draw (--seed {r.seed})"
+            + ("" if r.runs else "; --runs N gives the success rate")
+        )
+    if r.ok:
+        out.append("result: verified and arrived")
+    elif not r.verified:
+        out.append("result: the upload did not verify")
+    else:
+        out.append(f"result: LOST: {r.why}")
+    return "\n".join(out)
+
+
+def _table(r: DryRunReport) -> str:
+    head = (
+        f"{'point':>6} {'kind':>4} {'flown m':>10} {'v err':>7} {'h err':>7} "
+        f"{'v margin':>8} {'h margin':>8} {'planned v':>9} {'planned h':>9}  outcome"
+    )
+    lines = [head]
+    for row in r.rows:
+        kind = row.kind + ("*" if row.unreliable else "")
+        pv = "-" if row.planned_v is None else f"{row.planned_v:.3f}"
+        ph = "-" if row.planned_h is None else f"{row.planned_h:.3f}"
+        outcome = row.outcome + ("" if row.on_route else " (not on route)")
+        lines.append(
+            f"{row.point:>6} {kind:>4} {row.distance:>10.1f} {row.v_before:>7.3f} "
+            f"{row.h_before:>7.3f} {row.v_margin:>8.3f} {row.h_margin:>8.3f} {pv:>9} {ph:>9}"
+            f"  {outcome}"
+        )
+    if r.arrived or (r.rows and r.rows[-1].outcome != "lost"):
+        b = r.route[-1]
+        lines.append(
+            f"{b:>6} {'B':>4} {r.flown_length:>10.1f} {r.v_at_b:>7.3f} {r.h_at_b:>7.3f} "
+            f"{r.theta - r.v_at_b:>8.3f} {r.theta - r.h_at_b:>8.3f} {'':>9} {'':>9}  "
+            + ("arrived" if r.arrived else "lost")
+        )
+    lines.append("* unreliable point; errors on arrival, before the correction")
+    return "\n".join(lines)

@@ -1,0 +1,314 @@
+"""The dry run: a plan checked end to end against the mock vehicle, over real MAVLink on loopback.
+
+plan -> plan JSON -> mission items (the exporter) -> upload with the project's client to a
+:class:`~sim.vehicle.MockVehicle` on 127.0.0.1 -> read back and compare -> the vehicle replays
+the mission it *stored* against its own landmark database -> report.
+
+The vehicle is given nothing of the planner's: only a scenario the caller loaded on its own (the
+CLI reads the file a second time), as a real aircraft would carry its correction map. The report
+then compares what the vehicle flew with what the plan promised: the flown length within the
+replay's stated tolerance (sim/replay.py: chord shortfall on densified arcs plus the degE7
+quantisation of every waypoint), the corrections in the planned order, and with ``runs`` the
+Monte Carlo success rate against the plan's exact probability.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import asdict, dataclass
+
+from gcs_planner.core.planner import Plan
+from gcs_planner.errors import LinkError
+from gcs_planner.link.connection import open_link
+from gcs_planner.link.mission_client import MissionClient
+from gcs_planner.link.protocol import DEFAULT_RETRIES, DEFAULT_TIMEOUT_S
+from gcs_planner.mission.builder import build_mission
+from gcs_planner.plan_json import plan_to_dict
+from gcs_planner.scenario.model import Scenario
+from sim import replay as replay_mod
+from sim.faults import FaultRates
+from sim.vehicle import FLAVOURS, MockVehicle, free_udp_port
+
+# Exit code of a dry run whose mission verified but whose replay did not arrive. Not an error
+# class: the report is still printed in full, the code only tells a script the verdict.
+EXIT_LOST = 5
+# ArduPilot's wait before it asks again for a mission item it has not received.
+VEHICLE_REQUEST_TIMEOUT_S = 1.0
+
+
+@dataclass(frozen=True)
+class DryRunRow:
+    """One correction the vehicle met: the errors on arrival (before it) and what it did."""
+
+    point: str
+    kind: str
+    unreliable: bool
+    distance: float  # flown from A, metres
+    v_before: float
+    h_before: float
+    v_limit: float
+    h_limit: float
+    v_margin: float
+    h_margin: float
+    outcome: str  # "ok", "failed" (unreliable point, residual kept) or "lost" (over a limit)
+    on_route: bool  # False: a landmark the path passed within the capture radius of by chance
+    planned_v: float | None  # the plan's errors on arrival at this point, when it is on the route
+    planned_h: float | None
+
+
+@dataclass(frozen=True)
+class DryRunReport:
+    scenario: str
+    flavour: str
+    route: tuple[str, ...]  # planned point ids, A..B
+    verified: bool
+    link_error: str  # why the upload did not verify ("" when it did)
+    upload_attempts: int
+    upload_errors: tuple[str, ...]  # of the attempts that failed, in order
+    items: int
+    upload_seconds: float
+    resends: int
+    messages_dropped: int
+    loss: float
+    seed: int
+    arrived: bool
+    lost_reason: str
+    why: str  # where and which limit, when not arrived
+    flown_length: float  # to B, or to where the vehicle was lost
+    mission_length: float  # of the stored mission's path to B, whatever the draw
+    planned_length: float
+    arc_length: float
+    waypoints: int
+    length_tolerance: float
+    rows: tuple[DryRunRow, ...]
+    corrections_as_planned: bool  # the path meets the planned points, in order, and no other
+    v_at_b: float
+    h_at_b: float
+    theta: float
+    planned_probability: float
+    runs: int = 0
+    success_rate: float | None = None
+    success_ci: tuple[float, float] | None = None
+    confidence: float | None = None
+
+    @property
+    def length_difference(self) -> float:
+        return self.mission_length - self.planned_length
+
+    @property
+    def length_within_tolerance(self) -> bool:
+        return abs(self.length_difference) <= self.length_tolerance
+
+    @property
+    def probability_within_ci(self) -> bool | None:
+        if self.success_ci is None:
+            return None
+        low, high = self.success_ci
+        return low <= self.planned_probability <= high
+
+    @property
+    def ok(self) -> bool:
+        return self.verified and self.arrived
+
+    def to_dict(self) -> dict:
+        out = asdict(self)
+        out["route"] = list(self.route)
+        out["length_difference"] = self.length_difference
+        out["length_within_tolerance"] = self.length_within_tolerance
+        out["ok"] = self.ok
+        if self.runs > 0:
+            out["success_ci"] = list(self.success_ci or ())
+            out["probability_within_ci"] = self.probability_within_ci
+        else:
+            for key in ("success_rate", "success_ci", "confidence"):
+                del out[key]
+        return out
+
+
+def length_tolerance(arc_length: float, waypoints: int) -> float:
+    """How far the flown length may be from the planned one (sim/replay.py): chords under the
+    densified arcs are short by at most ``CHORD_SHORTFALL`` of the arc, and each waypoint's
+    degE7 position moves it by at most ``QUANTISATION_M``."""
+    return replay_mod.CHORD_SHORTFALL * arc_length + replay_mod.QUANTISATION_M * waypoints
+
+
+def dry_run(
+    plan: Plan,
+    landmarks: Scenario,
+    *,
+    flavour: str = "ardupilot",
+    runs: int = 0,
+    loss: float = 0.0,
+    seed: int = 0,
+    capture_radius: float = replay_mod.DEFAULT_CAPTURE_RADIUS_M,
+    timeout: float = DEFAULT_TIMEOUT_S,
+    retries: int = DEFAULT_RETRIES,
+    request_timeout: float | None = None,
+    attempts: int = 3,
+    connect_timeout: float = 10.0,
+) -> DryRunReport:
+    """Fly ``plan``'s chosen route on a mock vehicle whose landmark database is ``landmarks``.
+
+    ``loss``: the fraction of MAVLink messages the vehicle drops, both ways (seeded by ``seed``,
+    which also seeds the replay's draws at unreliable points). ``runs`` > 0 adds a Monte Carlo
+    of that many replays. ``timeout`` and ``retries`` are the ground station's (QGroundControl's
+    1.5 s and 5 by default), ``request_timeout`` the vehicle's wait before it asks for an item
+    again: ArduPilot's 1 s, shortened when the ground station's patience (``timeout`` times
+    ``retries + 1``) would not cover four of them. The ground station gives up on a lost
+    request even while the vehicle answers its resent item with INVALID_SEQUENCE, so the
+    vehicle's own re-request must come well within that patience.
+
+    ``attempts``: whole uploads tried before giving up, as a user would press upload again. A
+    lost final MISSION_ACK otherwise fails a complete transfer: the ground station resends the
+    last item and the mock vehicle, idle again, stays silent (PX4 answers such a duplicate with
+    the ACK since PX4-Autopilot#9547). Only a read-back equal to the upload counts as verified;
+    a refusal (MAV_MISSION_RESULT) is not retried. A failed upload is not raised: the report says
+    ``verified`` False and why, and the vehicle still replays whatever it stored.
+    """
+    if flavour not in FLAVOURS:
+        raise ValueError(f"flavour must be one of {FLAVOURS}, got {flavour!r}")
+    if runs < 0:
+        raise ValueError("runs must be >= 0")
+    if attempts < 1:
+        raise ValueError("attempts must be >= 1")
+    if not 0.0 <= loss < 1.0:
+        raise ValueError(f"loss must lie in [0, 1), got {loss!r}")
+    if request_timeout is None:
+        request_timeout = min(VEHICLE_REQUEST_TIMEOUT_S, timeout * (retries + 1) / 4)
+    route = plan.route
+    mission = build_mission(plan_to_dict(plan), firmware=flavour)
+    loiter = mission.loiter_param[1] if mission.loiter_param else None
+    faults = FaultRates(drop=loss) if loss > 0 else None
+    port = free_udp_port()
+    vehicle = MockVehicle(
+        f"udpin:127.0.0.1:{port}",
+        scenario=landmarks,
+        flavour=flavour,
+        capacity=max(5000, len(mission.items)),
+        faults_out=faults,
+        faults_in=faults,
+        fault_seed=seed,
+        capture_radius=capture_radius,
+        request_timeout=request_timeout,
+    )
+    verified, errors = False, []
+    start = time.perf_counter()
+    with vehicle:
+        link = open_link(f"udpout:127.0.0.1:{port}")
+        client = MissionClient(link, timeout=timeout, retries=retries)
+        try:
+            client.connect(timeout=connect_timeout)
+            for _ in range(attempts):
+                try:
+                    client.upload_verified(mission.items, loiter_radius=loiter)
+                except LinkError as exc:
+                    errors.append(str(exc))
+                    if str(exc).startswith("upload refused"):
+                        break  # the vehicle said no: asking again gets the same answer
+                else:
+                    verified = True
+                    break
+        except LinkError as exc:  # no heartbeat: nothing to retry
+            errors.append(str(exc))
+        finally:
+            link.close()
+        upload_seconds = time.perf_counter() - start
+        replayed = vehicle.replay(seed=seed, runs=runs)
+        dropped = sum(
+            inj.counts.dropped for inj in (vehicle.faults_out, vehicle.faults_in) if inj is not None
+        )
+
+    planned = {s.id: s for s in route.stops[1:-1]}
+    rows = tuple(_row(c, planned) for c in replayed.run.corrections)
+    arcs = sum(s.leg.arc for s in route.stops if s.leg is not None)
+    mc = replayed.monte_carlo
+    return DryRunReport(
+        scenario=landmarks.name,
+        flavour=flavour,
+        route=tuple(route.ids()),
+        verified=verified,
+        link_error="" if verified else errors[-1],
+        upload_attempts=len(errors) + verified,
+        upload_errors=tuple(errors),
+        items=len(mission.items),
+        upload_seconds=upload_seconds,
+        resends=client.retry_count,
+        messages_dropped=dropped,
+        loss=loss,
+        seed=seed,
+        arrived=replayed.arrived,
+        lost_reason=replayed.run.lost_reason,
+        why=_why(replayed),
+        flown_length=replayed.flown_length,
+        mission_length=replayed.mission_length,
+        planned_length=route.length,
+        arc_length=arcs,
+        waypoints=replayed.waypoints,
+        length_tolerance=length_tolerance(arcs, replayed.waypoints),
+        rows=rows,
+        # The landmarks the path meets do not depend on the draw, only their outcomes do.
+        corrections_as_planned=[e.id for e in replayed.encounters] == list(planned),
+        v_at_b=replayed.run.v_at_end,
+        h_at_b=replayed.run.h_at_end,
+        theta=replayed.theta,
+        planned_probability=route.probability,
+        runs=runs,
+        success_rate=None if mc is None else mc.success_rate,
+        success_ci=None if mc is None else (mc.ci_low, mc.ci_high),
+        confidence=None if mc is None else mc.confidence,
+    )
+
+
+def _row(c: replay_mod.CorrectionRow, planned: dict) -> DryRunRow:
+    if c.succeeded is None:
+        outcome = "lost"
+    else:
+        outcome = "ok" if c.succeeded else "failed"
+    stop = planned.get(c.id)
+    return DryRunRow(
+        point=c.id,
+        kind=c.kind,
+        unreliable=c.unreliable,
+        distance=c.distance,
+        v_before=c.v_before,
+        h_before=c.h_before,
+        v_limit=c.v_limit,
+        h_limit=c.h_limit,
+        v_margin=c.v_margin,
+        h_margin=c.h_margin,
+        outcome=outcome,
+        on_route=stop is not None,
+        planned_v=None if stop is None else stop.v_arrival,
+        planned_h=None if stop is None else stop.h_arrival,
+    )
+
+
+def _why(report: replay_mod.ReplayReport) -> str:
+    """Where the vehicle was lost and which limit broke, with the numbers ("" if it arrived)."""
+    run = report.run
+    if run.arrived:
+        return ""
+    if run.corrections and not run.corrections[-1].within_limits:
+        c = run.corrections[-1]
+        broken = []
+        if c.v_margin < 0:
+            broken.append(f"vertical error {c.v_before:.3f} > limit {c.v_limit:g}")
+        if c.h_margin < 0:
+            broken.append(f"horizontal error {c.h_before:.3f} > limit {c.h_limit:g}")
+        failed = [r.id for r in run.corrections if r.succeeded is False]
+        cause = f" after the failed correction(s) at {', '.join(failed)}" if failed else ""
+        return (
+            f"lost at {c.kind} point {c.id}, {c.distance:,.1f} m from A: "
+            f"{' and '.join(broken) or 'an error over its limit'}{cause}"
+        )
+    if not run.reached_b:
+        return run.lost_reason or "the mission does not reach B"
+    where = f"{run.flown_length:,.1f} m from A"
+    broken = [
+        f"{name} error {value:.3f} > theta {report.theta:g}"
+        for name, value in (("vertical", run.v_at_end), ("horizontal", run.h_at_end))
+        if value > report.theta
+    ]
+    failed = [r.id for r in run.corrections if r.succeeded is False]
+    cause = f" after the failed correction(s) at {', '.join(failed)}" if failed else ""
+    return f"lost at B, {where}: {' and '.join(broken) or 'an error over theta'}{cause}"

@@ -1,0 +1,295 @@
+"""`gcs-planner dry-run` end to end: plan, export, upload over real UDP on 127.0.0.1 to the mock
+vehicle, read back, replay the stored mission, report; through the CLI and the library."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from gcs_planner.cli import main
+from gcs_planner.core.planner import plan
+from gcs_planner.dry_run import EXIT_LOST, dry_run
+from gcs_planner.errors import LinkError
+from gcs_planner.scenario.readers import load_scenario
+
+# A straight chain A, V*, H, V*, H, V*, H, V, B, 12 km apart (* unreliable). Every point is needed
+# (a 24 km leg breaks a limit), and by hand: a failed V* leaves v = 5, so the next H sees 17 <= 20
+# but the V after it sees 29 > 25. The route arrives only if all three V* succeed: P = 0.8 ** 3.
+LINE = [
+    ("P0", 0, 0, "A", 0),
+    ("P1", 12_000, 300, "V", 1),
+    ("P2", 24_000, 0, "H", 0),
+    ("P3", 36_000, 300, "V", 1),
+    ("P4", 48_000, 0, "H", 0),
+    ("P5", 60_000, 300, "V", 1),
+    ("P6", 72_000, 0, "H", 0),
+    ("P7", 84_000, 300, "V", 0),
+    ("P8", 96_000, 0, "B", 0),
+]
+LINE_P = 0.8**3
+PARAMS = {"alpha1": 25, "alpha2": 15, "beta1": 20, "beta2": 25, "theta": 30, "delta": 0.001}
+LINE_FLAGS = [f for k, v in PARAMS.items() for f in (f"--{k}", str(v))] + ["--turn-radius", "0"]
+
+DS1 = ["--alpha1", "25", "--alpha2", "15", "--beta1", "20", "--beta2", "25", "--theta", "30",
+       "--delta", "0.001"]  # fmt: skip
+DS2 = ["--alpha1", "20", "--alpha2", "10", "--beta1", "15", "--beta2", "20", "--theta", "20",
+       "--delta", "0.001"]  # fmt: skip
+FAST = ["--objectives", "length,corrections", "--turn-radius", "200"]
+
+KEYS = {
+    "verified",
+    "arrived",
+    "flown_length",
+    "planned_length",
+    "mission_length",
+    "rows",
+    "length_tolerance",
+    "length_within_tolerance",
+    "planned_probability",
+    "why",
+}
+ROW_KEYS = {"point", "kind", "v_before", "h_before", "v_margin", "h_margin", "outcome"}
+
+
+def write_points(path: Path, rows: list[tuple]) -> Path:
+    lines = ["id,x,y,z,kind,unreliable"]
+    # Altitude from the point's number, so that a file without some points keeps the others.
+    lines += [f"{i},{x},{y},{5000 + 10 * int(i[1:])},{k},{u}" for i, x, y, k, u in rows]
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return path
+
+
+@pytest.fixture(scope="module")
+def line_csv(tmp_path_factory) -> Path:
+    return write_points(tmp_path_factory.mktemp("line") / "line.csv", LINE)
+
+
+@pytest.fixture(scope="module")
+def line_plan(line_csv):
+    scenario = load_scenario(line_csv, {**PARAMS, "turn_radius": 0})
+    return plan(scenario, objectives=("length", "corrections", "probability"))
+
+
+def landmarks(path: Path):
+    """The vehicle's own copy of the scenario, read from the file again."""
+    return load_scenario(path, {**PARAMS, "turn_radius": 0})
+
+
+def run_cli(capsys, *argv: str) -> tuple[int, str, str]:
+    rc = main(["dry-run", *argv])
+    out, err = capsys.readouterr()
+    return rc, out, err
+
+
+def seed_where(line_plan, line_csv, arrived: bool) -> int:
+    """The first seed whose single replay arrives (or is lost), found by flying it."""
+    for seed in range(60):
+        if dry_run(line_plan, landmarks(line_csv), seed=seed).arrived == arrived:
+            return seed
+    raise AssertionError(f"no seed in 0..59 with arrived={arrived} (P = {LINE_P})")
+
+
+def check_consistent(d: dict, rc: int, route_len: int | None = None) -> None:
+    """What every dry-run JSON must satisfy, whatever the draw."""
+    assert KEYS <= d.keys()
+    assert d["verified"] is True and d["link_error"] == ""
+    assert rc == (0 if d["arrived"] else EXIT_LOST)
+    assert abs(d["mission_length"] - d["planned_length"]) <= d["length_tolerance"]
+    assert d["length_within_tolerance"] is True
+    assert d["corrections_as_planned"] is True
+    for row in d["rows"]:
+        assert ROW_KEYS <= row.keys()
+        assert row["on_route"] and row["point"] in d["route"]
+        assert row["v_margin"] == pytest.approx(row["v_limit"] - row["v_before"])
+    if d["arrived"]:
+        assert d["flown_length"] == pytest.approx(d["mission_length"])
+        assert [r["point"] for r in d["rows"]] == d["route"][1:-1]
+        assert d["why"] == ""
+        assert max(d["v_at_b"], d["h_at_b"]) <= d["theta"]
+    else:
+        assert d["flown_length"] < d["mission_length"]
+        assert d["rows"][-1]["outcome"] == "lost" and d["why"]
+
+
+@pytest.mark.parametrize("firmware", ["ardupilot", "px4"])
+def test_cli_dry_run_json_both_flavours(capsys, line_csv, firmware):
+    rc, out, _ = run_cli(capsys, str(line_csv), *LINE_FLAGS, "--firmware", firmware, "--json")
+    d = json.loads(out)
+    check_consistent(d, rc)
+    assert d["flavour"] == firmware
+    assert d["route"] == [p[0] for p in LINE]
+    assert d["planned_probability"] == pytest.approx(LINE_P)
+    # Straight legs: the flown length is the planned one to the degE7 quantisation.
+    assert d["arc_length"] == 0.0
+    assert d["length_tolerance"] == pytest.approx(0.02 * d["waypoints"])
+    # ArduPilot stores its home as item 0; PX4 has none.
+    assert d["items"] == (12 if firmware == "ardupilot" else 11)
+
+
+def test_library_arriving_replay_matches_the_plan(line_plan, line_csv):
+    seed = seed_where(line_plan, line_csv, arrived=True)
+    report = dry_run(line_plan, landmarks(line_csv), flavour="px4", seed=seed)
+    assert report.ok and report.verified and report.arrived
+    stops = line_plan.route.stops
+    assert [r.point for r in report.rows] == [s.id for s in stops[1:-1]]
+    tol_units = PARAMS["delta"] * report.length_tolerance
+    for row, stop in zip(report.rows, stops[1:-1], strict=True):
+        assert row.outcome == "ok"
+        assert abs(row.v_before - stop.v_arrival) <= tol_units
+        assert abs(row.h_before - stop.h_arrival) <= tol_units
+    assert abs(report.flown_length - line_plan.route.length) <= report.length_tolerance
+
+
+def test_lost_replay_exits_non_zero_and_says_where(capsys, line_plan, line_csv):
+    seed = seed_where(line_plan, line_csv, arrived=False)
+    rc, out, err = run_cli(capsys, str(line_csv), *LINE_FLAGS, "--seed", str(seed))
+    assert rc == EXIT_LOST
+    assert "LOST" in out and "verified" in out
+    assert "planned probability is 0.5120 < 1" in out
+    rc_json, out_json, _ = run_cli(
+        capsys, str(line_csv), *LINE_FLAGS, "--seed", str(seed), "--json"
+    )
+    d = json.loads(out_json)
+    check_consistent(d, rc_json)
+    assert not d["arrived"]
+    rows = d["rows"]
+    failed = [r["point"] for r in rows if r["outcome"] == "failed"]
+    # By hand (see LINE): one V* failed, its H still held, the V after it broke alpha1.
+    ids = [p[0] for p in LINE]
+    lost = rows[-1]
+    assert failed and ids.index(lost["point"]) == ids.index(failed[-1]) + 2
+    assert lost["kind"] == "V" and lost["v_margin"] < 0 <= lost["h_margin"]
+    assert f"lost at V point {lost['point']}" in err
+    assert "vertical error" in err and "limit 25" in err and failed[-1] in err
+
+
+def test_monte_carlo_interval_contains_the_exact_probability(capsys, line_csv):
+    rc, out, _ = run_cli(capsys, str(line_csv), *LINE_FLAGS, "--runs", "200", "--json")
+    d = json.loads(out)
+    check_consistent(d, rc)
+    low, high = d["success_ci"]
+    assert d["runs"] == 200 and low <= d["success_rate"] <= high
+    assert low <= LINE_P <= high and d["probability_within_ci"] is True
+    assert d["planned_probability"] == pytest.approx(LINE_P)
+
+
+def test_loss_still_verifies_and_replays_the_same_mission(capsys, line_plan, line_csv):
+    clean = dry_run(line_plan, landmarks(line_csv), seed=4)
+    lossy = dry_run(
+        line_plan, landmarks(line_csv), seed=4, loss=0.1, timeout=0.3, request_timeout=0.3
+    )
+    assert lossy.verified and lossy.messages_dropped > 0
+    assert lossy.rows == clean.rows and lossy.arrived == clean.arrived
+    rc, out, _ = run_cli(
+        capsys, str(line_csv), *LINE_FLAGS, "--firmware", "px4", "--loss", "0.1",
+        "--seed", "4", "--timeout", "0.3", "--json",
+    )  # fmt: skip
+    d = json.loads(out)
+    check_consistent(d, rc)
+    assert d["messages_dropped"] > 0 and d["loss"] == 0.1
+
+
+def test_vehicle_flies_its_own_landmarks_not_the_planners(tmp_path, line_plan):
+    # The vehicle's map lacks P3: the plan still goes there, but no correction happens, and the
+    # H at P4 then sees v = 36 > beta1 = 20.
+    csv = write_points(tmp_path / "no_p3.csv", [p for p in LINE if p[0] != "P3"])
+    report = dry_run(line_plan, landmarks(csv))
+    assert report.verified and not report.arrived and not report.corrections_as_planned
+    assert [r.point for r in report.rows][-1] == "P4"
+    assert "P3" not in [r.point for r in report.rows]
+    assert report.why.startswith("lost at H point P4")
+
+
+def test_refused_upload_is_never_reported_as_a_success(capsys, line_csv, monkeypatch):
+    import gcs_planner.dry_run as module
+
+    class SmallVehicle(module.MockVehicle):
+        """An autopilot that stores fewer items than the mission has."""
+
+        def __init__(self, *args, **kwargs):
+            super().__init__(*args, **{**kwargs, "capacity": 5})
+
+    monkeypatch.setattr(module, "MockVehicle", SmallVehicle)
+    rc, out, err = run_cli(capsys, str(line_csv), *LINE_FLAGS, "--json")
+    d = json.loads(out)
+    assert rc == LinkError.exit_code
+    assert d["verified"] is False and "NO_SPACE" in d["link_error"] and "NO_SPACE" in err
+    assert d["arrived"] is False and d["ok"] is False  # it stored nothing, so flew nothing
+
+
+@pytest.mark.parametrize(
+    "argv, field",
+    [
+        (["--loss", "1.5"], "--loss"),
+        (["--loss", "abc"], "--loss"),
+        (["--runs", "-1"], "--runs"),
+        (["--seed", "x"], "--seed"),
+        (["--objectives", "speed"], "--objectives"),
+    ],
+)
+def test_bad_input_is_one_line_and_exit_2(capsys, line_csv, argv, field):
+    rc, out, err = run_cli(capsys, str(line_csv), *LINE_FLAGS, *argv)
+    assert rc == 2 and out == ""
+    assert len(err.strip().splitlines()) == 1 and field in err and "Traceback" not in err
+
+
+def test_missing_scenario_file_is_exit_2(capsys, tmp_path):
+    rc, _, err = run_cli(capsys, str(tmp_path / "nope.csv"), *LINE_FLAGS)
+    assert rc == 2 and "no such file" in err and len(err.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize(
+    "dataset, flags, firmware", [(1, DS1, "ardupilot"), (2, DS2, "px4")], ids=["ds1", "ds2"]
+)
+def test_contest_workbook_dry_run_verifies(capsys, dataset_paths, dataset, flags, firmware):
+    rc, out, _ = run_cli(
+        capsys, str(dataset_paths[dataset]), *flags, *FAST, "--firmware", firmware,
+        "--runs", "200", "--json",
+    )  # fmt: skip
+    d = json.loads(out)
+    check_consistent(d, rc)
+    assert d["arc_length"] > 0  # turns are flown on densified arcs, inside the tolerance
+    assert 0 < d["planned_probability"] <= 1
+    low, high = d["success_ci"]
+    assert low <= d["planned_probability"] <= high
+
+
+def test_contest_workbook_1_most_reliable_route_verifies_and_arrives(capsys, dataset_paths):
+    rc, out, _ = run_cli(
+        capsys, str(dataset_paths[1]), *DS1, "--turn-radius", "200", "--choose", "most-reliable",
+        "--json",
+    )  # fmt: skip
+    d = json.loads(out)
+    check_consistent(d, rc)
+    # Dataset 1 has a route through reliable points only: its arrival is not a matter of luck.
+    assert d["planned_probability"] == 1.0
+    assert rc == 0 and d["arrived"] and d["ok"]
+    assert all(r["outcome"] == "ok" for r in d["rows"])
+
+
+def _flags_to_overrides(flags: list[str]) -> dict[str, float]:
+    return {flags[i].lstrip("-"): float(flags[i + 1]) for i in range(0, len(flags), 2)}
+
+
+@pytest.mark.parametrize("dataset, flags", [(1, DS1), (2, DS2)], ids=["ds1", "ds2"])
+def test_contest_workbook_arriving_draw_flies_the_plan(dataset_paths, dataset, flags):
+    overrides = {**_flags_to_overrides(flags), "turn_radius": 200.0}
+    path = dataset_paths[dataset]
+    result = plan(load_scenario(path, overrides), objectives=("length", "corrections"))
+    assert 0 < result.route.probability < 1  # so both outcomes occur; search for an arrival
+    for seed in range(80):
+        report = dry_run(result, load_scenario(path, overrides), seed=seed)
+        assert report.verified and report.corrections_as_planned
+        if report.arrived:
+            break
+    else:
+        raise AssertionError(f"no arriving draw in 80 seeds (P = {result.route.probability})")
+    assert report.ok
+    assert [r.point for r in report.rows] == list(report.route[1:-1])
+    # A failed correction need not doom a route; only "lost" ends it.
+    assert all(r.outcome in ("ok", "failed") for r in report.rows)
+    assert all(min(r.v_margin, r.h_margin) >= 0 for r in report.rows)
+    assert report.length_within_tolerance
+    assert abs(report.flown_length - result.route.length) <= report.length_tolerance
