@@ -376,7 +376,10 @@ def _wilson(successes: int, runs: int, confidence: float) -> tuple[float, float]
     z2n = z * z / runs
     centre = (p + z2n / 2) / (1 + z2n)
     half = z / (1 + z2n) * math.sqrt(p * (1 - p) / runs + z2n / (4 * runs))
-    return max(0.0, centre - half), min(1.0, centre + half)
+    # At 0 or all successes the interval ends exactly at 0 or 1; rounding must not move it.
+    low = 0.0 if successes == 0 else max(0.0, centre - half)
+    high = 1.0 if successes == runs else min(1.0, centre + half)
+    return low, high
 
 
 def monte_carlo(

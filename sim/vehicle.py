@@ -152,6 +152,9 @@ class MockVehicle:
         self._mission: list[MissionItem] = []
         self._current = 0
         self._upload: _Upload | None = None
+        # (peer, count) of the last upload completed: its final item may come again when the
+        # ground station missed the acknowledgement, and is answered with it again.
+        self._completed: tuple[tuple[int, int], int] | None = None
         self._seen: collections.deque[bytes] = collections.deque(maxlen=64)
         self._seen_set: set[bytes] = set()
         self._peers: set[tuple[int, int]] = set()
@@ -338,6 +341,7 @@ class MockVehicle:
             self._ack(peer, mavlink.MAV_MISSION_DENIED)
             return
         self._upload = None  # the same sender may restart (ArduPilot does the same)
+        self._completed = None
         if msg.count > self.capacity:
             self._ack(peer, mavlink.MAV_MISSION_NO_SPACE)
             self._statustext(f"Only {self.capacity} items are supported")
@@ -353,7 +357,10 @@ class MockVehicle:
     def _on_mission_item_int(self, msg: Any, peer: tuple[int, int]) -> None:
         up = self._upload
         if up is None or getattr(msg, "mission_type", 0) != MAV_MISSION_TYPE_MISSION:
-            return  # a late copy of an item from a finished transfer: nothing to do
+            if up is None and self._completed == (peer, msg.seq + 1):
+                # The final item resent: the acknowledgement was lost (PX4 answers the same).
+                self._ack(peer, mavlink.MAV_MISSION_ACCEPTED)
+            return  # otherwise a late copy of an item from a finished transfer
         if peer != up.peer:
             self._ack(peer, mavlink.MAV_MISSION_DENIED)
             return
@@ -371,6 +378,7 @@ class MockVehicle:
         up.last_receive = now
         if up.expected == up.count:
             self._upload = None
+            self._completed = (peer, up.count)
             self._commit(up.items)
             self._ack(peer, mavlink.MAV_MISSION_ACCEPTED)
             self._mission_current()

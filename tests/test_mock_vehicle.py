@@ -179,3 +179,33 @@ def test_fault_injector_conserves_frames_and_is_seeded(seed, drop, dup, delay, r
         assert sorted(out) == list(range(200))
     if not rates.any:
         assert out == list(range(200))
+
+
+def test_final_item_resent_after_a_lost_ack_is_acknowledged_again():
+    port = free_udp_port()
+    with MockVehicle(f"udpin:127.0.0.1:{port}", flavour="px4", request_timeout=0.5) as vehicle:
+        link = _raw_peer(port)
+        try:
+            link.send(link.mav.mission_count_encode(1, 1, 2, 0))
+
+            def item(seq):
+                it = ITEMS[seq]
+                return link.mav.mission_item_int_encode(
+                    1, 1, seq, it.frame, it.command, 0, 1, 0, 0, 0, 0, it.x, it.y, 100.0
+                )
+
+            _collect(link, {"MISSION_REQUEST_INT"}, 0.1)
+            link.send(item(0))
+            _collect(link, {"MISSION_REQUEST_INT"}, 0.1)
+            link.send(item(1))
+            first = _collect(link, {"MISSION_ACK"}, 0.3)
+            link.send(item(1))  # as if that acknowledgement had been lost
+            again = _collect(link, {"MISSION_ACK"}, 0.3)
+            link.send(item(0))  # an older item is not the end of the transfer: no answer
+            stale = _collect(link, {"MISSION_ACK"}, 0.3)
+        finally:
+            link.close()
+    assert [m.type for m in first] == [mavlink.MAV_MISSION_ACCEPTED]
+    assert [m.type for m in again] == [mavlink.MAV_MISSION_ACCEPTED]
+    assert stale == []
+    assert len(vehicle.mission) == 2
