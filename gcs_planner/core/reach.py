@@ -57,16 +57,18 @@ def build_reach_graph(scenario: Scenario) -> ReachGraph:
     start, end = scenario.start, scenario.end
     tree = cKDTree(xyz)
     pairs = tree.query_pairs(r=scenario.params.reach_m, output_type="ndarray")
-    # Both directions; the tree gives unordered pairs i < j.
+    # Each unordered pair i < j once: its distance, then both directions.
+    diff = xyz[pairs[:, 0]] - xyz[pairs[:, 1]]
+    d = np.sqrt(np.einsum("ij,ij->i", diff, diff))
     src = np.concatenate([pairs[:, 0], pairs[:, 1]]).astype(np.int64)
     dst = np.concatenate([pairs[:, 1], pairs[:, 0]]).astype(np.int64)
-    dist = np.linalg.norm(xyz[src] - xyz[dst], axis=1)
+    dist = np.concatenate([d, d])
     keep = (dst != start) & (src != end) & (dist <= np.minimum(lim_v[dst], lim_h[dst]))
     src, dst, dist = src[keep], dst[keep], dist[keep]
-    order = np.lexsort((dist, src))
+    # CSR by source; a stable integer sort keeps the order deterministic (and is a radix sort).
+    order = np.argsort(src, kind="stable")
     src, dst, dist = src[order], dst[order], dist[order]
     indptr = np.zeros(scenario.n + 1, dtype=np.int64)
-    np.add.at(indptr, src + 1, 1)
-    np.cumsum(indptr, out=indptr)
+    np.cumsum(np.bincount(src, minlength=scenario.n), out=indptr[1:])
     to_end = np.linalg.norm(xyz - xyz[end], axis=1)
     return ReachGraph(indptr, dst.astype(np.int32), dist, lim_v, lim_h, to_end, start, end)

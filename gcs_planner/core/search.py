@@ -122,6 +122,17 @@ def _layered_search(
     # Archive of kept labels for dominance: node, L, e, mask.
     arch_node, arch_L, arch_e, arch_mask = node.copy(), L.copy(), np.zeros(1), mask.copy()
 
+    # Per point, two archived labels that dominate most candidates: the shortest (least e on a
+    # tie) and the one carrying the least error (shortest on a tie). Testing candidates against
+    # them is a gather per candidate, far cheaper than the full filter, which then sorts only
+    # the few that survive. Labels with different critical sets are incomparable, so this is
+    # used only while there are none.
+    short_L = np.full(n, np.inf)
+    short_e = np.full(n, np.inf)
+    low_L = np.full(n, np.inf)
+    low_e = np.full(n, np.inf)
+    _summarise(node, L, np.zeros(1), short_L, short_e, low_L, low_e)
+
     best = np.inf
     found: list[tuple[int, float, int, int]] = []  # (k, length, parent gid, end)
     closest = start
@@ -184,6 +195,11 @@ def _layered_search(
             rows = np.flatnonzero(w >= 0)
             nmask[rows, w[rows]] |= crit_bit[j[rows]]
 
+        if not words:
+            fresh = ~(
+                ((short_L[j] <= nL) & (short_e[j] <= ne)) | ((low_L[j] <= nL) & (low_e[j] <= ne))
+            )
+            src, j, nL, ne, nmask, jv = (a[fresh] for a in (src, j, nL, ne, nmask, jv))
         survive = not_dominated(j, nL, ne, nmask, arch_node, arch_L, arch_e, arch_mask)
         src, j, nL, ne, nmask, jv = (a[survive] for a in (src, j, nL, ne, nmask, jv))
 
@@ -196,6 +212,8 @@ def _layered_search(
         arch_L = np.concatenate([arch_L, nL])
         arch_e = np.concatenate([arch_e, ne])
         arch_mask = np.concatenate([arch_mask, nmask])
+        if not words:
+            _summarise(j, nL, ne, short_L, short_e, low_L, low_e)
 
         node, L, mask, gid = j, nL, nmask, new_gid
         dv = np.where(jv, 0.0, ne)
@@ -212,6 +230,30 @@ def _layered_search(
             g = int(all_parent[g])
         front.append(FrontPoint(length, k_, tuple(reversed(pts))))
     return front, closest
+
+
+def _summarise(
+    j: np.ndarray,
+    L: np.ndarray,
+    e: np.ndarray,
+    short_L: np.ndarray,
+    short_e: np.ndarray,
+    low_L: np.ndarray,
+    low_e: np.ndarray,
+) -> None:
+    """Fold new labels into the per-point shortest and least-error labels (in place)."""
+    if not len(j):
+        return
+    for first, second, key_first, key_second in (
+        (L, e, short_L, short_e),
+        (e, L, low_e, low_L),
+    ):
+        order = np.lexsort((second, first, j))
+        pts, at = np.unique(j[order], return_index=True)
+        f, s_ = first[order][at], second[order][at]
+        better = (f < key_first[pts]) | ((f == key_first[pts]) & (s_ < key_second[pts]))
+        key_first[pts[better]] = f[better]
+        key_second[pts[better]] = s_[better]
 
 
 def not_dominated(
