@@ -256,17 +256,21 @@ def test_contest_workbook_dry_run_verifies(capsys, dataset_paths, dataset, flags
     assert low <= d["planned_probability"] <= high
 
 
-def test_contest_workbook_1_most_reliable_route_verifies_and_arrives(capsys, dataset_paths):
+@pytest.mark.parametrize("dataset, flags", [(1, DS1), (2, DS2)], ids=["ds1", "ds2"])
+def test_contest_workbook_most_reliable_route_verifies_and_arrives(
+    capsys, dataset_paths, dataset, flags
+):
     rc, out, _ = run_cli(
-        capsys, str(dataset_paths[1]), *DS1, "--turn-radius", "200", "--choose", "most-reliable",
-        "--json",
+        capsys, str(dataset_paths[dataset]), *flags, "--turn-radius", "200",
+        "--choose", "most-reliable", "--json",
     )  # fmt: skip
     d = json.loads(out)
     check_consistent(d, rc)
-    # Dataset 1 has a route through reliable points only: its arrival is not a matter of luck.
+    # Both workbooks have routes that arrive even if every unreliable correction fails: their
+    # arrival is not a matter of luck.
     assert d["planned_probability"] == 1.0
     assert rc == 0 and d["arrived"] and d["ok"]
-    assert all(r["outcome"] == "ok" for r in d["rows"])
+    assert all(r["outcome"] in ("ok", "failed") for r in d["rows"])
 
 
 def _flags_to_overrides(flags: list[str]) -> dict[str, float]:
