@@ -57,18 +57,26 @@ def build_reach_graph(scenario: Scenario) -> ReachGraph:
     start, end = scenario.start, scenario.end
     tree = cKDTree(xyz)
     pairs = tree.query_pairs(r=scenario.params.reach_m, output_type="ndarray")
-    # Each unordered pair i < j once: its distance, then both directions.
-    diff = xyz[pairs[:, 0]] - xyz[pairs[:, 1]]
+    # Each unordered pair i < j once (int32 halves the memory of dense maps): its distance,
+    # then each direction kept if a leg that long can arrive within the target's limits.
+    a = pairs[:, 0].astype(np.int32)
+    b = pairs[:, 1].astype(np.int32)
+    del pairs
+    diff = xyz[a] - xyz[b]
     d = np.sqrt(np.einsum("ij,ij->i", diff, diff))
-    src = np.concatenate([pairs[:, 0], pairs[:, 1]]).astype(np.int64)
-    dst = np.concatenate([pairs[:, 1], pairs[:, 0]]).astype(np.int64)
-    dist = np.concatenate([d, d])
-    keep = (dst != start) & (src != end) & (dist <= np.minimum(lim_v[dst], lim_h[dst]))
-    src, dst, dist = src[keep], dst[keep], dist[keep]
+    del diff
+    reach_to = np.minimum(lim_v, lim_h)
+    forward = (b != start) & (a != end) & (d <= reach_to[b])
+    backward = (a != start) & (b != end) & (d <= reach_to[a])
+    src = np.concatenate([a[forward], b[backward]])
+    dst = np.concatenate([b[forward], a[backward]])
+    dist = np.concatenate([d[forward], d[backward]])
+    del a, b, d, forward, backward
     # CSR by source; a stable integer sort keeps the order deterministic (and is a radix sort).
     order = np.argsort(src, kind="stable")
-    src, dst, dist = src[order], dst[order], dist[order]
+    dst, dist = dst[order], dist[order]
     indptr = np.zeros(scenario.n + 1, dtype=np.int64)
     np.cumsum(np.bincount(src, minlength=scenario.n), out=indptr[1:])
+    del src, order
     to_end = np.linalg.norm(xyz - xyz[end], axis=1)
-    return ReachGraph(indptr, dst.astype(np.int32), dist, lim_v, lim_h, to_end, start, end)
+    return ReachGraph(indptr, dst, dist, lim_v, lim_h, to_end, start, end)

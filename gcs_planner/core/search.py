@@ -162,44 +162,31 @@ def _layered_search(
         if not len(node):
             break
 
-        # Expand the layer over the reach graph (CSR), all labels at once.
+        # Expand the layer over the reach graph (CSR), in chunks of labels whose arcs number
+        # about CHUNK_ARCS: the candidates of a whole layer can run to hundreds of millions on
+        # dense maps, and most die in the cheap filters of each chunk.
         counts = deg[node]
-        total_c = int(counts.sum())
-        if total_c == 0:
+        if int(counts.sum()) == 0:
             break
-        src = np.repeat(np.arange(len(node)), counts)
-        offs = np.cumsum(counts) - counts
-        arc = graph.indptr[node][src] + (np.arange(total_c) - offs[src])
-        j = graph.target[arc].astype(np.int64)
-        d = graph.length[arc]
-        nL = L[src] + d
-        ndv = dv[src] + d
-        ndh = dh[src] + d
-        keep = (j != end) & (ndv <= graph.lim_v[j]) & (ndh <= graph.lim_h[j])
-        keep &= nL + graph.to_end[j] < best
-        if words:
-            w = crit_word[j]
-            is_crit = w >= 0
-            visited = np.zeros(total_c, dtype=bool)
-            if is_crit.any():
-                wi = np.where(is_crit, w, 0)
-                visited = is_crit & ((mask[src, wi] & crit_bit[j]) != 0)
-            keep &= ~visited
-        stats.candidates += int(keep.sum())
-        src, j, nL, ndv, ndh = src[keep], j[keep], nL[keep], ndv[keep], ndh[keep]
-        jv = kind_v[j]
-        ne = np.where(jv, ndh, ndv)  # the component this point does not reset
-        nmask = mask[src].copy()
-        if words:
-            w = crit_word[j]
-            rows = np.flatnonzero(w >= 0)
-            nmask[rows, w[rows]] |= crit_bit[j[rows]]
-
-        if not words:
-            fresh = ~(
-                ((short_L[j] <= nL) & (short_e[j] <= ne)) | ((low_L[j] <= nL) & (low_e[j] <= ne))
+        cum = np.cumsum(counts)
+        parts = []
+        lo = 0
+        while lo < len(node):
+            base = int(cum[lo - 1]) if lo else 0
+            hi = max(lo + 1, int(np.searchsorted(cum, base + CHUNK_ARCS, side="right")))
+            part = _expand(
+                graph, node, L, dv, dh, mask, lo, hi, best, kind_v, crit_word, crit_bit, stats
             )
-            src, j, nL, ne, nmask, jv = (a[fresh] for a in (src, j, nL, ne, nmask, jv))
+            if not words:
+                c_j, c_L, c_e = part[1], part[2], part[3]
+                fresh = ~(
+                    ((short_L[c_j] <= c_L) & (short_e[c_j] <= c_e))
+                    | ((low_L[c_j] <= c_L) & (low_e[c_j] <= c_e))
+                )
+                part = tuple(x[fresh] for x in part)
+            parts.append(part)
+            lo = hi
+        src, j, nL, ne, nmask, jv = (np.concatenate([pt[i] for pt in parts]) for i in range(6))
         survive = not_dominated(j, nL, ne, nmask, arch_node, arch_L, arch_e, arch_mask)
         src, j, nL, ne, nmask, jv = (a[survive] for a in (src, j, nL, ne, nmask, jv))
 
@@ -230,6 +217,58 @@ def _layered_search(
             g = int(all_parent[g])
         front.append(FrontPoint(length, k_, tuple(reversed(pts))))
     return front, closest
+
+
+CHUNK_ARCS = 1 << 22
+
+
+def _expand(
+    graph: ReachGraph,
+    node: np.ndarray,
+    L: np.ndarray,
+    dv: np.ndarray,
+    dh: np.ndarray,
+    mask: np.ndarray,
+    lo: int,
+    hi: int,
+    best: float,
+    kind_v: np.ndarray,
+    crit_word: np.ndarray,
+    crit_bit: np.ndarray,
+    stats: SearchStats,
+) -> tuple[np.ndarray, ...]:
+    """The feasible, bounded one-leg extensions of labels lo:hi of a layer, as (label index in
+    the layer, point, L, carried error e, critical mask, point is V)."""
+    end = graph.end
+    counts = graph.degree()[node[lo:hi]]
+    total_c = int(counts.sum())
+    src = lo + np.repeat(np.arange(hi - lo), counts)
+    offs = np.cumsum(counts) - counts
+    arc = graph.indptr[node[lo:hi]][src - lo] + (np.arange(total_c) - offs[src - lo])
+    j = graph.target[arc].astype(np.int64)
+    d = graph.length[arc]
+    nL = L[src] + d
+    ndv = dv[src] + d
+    ndh = dh[src] + d
+    keep = (j != end) & (ndv <= graph.lim_v[j]) & (ndh <= graph.lim_h[j])
+    keep &= nL + graph.to_end[j] < best
+    words = mask.shape[1]
+    if words:
+        w = crit_word[j]
+        is_crit = w >= 0
+        if is_crit.any():
+            wi = np.where(is_crit, w, 0)
+            keep &= ~(is_crit & ((mask[src, wi] & crit_bit[j]) != 0))
+    stats.candidates += int(keep.sum())
+    src, j, nL, ndv, ndh = src[keep], j[keep], nL[keep], ndv[keep], ndh[keep]
+    jv = kind_v[j]
+    ne = np.where(jv, ndh, ndv)  # the component this point does not reset
+    nmask = mask[src].copy()
+    if words:
+        w = crit_word[j]
+        rows = np.flatnonzero(w >= 0)
+        nmask[rows, w[rows]] |= crit_bit[j[rows]]
+    return src, j, nL, ne, nmask, jv
 
 
 def _summarise(
