@@ -1,0 +1,1 @@
+"""Benchmarks of the planner against its peers: ``python -m benchmarks --help``."""
