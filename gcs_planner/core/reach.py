@@ -55,22 +55,30 @@ def build_reach_graph(scenario: Scenario) -> ReachGraph:
     xyz = scenario.xyz
     lim_v, lim_h = arrival_limits_m(scenario)
     start, end = scenario.start, scenario.end
-    tree = cKDTree(xyz)
-    pairs = tree.query_pairs(r=scenario.params.reach_m, output_type="ndarray")
+    reach_to = np.minimum(lim_v, lim_h)
+    to_end = np.linalg.norm(xyz - xyz[end], axis=1)
+    # Legs between A and correction points are no longer than the largest limit of a
+    # correction point; only legs into B may be as long as theta allows. Querying the tree at
+    # the smaller radius and adding the legs into B from the distances to B keeps the pair
+    # search (the costliest step on dense maps) to the pairs that can be arcs.
+    others = np.flatnonzero(np.arange(scenario.n) != end).astype(np.int32)
+    inner = reach_to[others][np.isfinite(reach_to[others])]
+    radius = float(inner.max()) if len(inner) else 0.0
+    pairs = cKDTree(xyz[others]).query_pairs(r=radius, output_type="ndarray")
     # Each unordered pair i < j once (int32 halves the memory of dense maps): its distance,
     # then each direction kept if a leg that long can arrive within the target's limits.
-    a = pairs[:, 0].astype(np.int32)
-    b = pairs[:, 1].astype(np.int32)
+    a = others[pairs[:, 0]]
+    b = others[pairs[:, 1]]
     del pairs
     diff = xyz[a] - xyz[b]
     d = np.sqrt(np.einsum("ij,ij->i", diff, diff))
     del diff
-    reach_to = np.minimum(lim_v, lim_h)
-    forward = (b != start) & (a != end) & (d <= reach_to[b])
-    backward = (a != start) & (b != end) & (d <= reach_to[a])
-    src = np.concatenate([a[forward], b[backward]])
-    dst = np.concatenate([b[forward], a[backward]])
-    dist = np.concatenate([d[forward], d[backward]])
+    forward = (b != start) & (d <= reach_to[b])
+    backward = (a != start) & (d <= reach_to[a])
+    into_b = others[to_end[others] <= reach_to[end]]
+    src = np.concatenate([a[forward], b[backward], into_b])
+    dst = np.concatenate([b[forward], a[backward], np.full(len(into_b), end, dtype=np.int32)])
+    dist = np.concatenate([d[forward], d[backward], to_end[into_b]])
     del a, b, d, forward, backward
     # CSR by source; a stable integer sort keeps the order deterministic (and is a radix sort).
     order = np.argsort(src, kind="stable")
@@ -78,5 +86,4 @@ def build_reach_graph(scenario: Scenario) -> ReachGraph:
     indptr = np.zeros(scenario.n + 1, dtype=np.int64)
     np.cumsum(np.bincount(src, minlength=scenario.n), out=indptr[1:])
     del src, order
-    to_end = np.linalg.norm(xyz - xyz[end], axis=1)
     return ReachGraph(indptr, dst, dist, lim_v, lim_h, to_end, start, end)
