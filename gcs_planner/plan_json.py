@@ -87,6 +87,7 @@ def plan_to_dict(plan: Plan) -> dict[str, Any]:
         "front": [route_to_dict(s, r, lb) for r, lb in zip(plan.routes, plan.lower_bounds)],
         "chosen": plan.chosen,
         "choice": plan.choice,
+        "min_probability": plan.min_probability,
         "shortest_certain": plan.shortest_certain,
         "most_reliable": plan.most_reliable,
         "optimality": {"optimal": plan.optimal, "statement": plan.statement},

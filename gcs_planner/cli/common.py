@@ -78,6 +78,13 @@ def add_plan_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--max-corrections", type=int, help="consider routes with at most K corrections"
     )
+    parser.add_argument(
+        "--min-probability",
+        type=float,
+        default=0.0,
+        metavar="P",
+        help="choose only among front routes that arrive with probability >= P (default 0)",
+    )
 
 
 def plan_from_args(args: argparse.Namespace, scenario: Scenario) -> Plan:
@@ -105,6 +112,13 @@ def plan_from_args(args: argparse.Namespace, scenario: Scenario) -> Plan:
             raise InputError(f"not numbers: {args.weights!r}", field="--weights") from None
     if args.choose == "most-reliable" and "probability" not in objectives:
         objectives += ("probability",)
+    if not 0.0 <= args.min_probability <= 1.0:
+        raise InputError(
+            f"{args.min_probability:g} is not a probability (0 to 1)", field="--min-probability"
+        )
+    if args.min_probability > 0 and "probability" not in objectives:
+        # The routes that satisfy it may all lie off the (length, corrections) front.
+        objectives += ("probability",)
     try:
         return plan(
             scenario,
@@ -112,6 +126,7 @@ def plan_from_args(args: argparse.Namespace, scenario: Scenario) -> Plan:
             choice=args.choose,
             weights=weights,
             max_corrections=args.max_corrections,
+            min_probability=args.min_probability,
         )
     except ValueError as exc:
         raise InputError(str(exc)) from None

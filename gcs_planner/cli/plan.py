@@ -138,7 +138,13 @@ def render(result: Plan) -> str:
         ),
         f"optimality: {result.statement}",
         "",
-        f"Pareto front ({len(result.routes)} routes; * = chosen by {result.choice}):",
+        f"Pareto front ({len(result.routes)} routes; * = chosen by {result.choice}"
+        + (
+            f" among routes with P >= {result.min_probability:g}"
+            if result.min_probability > 0
+            else ""
+        )
+        + "):",
         f"  {'':1} {'length m':>11} {'corr':>4} {'P success':>9} {'gap m':>7}  route",
     ]
     certain, reliable = result.shortest_certain, result.most_reliable

@@ -34,6 +34,8 @@ class Plan:
     statement: str
     lower_bounds: tuple[float, ...]  # per route: a proven lower bound on its front value
     stats: dict = field(default_factory=dict)
+    # The choice was made among the front routes at least this likely to arrive.
+    min_probability: float = 0.0
 
     @property
     def route(self) -> Route:
@@ -71,8 +73,13 @@ def plan(
     weights: Sequence[float] | None = None,
     max_corrections: int | None = None,
     max_labels: int = DEFAULT_MAX_LABELS,
+    min_probability: float = 0.0,
 ) -> Plan:
-    """Plan a scenario. Raises InfeasibleError (with the reason) when no route exists."""
+    """Plan a scenario. Raises InfeasibleError (with the reason) when no route exists, or
+    none on the front arrives with at least ``min_probability`` (the route is chosen among
+    those that do; the front is reported whole)."""
+    if not 0.0 <= min_probability <= 1.0:
+        raise ValueError(f"min_probability must be within [0, 1], not {min_probability}")
     if objectives is None:
         objectives = ("length", "corrections")
     objectives = tuple(objectives)
@@ -91,10 +98,25 @@ def plan(
     order = sorted(range(len(routes)), key=lambda i: (routes[i].corrections, routes[i].length))
     routes = [routes[i] for i in order]
     lower_bounds = [lower_bounds[i] for i in order]
-    probs = [r.probability for r in routes] if use_probability else None
-    chosen = choose_route(
-        [r.length for r in routes], [r.corrections for r in routes], probs, choice, weights
-    )
+    # Every route's probability is exact (re-evaluated), whichever objectives were searched.
+    eligible = [i for i, r in enumerate(routes) if r.probability >= min_probability - PROB_EPS]
+    if not eligible:
+        best = max(r.probability for r in routes)
+        raise InfeasibleError(
+            f"{scenario.name}: no route on the front arrives with probability >= "
+            f"{min_probability:g}; the most reliable one found arrives with {best:.4f} "
+            f"({statement})"
+        )
+    picked = [routes[i] for i in eligible]
+    chosen = eligible[
+        choose_route(
+            [r.length for r in picked],
+            [r.corrections for r in picked],
+            [r.probability for r in picked] if use_probability else None,
+            choice,
+            weights,
+        )
+    ]
     return Plan(
         scenario,
         tuple(routes),
@@ -105,6 +127,7 @@ def plan(
         statement,
         tuple(lower_bounds),
         stats,
+        min_probability,
     )
 
 
