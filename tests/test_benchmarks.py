@@ -121,7 +121,7 @@ def test_measure_kills_a_run_past_the_limit() -> None:
 def test_quick_mode_writes_results_and_plot(tmp_path: Path, dataset_paths) -> None:
     main(["--quick", "--out", str(tmp_path)])
     text = (tmp_path / "RESULTS.md").read_text(encoding="utf-8")
-    for heading in ("## 1.", "## 2.", "## 3.", "## 4.", "Machine:"):
+    for heading in ("## 1.", "## 2.", "## 3.", "## 4.", "## 5.", "Machine:"):
         assert heading in text
     assert "front = exact" in text
     assert "DIFFERS" not in text and "BEATS" not in text
