@@ -187,6 +187,10 @@ class MockVehicle:
     def __exit__(self, *exc: object) -> None:
         self.stop()
 
+    def request_stop(self) -> None:
+        """Ask the loop to end at its next turn; safe from a signal handler."""
+        self._stop.set()
+
     def serve_forever(self) -> None:
         """Run in the calling thread until ``stop()`` (from another thread) or Ctrl-C."""
         self._run()

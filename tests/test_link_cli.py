@@ -13,6 +13,7 @@ from pathlib import Path
 import pytest
 
 from gcs_planner.cli import main
+from gcs_planner.link.connection import open_link
 from gcs_planner.mission.builder import Mission
 from gcs_planner.mission.qgc_plan import read_plan, write_plan
 from gcs_planner.scenario.model import Origin
@@ -75,13 +76,44 @@ def test_upload_and_download_against_mock_vehicle_process(tmp_path, capsys):
     finally:
         proc.send_signal(signal.SIGINT)
         try:
-            _, err = proc.communicate(timeout=10)
+            _, err = proc.communicate(timeout=30)
         except subprocess.TimeoutExpired:
             proc.kill()
-            proc.communicate()
-            raise
+            _, err = proc.communicate()
+            pytest.fail(f"mock-vehicle did not stop on Ctrl-C within 30 s; stderr: {err}")
     assert proc.returncode == 0
     assert "holds 30 items" in err
+
+
+def test_mock_vehicle_process_stops_on_sigterm():
+    port = free_udp_port()
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "gcs_planner", "mock-vehicle", "--connect",
+         f"udpin:127.0.0.1:{port}", "--scenario", "missions/example/scenario.toml"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )  # fmt: skip
+    link = open_link(f"udpout:127.0.0.1:{port}")
+    try:
+        # Running: it answers with heartbeats once it hears from us.
+        deadline = time.monotonic() + 20
+        beat = None
+        while beat is None and time.monotonic() < deadline:
+            link.send(link.mav.heartbeat_encode(6, 8, 0, 0, 4))
+            beat = link.recv(0.5)
+        assert beat is not None
+    finally:
+        link.close()
+        proc.send_signal(signal.SIGTERM)
+        try:
+            _, err = proc.communicate(timeout=30)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            _, err = proc.communicate()
+            pytest.fail(f"mock-vehicle did not stop on SIGTERM within 30 s; stderr: {err}")
+    assert proc.returncode == 0
+    assert "mock vehicle stopped" in err
 
 
 def test_upload_refuses_a_mission_for_the_other_firmware(tmp_path, capsys):

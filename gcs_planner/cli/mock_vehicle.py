@@ -5,6 +5,7 @@ flies it against the scenario's correction points with telemetry."""
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
 
 from gcs_planner.cli.common import add_scenario_arguments, load_scenario_from_args
@@ -47,11 +48,20 @@ def run(args: argparse.Namespace) -> int:
         f"{scenario.n} landmarks from {scenario.source}; Ctrl-C to stop",
         file=sys.stderr,
     )
+
+    # Ctrl-C and a process manager's SIGTERM end the loop at its next turn (within ~10 ms)
+    # instead of raising wherever the main thread happens to be.
+    def request_stop(signum: int, frame: object) -> None:
+        vehicle.request_stop()
+
+    previous = {sig: signal.signal(sig, request_stop) for sig in (signal.SIGINT, signal.SIGTERM)}
     try:
         vehicle.serve_forever()
     except KeyboardInterrupt:
         pass
     finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
         vehicle.stop()
     print(f"mock vehicle stopped; it holds {len(vehicle.mission)} items", file=sys.stderr)
     return 0
