@@ -3,15 +3,17 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from helpers import corridor_scenario, mixed_scenario
 
 from gcs_planner.core.reach import arrival_limits_m, build_reach_graph
 
 
-def test_arcs_are_exactly_the_flyable_legs() -> None:
+@pytest.mark.parametrize("compiled", [False, True], ids=["kdtree", "grid-kernel"])
+def test_arcs_are_exactly_the_flyable_legs(compiled: bool) -> None:
     for seed in range(120):
         scenario = (mixed_scenario if seed % 2 else corridor_scenario)(seed, 2, 40)
-        graph = build_reach_graph(scenario)
+        graph = build_reach_graph(scenario, compiled=compiled)
         lim_v, lim_h = arrival_limits_m(scenario)
         xyz = scenario.xyz
         want = set()

@@ -102,3 +102,30 @@ def test_contest_fronts_are_feasible_simple_and_beat_the_paper(dataset_paths, wh
     paper_length, paper_k = {1: (116_861, 12), 2: (140_131, 15)}[which]
     best = min((fp for fp in result.front if fp.corrections < paper_k), key=lambda fp: fp.length)
     assert best.length < 0.9 * paper_length
+
+
+@pytest.mark.parametrize("compiled", [False, True], ids=["numpy", "compiled"])
+def test_both_engines_equal_brute_force(compiled: bool) -> None:
+    """The numpy search and the streaming numba kernel (used on large maps) are two
+    implementations of one search: each must equal brute force, walks-only cases included."""
+    revisits = 0
+    for seed in range(600):
+        scenario = (corridor_scenario if seed % 2 else mixed_scenario)(seed)
+        result = straight_front(scenario, compiled=compiled)
+        assert_same_front(result, brute_force_front(scenario))
+        assert_routes_valid(scenario, result)
+        revisits += bool(result.stats.critical)
+    assert revisits >= 1
+
+
+@pytest.mark.parametrize("n", [300, 1500])
+def test_both_engines_agree_on_dense_random_maps(n: int) -> None:
+    for seed in range(3):
+        scenario = random_scenario(n, seed, params=DATASET1)
+        a = straight_front(scenario, compiled=False)
+        b = straight_front(scenario, compiled=True)
+        assert [f.corrections for f in a.front] == [f.corrections for f in b.front]
+        np.testing.assert_allclose(
+            [f.length for f in a.front], [f.length for f in b.front], rtol=0, atol=1e-6
+        )
+        assert_routes_valid(scenario, b)

@@ -14,6 +14,25 @@ from scipy.spatial import cKDTree
 
 from gcs_planner.scenario.model import Kind, Scenario
 
+# From this many points on, the compiled kernels (numba) build the graph and run the search: below
+# it numpy is fast enough and the first call's compilation would cost more than it saves.
+COMPILED_FROM_POINTS = 3_000
+
+
+def compiled_available() -> bool:
+    """Whether numba (an optional speed-up for dense maps) can be imported."""
+    try:
+        import numba  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+def use_compiled(n: int, compiled: bool | None) -> bool:
+    if compiled is None:
+        return n >= COMPILED_FROM_POINTS and compiled_available()
+    return compiled
+
 
 @dataclass(frozen=True)
 class ReachGraph:
@@ -45,18 +64,27 @@ def arrival_limits_m(scenario: Scenario) -> tuple[np.ndarray, np.ndarray]:
     return lim_v, lim_h
 
 
-def build_reach_graph(scenario: Scenario) -> ReachGraph:
+def build_reach_graph(scenario: Scenario, compiled: bool | None = None) -> ReachGraph:
     """Arcs i → j for every pair within reach, j never A and i never B.
 
     An arc is kept only if a leg of that length can arrive within j's limits when flown right
     after both errors were reset, i.e. d ≤ min(lim_v[j], lim_h[j]) — no route can use it
     otherwise. A leg from A counts from zero errors, the same test.
+
+    ``compiled``: use the numba kernel (True), the KD-tree (False), or decide by size (None).
     """
     xyz = scenario.xyz
     lim_v, lim_h = arrival_limits_m(scenario)
     start, end = scenario.start, scenario.end
     reach_to = np.minimum(lim_v, lim_h)
     to_end = np.linalg.norm(xyz - xyz[end], axis=1)
+    if use_compiled(scenario.n, compiled):
+        from gcs_planner.core.kernel import grid_arcs
+
+        inner = reach_to[(np.arange(scenario.n) != end) & np.isfinite(reach_to)]
+        radius = float(inner.max()) if len(inner) else 0.0
+        indptr, dst, dist = grid_arcs(xyz, reach_to, radius, start, end, to_end)
+        return ReachGraph(indptr, dst, dist, lim_v, lim_h, to_end, start, end)
     # Legs between A and correction points are no longer than the largest limit of a
     # correction point; only legs into B may be as long as theta allows. Querying the tree at
     # the smaller radius and adding the legs into B from the distances to B keeps the pair

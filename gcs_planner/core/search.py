@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from gcs_planner.core.reach import ReachGraph, build_reach_graph
+from gcs_planner.core.reach import ReachGraph, build_reach_graph, use_compiled
 from gcs_planner.scenario.model import Kind, Scenario
 
 
@@ -62,12 +62,17 @@ def straight_front(
     scenario: Scenario,
     graph: ReachGraph | None = None,
     max_corrections: int | None = None,
+    compiled: bool | None = None,
 ) -> FrontResult:
-    """Exact Pareto front of (length, corrections) over simple feasible routes, straight legs."""
+    """Exact Pareto front of (length, corrections) over simple feasible routes, straight legs.
+
+    ``compiled``: run the numba kernels (True), numpy (False), or decide by size (None).
+    """
     t0 = time.perf_counter()
     stats = SearchStats()
+    compiled = use_compiled(scenario.n, compiled)
     if graph is None:
-        graph = build_reach_graph(scenario)
+        graph = build_reach_graph(scenario, compiled)
     stats.graph_seconds = time.perf_counter() - t0
     stats.arcs = len(graph.target)
     kmax = scenario.n - 2 if max_corrections is None else min(max_corrections, scenario.n - 2)
@@ -75,7 +80,10 @@ def straight_front(
     critical: list[int] = []
     while True:
         stats.rounds += 1
-        front, closest = _layered_search(graph, is_v, critical, kmax, stats)
+        if compiled and not critical:
+            front, closest = _compiled_search(graph, is_v, kmax, stats)
+        else:
+            front, closest = _layered_search(graph, is_v, critical, kmax, stats)
         repeated = sorted(
             {p for fp in front for p in fp.points if fp.points.count(p) > 1} - set(critical)
         )
@@ -86,6 +94,36 @@ def straight_front(
     stats.seconds = time.perf_counter() - t0
     why = None if front else explain_infeasible(scenario, graph, closest)
     return FrontResult(tuple(front), stats, why)
+
+
+def _compiled_search(
+    graph: ReachGraph, is_v: np.ndarray, kmax: int, stats: SearchStats
+) -> tuple[list[FrontPoint], int]:
+    """The first round (no critical points) by the streaming kernel of ``kernel``."""
+    from gcs_planner.core.kernel import layered_search
+
+    ks, lengths, last, node, parent, alive, closest = layered_search(
+        graph.indptr,
+        graph.target,
+        graph.length,
+        graph.lim_v,
+        graph.lim_h,
+        graph.to_end,
+        is_v,
+        graph.start,
+        graph.end,
+        kmax,
+    )
+    stats.labels += int(alive)
+    stats.layers += int(ks.max()) + 1 if len(ks) else 0
+    front = []
+    for k_, length, g in zip(ks.tolist(), lengths.tolist(), last.tolist()):
+        pts = [graph.end]
+        while g >= 0:
+            pts.append(int(node[g]))
+            g = int(parent[g])
+        front.append(FrontPoint(length, k_, tuple(reversed(pts))))
+    return front, int(closest)
 
 
 def _layered_search(
