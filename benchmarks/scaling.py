@@ -10,8 +10,13 @@ from benchmarks.fronts import compare
 from benchmarks.report import seconds, table
 from benchmarks.worker import measure
 
-SCALING_METHODS = ("project", "plain", "milp")
-LABELS = {"project": "project (exact, numpy)", "plain": "plain (pure Python)", "milp": "MILP"}
+SCALING_METHODS = ("project", "project-numpy", "plain", "milp")
+LABELS = {
+    "project": "project (exact; numba kernels from 3,000 points)",
+    "project-numpy": "project, numpy engine only",
+    "plain": "plain (pure Python)",
+    "milp": "MILP",
+}
 
 
 @dataclass

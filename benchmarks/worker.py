@@ -28,7 +28,7 @@ from benchmarks.plain import plain_front
 from gcs_planner.baselines.milp import MilpNotProvenError, milp_front
 from gcs_planner.core.search import straight_front
 
-METHODS = ("project", "plain", "milp", "nsga2")
+METHODS = ("project", "project-numpy", "plain", "milp", "nsga2")
 ROOT = Path(__file__).resolve().parents[1]
 STARTUP_S = 20.0  # imports and loading a workbook take about a second
 
@@ -61,8 +61,11 @@ def _run(job: dict) -> dict:
     method, limit = job["method"], float(job.get("time_limit", 120.0))
     note, extra = "", {}
     t0 = time.perf_counter()
-    if method == "project":
-        result = straight_front(scenario)
+    if method in ("project", "project-numpy"):
+        # "project" decides by size (numba kernels from 3,000 points, their compiled code loaded
+        # from numba's cache in this fresh process, which the time includes); "project-numpy"
+        # is the numpy engine alone, for the comparison.
+        result = straight_front(scenario, compiled=False if method == "project-numpy" else None)
         front = [(fp.length, fp.corrections, fp.points) for fp in result.front]
         extra = {"labels": result.stats.labels, "arcs": result.stats.arcs}
     elif method == "plain":
