@@ -47,6 +47,17 @@ def _plan_file(tmp_path: Path, firmware: str) -> Path:
     return write_plan(mission, tmp_path / "mission.plan")
 
 
+def _stop(proc: subprocess.Popen, sig: int) -> str:
+    """Signal the mock-vehicle process and return its stderr; fail if it does not stop."""
+    proc.send_signal(sig)
+    try:
+        return proc.communicate(timeout=30)[1]
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        err = proc.communicate()[1]
+        pytest.fail(f"mock-vehicle did not stop on signal {sig} within 30 s; stderr: {err}")
+
+
 def test_upload_and_download_against_mock_vehicle_process(tmp_path, capsys):
     port = free_udp_port()
     proc = subprocess.Popen(
@@ -74,13 +85,7 @@ def test_upload_and_download_against_mock_vehicle_process(tmp_path, capsys):
         assert main(["download", *conn, "--out", str(wp)]) == 0
         assert wp.read_text().startswith("QGC WPL 110")
     finally:
-        proc.send_signal(signal.SIGINT)
-        try:
-            _, err = proc.communicate(timeout=30)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            _, err = proc.communicate()
-            pytest.fail(f"mock-vehicle did not stop on Ctrl-C within 30 s; stderr: {err}")
+        err = _stop(proc, signal.SIGINT)
     assert proc.returncode == 0
     assert "holds 30 items" in err
 
@@ -105,13 +110,7 @@ def test_mock_vehicle_process_stops_on_sigterm():
         assert beat is not None
     finally:
         link.close()
-        proc.send_signal(signal.SIGTERM)
-        try:
-            _, err = proc.communicate(timeout=30)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            _, err = proc.communicate()
-            pytest.fail(f"mock-vehicle did not stop on SIGTERM within 30 s; stderr: {err}")
+        err = _stop(proc, signal.SIGTERM)
     assert proc.returncode == 0
     assert "mock vehicle stopped" in err
 
