@@ -30,10 +30,10 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
-from statistics import NormalDist
 
 import numpy as np
 
+from gcs_planner.confidence import wilson_interval
 from gcs_planner.mission.georef import DEFAULT_ORIGIN, LocalFrame
 from gcs_planner.mission.items import MissionItem
 from gcs_planner.scenario.model import Kind, Parameters, Scenario
@@ -370,18 +370,6 @@ def _fly(
     )
 
 
-def _wilson(successes: int, runs: int, confidence: float) -> tuple[float, float]:
-    z = NormalDist().inv_cdf(0.5 + confidence / 2)
-    p = successes / runs
-    z2n = z * z / runs
-    centre = (p + z2n / 2) / (1 + z2n)
-    half = z / (1 + z2n) * math.sqrt(p * (1 - p) / runs + z2n / (4 * runs))
-    # At 0 or all successes the interval ends exactly at 0 or 1; rounding must not move it.
-    low = 0.0 if successes == 0 else max(0.0, centre - half)
-    high = 1.0 if successes == runs else min(1.0, centre + half)
-    return low, high
-
-
 def monte_carlo(
     path: FlightPath,
     encounters: Sequence[Encounter],
@@ -418,7 +406,7 @@ def monte_carlo(
     reached = float(np.linalg.norm(path.points[-1] - scenario.xyz[scenario.end])) <= capture_radius
     ok &= (v <= theta_m) & (h <= theta_m) & reached
     successes = int(np.count_nonzero(ok))
-    low, high = _wilson(successes, runs, confidence)
+    low, high = wilson_interval(successes, runs, confidence)
     return MonteCarloSummary(runs, successes, successes / runs, low, high, confidence)
 
 

@@ -42,13 +42,12 @@ points exceed residual_m, as on the contest data, the clip merges everything and
 from __future__ import annotations
 
 import itertools
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from statistics import NormalDist
 
 import numpy as np
 
+from gcs_planner.confidence import wilson_interval
 from gcs_planner.core.route import Leg, straight_legs
 from gcs_planner.scenario.model import Kind, Parameters, Scenario
 
@@ -172,18 +171,6 @@ def success_probability(
     return SuccessProbability(per_stop[-1], tuple(per_stop), largest)
 
 
-def _wilson(successes: int, runs: int, confidence: float) -> tuple[float, float]:
-    z = NormalDist().inv_cdf(0.5 + confidence / 2.0)
-    rate = successes / runs
-    z2n = z * z / runs
-    centre = (rate + z2n / 2.0) / (1.0 + z2n)
-    half = z / (1.0 + z2n) * math.sqrt(rate * (1.0 - rate) / runs + z2n / (4.0 * runs))
-    # At 0 or all successes the interval ends exactly at 0 or 1; rounding must not move it.
-    low = 0.0 if successes == 0 else max(0.0, centre - half)
-    high = 1.0 if successes == runs else min(1.0, centre + half)
-    return low, high
-
-
 def monte_carlo_success(
     scenario: Scenario,
     points: Sequence[int],
@@ -226,7 +213,7 @@ def monte_carlo_success(
         else:
             h = np.where(succeeded, 0.0, np.minimum(h, residual_m))
     successes = int(np.count_nonzero(ok))
-    low, high = _wilson(successes, runs, confidence)
+    low, high = wilson_interval(successes, runs, confidence)
     return MonteCarloResult(runs, successes, successes / runs, low, high, confidence)
 
 
