@@ -138,7 +138,8 @@ def render(result: Plan) -> str:
         ),
         f"optimality: {result.statement}",
         "",
-        f"Pareto front ({len(result.routes)} routes; * = chosen by {result.choice}"
+        f"Pareto front ({len(result.routes)} route{'' if len(result.routes) == 1 else 's'}; "
+        f"* = chosen by {result.choice}"
         + (
             f" among routes with P >= {result.min_probability:g}"
             if result.min_probability > 0
