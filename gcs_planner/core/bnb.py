@@ -13,6 +13,7 @@ the lower bound that the open labels still allow, and the gap is reported, never
 
 from __future__ import annotations
 
+import copy
 import heapq
 import itertools
 import math
@@ -63,12 +64,21 @@ class BnbResult:
 PROB_EPS = 1e-12
 
 
-def _dominated(found: list[Found], length: float, k: int, prob: float) -> bool:
+def _least_length(front: Sequence[Found], corrections: int, probability: float) -> float:
+    """The least length on ``front`` with at most ``corrections`` and at least ``probability``."""
+    return min(
+        (
+            f.length
+            for f in front
+            if f.corrections <= corrections and f.probability >= probability - PROB_EPS
+        ),
+        default=math.inf,
+    )
+
+
+def _dominated(found: Sequence[Found], length: float, k: int, prob: float) -> bool:
     """Whether a found route is at least as good as (length, k, prob) on every objective."""
-    for f in found:
-        if f.corrections <= k and f.probability >= prob - PROB_EPS and f.length <= length:
-            return True
-    return False
+    return _least_length(found, k, prob) <= length
 
 
 class _Incumbents:
@@ -148,8 +158,7 @@ def bnb_front(
         # heading: no proof, but it finds good routes fast (the certain one, the most reliable
         # ones). Both seed the search over simple routes, whose exhaustion, or gaps, is what is
         # reported.
-        floor_ctx = _Context(scenario.with_params(turn_radius=0.0), probability, max_corrections)
-        floor = _relaxed(floor_ctx, max_labels, ())
+        floor = _relaxed(ctx.straight(), max_labels, ())
         guide = _relaxed(ctx, max_labels, [*seeds, *(f.points for f in floor.front)])
         simple = [f.points for f in guide.front if len(set(f.points)) == len(f.points)]
         res = _search(ctx, None, max_labels, [*seeds, *simple])
@@ -161,18 +170,6 @@ def bnb_front(
             ]
     res.seconds = time.perf_counter() - t0
     return res
-
-
-def _least_length(front: Sequence[Found], corrections: int, probability: float) -> float:
-    """The least length on ``front`` with at most ``corrections`` and at least ``probability``."""
-    return min(
-        (
-            f.length
-            for f in front
-            if f.corrections <= corrections and f.probability >= probability - PROB_EPS
-        ),
-        default=math.inf,
-    )
 
 
 def _relaxed(ctx: _Context, max_labels: int, seeds: Sequence[Sequence[int]]) -> BnbResult:
@@ -192,9 +189,10 @@ def _relaxed(ctx: _Context, max_labels: int, seeds: Sequence[Sequence[int]]) -> 
             # A budget ended a relaxed round: its walks are no routes, so fall back to the
             # search over simple routes, which is sound at any budget.
             res = _search(ctx, None, max_labels, seeds)
+            spent += res.labels
             break
         critical |= repeated
-    res.labels = spent if res.exhausted else res.labels
+    res.labels = spent  # every round's labels, the fallback's included
     return res
 
 
@@ -211,6 +209,15 @@ class _Context:
         self.kmax = scenario.n - 2 if max_corrections is None else max_corrections
         self.kind_of = [Kind(int(c)) for c in scenario.kind]  # Enum() is slow in the loop
         self.unreliable = scenario.unreliable if probability else np.zeros(scenario.n, dtype=bool)
+
+    def straight(self) -> _Context:
+        """The same search with straight legs. The reach graph and the cost-to-go are made of
+        straight legs already: shared, not built again."""
+        other = copy.copy(self)
+        other.scenario = self.scenario.with_params(turn_radius=0.0)
+        other.params = other.scenario.params
+        other.R = 0.0
+        return other
 
     def seed(self, points: Sequence[int]) -> Found | None:
         """A known route as an incumbent, evaluated under this search's model."""
@@ -279,7 +286,9 @@ def _search(
     inc = _Incumbents(kmax)
     for points in seeds:
         seed = ctx.seed(points)
-        if seed is not None and not _dominated(inc.found, *_values(seed)):
+        if seed is not None and not _dominated(
+            inc.found, seed.length, seed.corrections, seed.probability
+        ):
             inc.add(seed)
     counter = itertools.count()
     # Entry: (f, tiebreak, L, node, k, states, heading, path, to_go). A carries no error and
@@ -396,10 +405,6 @@ def _search(
     return BnbResult(
         found, lower, complete, labels, time.perf_counter() - t0, exhausted, len(live), open_bound
     )
-
-
-def _values(f: Found) -> tuple[float, int, float]:
-    return f.length, f.corrections, f.probability
 
 
 def flown_route(scenario: Scenario, points: tuple[int, ...]) -> Route:
