@@ -120,11 +120,12 @@ def layered_search(
     start: int,
     end: int,
     kmax: int,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, int]:
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, int, int, int]:
     """The layered label search of ``search._layered_search`` without critical points.
 
-    Returns, per improvement of the best complete length at layer k: (k, length, last label),
-    the label store (point, parent) to rebuild routes, and the point closest to B reached.
+    Returns, per improvement of the best complete length at layer k: (k, length, last label);
+    the label store (point, parent) to rebuild routes; the labels kept, the layers searched and
+    the point closest to B reached.
     """
     n = lim_v.shape[0]
     lim_b = lim_v[end]
@@ -224,14 +225,12 @@ def layered_search(
                     p = nxt[p]
                 if size == cap:
                     cap *= 2
-                    node = _grow_i(node, cap)
-                    Ls = _grow_f(Ls, cap)
-                    es = _grow_f(es, cap)
-                    parent = _grow_i(parent, cap)
-                    nxt = _grow_i(nxt, cap)
-                    grown = np.zeros(cap, np.bool_)
-                    grown[:size] = dead[:size]
-                    dead = grown
+                    node = _grow(node, cap)
+                    Ls = _grow(Ls, cap)
+                    es = _grow(es, cap)
+                    parent = _grow(parent, cap)
+                    nxt = _grow(nxt, cap)
+                    dead = _grow(dead, cap)
                 node[size] = j
                 Ls[size] = nL
                 es[size] = ne
@@ -245,18 +244,15 @@ def layered_search(
     for i in range(size):
         if not dead[i]:
             alive += 1
-    return f_k[:nfound], f_L[:nfound], f_label[:nfound], node[:size], parent[:size], alive, closest
+    return (
+        f_k[:nfound], f_L[:nfound], f_label[:nfound], node[:size], parent[:size], alive, k + 1,
+        closest,
+    )  # fmt: skip
 
 
 @njit(cache=True)
-def _grow_i(a: np.ndarray, cap: int) -> np.ndarray:
-    out = np.empty(cap, a.dtype)
-    out[: a.shape[0]] = a
-    return out
-
-
-@njit(cache=True)
-def _grow_f(a: np.ndarray, cap: int) -> np.ndarray:
-    out = np.empty(cap, a.dtype)
+def _grow(a: np.ndarray, cap: int) -> np.ndarray:
+    """A copy of ``a`` with room for ``cap`` entries (the tail is zero)."""
+    out = np.zeros(cap, a.dtype)
     out[: a.shape[0]] = a
     return out

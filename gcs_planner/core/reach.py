@@ -19,19 +19,9 @@ from gcs_planner.scenario.model import Kind, Scenario
 COMPILED_FROM_POINTS = 3_000
 
 
-def compiled_available() -> bool:
-    """Whether numba (an optional speed-up for dense maps) can be imported."""
-    try:
-        import numba  # noqa: F401
-    except ImportError:
-        return False
-    return True
-
-
 def use_compiled(n: int, compiled: bool | None) -> bool:
-    if compiled is None:
-        return n >= COMPILED_FROM_POINTS and compiled_available()
-    return compiled
+    """``compiled`` as asked, or by size when None."""
+    return n >= COMPILED_FROM_POINTS if compiled is None else compiled
 
 
 @dataclass(frozen=True)

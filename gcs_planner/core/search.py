@@ -102,7 +102,7 @@ def _compiled_search(
     """The first round (no critical points) by the streaming kernel of ``kernel``."""
     from gcs_planner.core.kernel import layered_search
 
-    ks, lengths, last, node, parent, alive, closest = layered_search(
+    ks, lengths, last, node, parent, alive, layers, closest = layered_search(
         graph.indptr,
         graph.target,
         graph.length,
@@ -115,7 +115,7 @@ def _compiled_search(
         kmax,
     )
     stats.labels += int(alive)
-    stats.layers += int(ks.max()) + 1 if len(ks) else 0
+    stats.layers += int(layers)
     front = []
     for k_, length, g in zip(ks.tolist(), lengths.tolist(), last.tolist()):
         pts = [graph.end]
@@ -213,7 +213,7 @@ def _layered_search(
             base = int(cum[lo - 1]) if lo else 0
             hi = max(lo + 1, int(np.searchsorted(cum, base + CHUNK_ARCS, side="right")))
             part = _expand(
-                graph, node, L, dv, dh, mask, lo, hi, best, kind_v, crit_word, crit_bit, stats
+                graph, deg, node, L, dv, dh, mask, lo, hi, best, kind_v, crit_word, crit_bit, stats
             )
             if not words:
                 c_j, c_L, c_e = part[1], part[2], part[3]
@@ -262,6 +262,7 @@ CHUNK_ARCS = 1 << 22
 
 def _expand(
     graph: ReachGraph,
+    deg: np.ndarray,
     node: np.ndarray,
     L: np.ndarray,
     dv: np.ndarray,
@@ -278,7 +279,7 @@ def _expand(
     """The feasible, bounded one-leg extensions of labels lo:hi of a layer, as (label index in
     the layer, point, L, carried error e, critical mask, point is V)."""
     end = graph.end
-    counts = graph.degree()[node[lo:hi]]
+    counts = deg[node[lo:hi]]
     total_c = int(counts.sum())
     src = lo + np.repeat(np.arange(hi - lo), counts)
     offs = np.cumsum(counts) - counts
