@@ -158,11 +158,11 @@ def dry_run(
     request even while the vehicle answers its resent item with INVALID_SEQUENCE, so the
     vehicle's own re-request must come well within that patience.
 
-    ``attempts``: whole uploads tried before giving up, as a user would press upload again. A
-    lost final MISSION_ACK otherwise fails a complete transfer: the ground station resends the
-    last item and the mock vehicle, idle again, stays silent (PX4 answers such a duplicate with
-    the ACK since PX4-Autopilot#9547). Only a read-back equal to the upload counts as verified;
-    a refusal (MAV_MISSION_RESULT) is not retried. A failed upload is not raised: the report says
+    ``attempts``: whole uploads tried before giving up, as a user would press upload again when
+    heavy ``loss`` outlasts the ground station's retries. (A lost final MISSION_ACK no longer
+    needs this: the mock vehicle answers the resent last item with the ACK again, as PX4 does
+    since PX4-Autopilot#9547.) Only a read-back equal to the upload counts as verified; a
+    refusal (MAV_MISSION_RESULT) is not retried. A failed upload is not raised: the report says
     ``verified`` False and why, and the vehicle still replays whatever it stored.
     """
     if flavour not in FLAVOURS:
