@@ -37,6 +37,7 @@ from gcs_planner.confidence import wilson_interval
 from gcs_planner.mission.georef import DEFAULT_ORIGIN, LocalFrame
 from gcs_planner.mission.items import MissionItem
 from gcs_planner.scenario.model import Kind, Parameters, Scenario
+from gcs_planner.vehicle import DEFAULT_CAPTURE_RADIUS_M, DEFAULT_CRUISE_AIRSPEED
 
 # MAV_CMD values whose x/y/z are a position the vehicle flies to.
 NAV_POSITION_COMMANDS = frozenset({16, 17, 18, 19, 21, 22, 31})
@@ -44,8 +45,7 @@ MAV_CMD_DO_CHANGE_SPEED = 178
 GLOBAL_AMSL_FRAMES = frozenset({0, 5})
 GLOBAL_RELATIVE_FRAMES = frozenset({3, 6})
 
-DEFAULT_CAPTURE_RADIUS_M = 5.0
-DEFAULT_CRUISE_SPEED = 25.0  # m/s
+DEFAULT_CRUISE_SPEED = DEFAULT_CRUISE_AIRSPEED  # m/s
 DENSIFY_MAX_DEG = 16.0
 # Largest relative shortfall of a chord under an arc of DENSIFY_MAX_DEG (see module docstring).
 CHORD_SHORTFALL = 1.0 - math.sin(math.radians(DENSIFY_MAX_DEG) / 2) / (

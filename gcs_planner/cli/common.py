@@ -11,6 +11,7 @@ from gcs_planner.core.choose import CHOICES
 from gcs_planner.errors import InputError
 from gcs_planner.mission.georef import parse_origin
 from gcs_planner.scenario.model import Scenario
+from gcs_planner.vehicle import LEG_MODELS
 
 if TYPE_CHECKING:
     from gcs_planner.core.planner import Plan
@@ -26,6 +27,14 @@ PARAMETER_FLAGS = {
     "turn_radius": "minimum turning radius in metres (0: straight legs)",
     "p_success": "success probability of a correction at an unreliable point",
     "fail_residual": "residual error after a failed correction",
+    "max_climb_angle": "largest climb (flight-path) angle in degrees (90: unlimited)",
+    "max_descent_angle": "largest descent angle in degrees (90: unlimited)",
+}
+# The aircraft beyond the planning parameters.
+VEHICLE_FLAGS = {
+    "cruise_airspeed": "cruise airspeed in m/s",
+    "max_bank_angle": "bank limit in degrees: with --cruise-airspeed gives the turning radius "
+    "R = V^2 / (g tan(bank)) instead of --turn-radius",
 }
 
 
@@ -35,6 +44,14 @@ def add_scenario_arguments(parser: argparse.ArgumentParser, positional: bool = T
     group = parser.add_argument_group("scenario parameters (override the scenario file)")
     for name, help_text in PARAMETER_FLAGS.items():
         group.add_argument(f"--{name.replace('_', '-')}", dest=name, type=float, help=help_text)
+    for name, help_text in VEHICLE_FLAGS.items():
+        group.add_argument(f"--{name.replace('_', '-')}", dest=name, type=float, help=help_text)
+    group.add_argument(
+        "--leg-model",
+        choices=LEG_MODELS,
+        help="how legs are flown with a turning radius > 0: airplane (horizontal turns, climb "
+        "limits, helices; the default) or cs3d (tilted-plane Dubins, earlier releases' model)",
+    )
     group.add_argument(
         "--heading-at-a", type=_vector, help="initial heading at A as X,Y,Z (default: free)"
     )
@@ -54,7 +71,10 @@ def _vector(text: str) -> tuple[float, float, float]:
 def load_scenario_from_args(args: argparse.Namespace, path: str | None = None) -> Scenario:
     from gcs_planner.scenario.readers import load_scenario
 
-    overrides: dict = {name: getattr(args, name, None) for name in PARAMETER_FLAGS}
+    overrides: dict = {
+        name: getattr(args, name, None) for name in (*PARAMETER_FLAGS, *VEHICLE_FLAGS)
+    }
+    overrides["leg_model"] = getattr(args, "leg_model", None)
     overrides["heading_at_a"] = getattr(args, "heading_at_a", None)
     origin = getattr(args, "origin", None)
     overrides["origin"] = None if origin is None else parse_origin(origin)

@@ -28,12 +28,8 @@ from gcs_planner.link.protocol import (
     mission_differences,
 )
 from gcs_planner.mission.items import MAV_MISSION_TYPE_MISSION, MissionItem
+from gcs_planner.vehicle import FIRMWARE_OF_AUTOPILOT, FIRMWARES
 
-FIRMWARES = ("ardupilot", "px4")
-_AUTOPILOT_FIRMWARE = {
-    mavlink.MAV_AUTOPILOT_ARDUPILOTMEGA: "ardupilot",
-    mavlink.MAV_AUTOPILOT_PX4: "px4",
-}
 _COMMAND_OK = (mavlink.MAV_RESULT_ACCEPTED, mavlink.MAV_RESULT_IN_PROGRESS)
 _NOT_VEHICLES = {mavlink.MAV_TYPE_GCS, mavlink.MAV_TYPE_GIMBAL, mavlink.MAV_TYPE_ADSB}
 
@@ -127,7 +123,7 @@ class MissionClient:
                 continue
             self.target_system = msg.get_srcSystem()
             self.target_component = msg.get_srcComponent()
-            flavour = _AUTOPILOT_FIRMWARE.get(msg.autopilot, "generic")
+            flavour = FIRMWARE_OF_AUTOPILOT.get(msg.autopilot, "generic")
             if self.firmware is None:
                 self.firmware = flavour
             self.vehicle = Vehicle(

@@ -12,12 +12,10 @@ import time
 from gcs_planner.errors import LinkError
 from gcs_planner.link.connection import Link, mavlink
 from gcs_planner.link.protocol import DEFAULT_RETRIES, DEFAULT_TIMEOUT_S
+from gcs_planner.vehicle import LOITER_RADIUS_PARAM
 
 # name and MAV_PARAM_TYPE of the loiter radius, per firmware.
-LOITER_RADIUS = {
-    "ardupilot": ("WP_LOITER_RAD", mavlink.MAV_PARAM_TYPE_INT16),
-    "px4": ("NAV_LOITER_RAD", mavlink.MAV_PARAM_TYPE_REAL32),
-}
+LOITER_RADIUS = LOITER_RADIUS_PARAM
 _INT_TYPES = {
     mavlink.MAV_PARAM_TYPE_INT8: (-(2**7), 2**7 - 1),
     mavlink.MAV_PARAM_TYPE_INT16: (-(2**15) + 1, 2**15 - 1),

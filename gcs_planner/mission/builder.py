@@ -44,27 +44,28 @@ from gcs_planner.mission.items import (
     MissionItem,
 )
 from gcs_planner.scenario.model import Origin
+from gcs_planner.vehicle import (
+    DEFAULT_ACCEPTANCE_RADIUS_M,
+    DEFAULT_CRUISE_AIRSPEED,
+    FIRMWARES,
+    LOITER_RADIUS_PARAM,
+    MAX_ARC_STEP_DEG,
+    MAX_CHORD_ERROR_M,
+)
 
-# Within this distance of a correction point the aircraft's correction works, and the autopilot
-# counts the waypoint reached. 50 m is a quarter of the 200 m turning radius: tight enough for the
-# correction, loose enough that a fixed wing in wind does not miss the point and circle back.
-DEFAULT_CAPTURE_RADIUS = 50
-# Airspeed of a small maritime fixed wing (m/s); 25 m/s flies the contest's ~100 km in ~70 min.
-DEFAULT_CRUISE_SPEED = 25.0
+# The waypoint acceptance radius (param2 of each correction waypoint): within it the autopilot
+# counts the waypoint reached. 50 m is a quarter of the 200 m turning radius: loose enough that a
+# fixed wing in wind does not miss the point and circle back.
+DEFAULT_CAPTURE_RADIUS = int(DEFAULT_ACCEPTANCE_RADIUS_M)
+DEFAULT_CRUISE_SPEED = DEFAULT_CRUISE_AIRSPEED
 # QGroundControl's default hover speed; meaningless for a fixed wing but the .plan carries it.
 HOVER_SPEED = 5.0
 
-MAX_ARC_STEP_DEG = 16.0
-MAX_CHORD_ERROR_M = 2.0
-
-FIRMWARES = ("ardupilot", "px4")
 ALTITUDE_FRAMES = {"amsl": MAV_FRAME_GLOBAL, "relative": MAV_FRAME_GLOBAL_RELATIVE_ALT}
 # Which altitude frames each firmware takes in a mission (ArduPlane: AP_Mission; PX4: the
 # mission feasibility checks). Both take both; the table is where a refusal would be stated.
 FRAMES_ACCEPTED = {"ardupilot": ("amsl", "relative"), "px4": ("amsl", "relative")}
 END_ACTIONS = ("loiter", "rtl", "land")
-# The vehicle parameter that holds the loiter radius, set by the link on upload.
-LOITER_RADIUS_PARAM = {"ardupilot": "WP_LOITER_RAD", "px4": "NAV_LOITER_RAD"}
 
 PLAN_FORMAT = "gcs-planner-plan"
 PLAN_VERSION = 1
@@ -380,7 +381,7 @@ def build_mission(
         home=(float(home_lat), float(home_lon), float(home_alt)),
         cruise_speed=speed,
         turn_radius=radius,
-        loiter_param=(LOITER_RADIUS_PARAM[firmware], radius) if radius > 0 else None,
+        loiter_param=(LOITER_RADIUS_PARAM[firmware][0], radius) if radius > 0 else None,
         capture_radius=float(capture),
         origin=org,
         origin_is_default=org_default,

@@ -12,6 +12,8 @@ from enum import IntEnum
 
 import numpy as np
 
+from gcs_planner.vehicle import DEFAULT_CRUISE_AIRSPEED, DEFAULT_LEG_MODEL, VehicleProfile
+
 
 class Kind(IntEnum):
     """Kind of a scenario point. The integer codes are what ``Scenario.kind`` stores."""
@@ -43,6 +45,10 @@ class Parameters:
     turn_radius: float = 200.0
     p_success: float = 0.8
     fail_residual: float = 5.0
+    # Largest climb and descent (flight-path) angles in degrees; 90 = unlimited (MODEL.md,
+    # "Airplane legs"). Only the airplane leg model plans with them.
+    max_climb_angle: float = 90.0
+    max_descent_angle: float = 90.0
 
     def validate(self) -> list[str]:
         """Return the names of invalid parameters with why, empty when all are valid."""
@@ -57,6 +63,10 @@ class Parameters:
             bad.append(f"p_success must lie in [0, 1] (got {self.p_success!r})")
         if not math.isfinite(self.fail_residual) or self.fail_residual < 0:
             bad.append(f"fail_residual must be a finite number >= 0 (got {self.fail_residual!r})")
+        for name in ("max_climb_angle", "max_descent_angle"):
+            value = getattr(self, name)
+            if not math.isfinite(value) or not 0.0 < value <= 90.0:
+                bad.append(f"{name} must lie in (0, 90] degrees (got {value!r})")
         return bad
 
     # Limits in metres of flight: the search works in metres flown since the last reset of a
@@ -116,10 +126,32 @@ class Scenario:
     source: str = ""
     origin: Origin | None = None
     heading_at_a: tuple[float, float, float] | None = None
+    # The aircraft beyond the planning parameters: which leg model plans with the turning
+    # radius, its cruise airspeed, and where the radius came from (see ``vehicle``).
+    leg_model: str = DEFAULT_LEG_MODEL
+    cruise_airspeed: float = DEFAULT_CRUISE_AIRSPEED
+    radius_source: str = "turn_radius"
     _index: dict[str, int] = field(default_factory=dict, repr=False)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "_index", {pid: i for i, pid in enumerate(self.ids)})
+
+    @property
+    def vehicle(self) -> VehicleProfile:
+        """The aircraft's flight envelope as the planner, exporter and mock vehicle use it."""
+        p = self.params
+        return VehicleProfile(
+            turn_radius=p.turn_radius,
+            max_climb_angle=p.max_climb_angle,
+            max_descent_angle=p.max_descent_angle,
+            cruise_airspeed=self.cruise_airspeed,
+            leg_model=self.leg_model,
+            radius_source=self.radius_source,
+        )
+
+    def with_vehicle(self, **changes: object) -> Scenario:
+        """A copy with the leg model, cruise airspeed or radius source changed."""
+        return replace(self, **changes)
 
     @property
     def n(self) -> int:

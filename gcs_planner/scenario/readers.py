@@ -19,10 +19,18 @@ import numpy as np
 from gcs_planner.errors import InputError
 from gcs_planner.scenario import csv_reader, toml_reader, xlsx
 from gcs_planner.scenario.model import PARAMETER_NAMES, Kind, Origin, Parameters, Scenario
+from gcs_planner.vehicle import (
+    DEFAULT_CRUISE_AIRSPEED,
+    LEG_MODELS,
+    MAX_BANK_DEG,
+    turn_radius_from,
+)
 
 COMMAND_LINE = "command line"
 PARAMETER_KEYS = tuple(f.name for f in fields(Parameters))
-OVERRIDE_KEYS = (*PARAMETER_KEYS, "heading_at_a", "origin")
+# The aircraft beyond the planning parameters ([vehicle] in a TOML, flags on the command line).
+VEHICLE_EXTRA_KEYS = ("cruise_airspeed", "max_bank_angle", "leg_model")
+OVERRIDE_KEYS = (*PARAMETER_KEYS, *VEHICLE_EXTRA_KEYS, "heading_at_a", "origin")
 
 # Kind vocabulary shared by both point formats: the planner's letters, and the contest's codes
 # (1 = V, 0 = H, "A点", "B点") so that a workbook exported to CSV still reads.
@@ -63,11 +71,18 @@ def load_scenario(
         raise ValueError(f"unknown override(s): {', '.join(unknown)}")
     _check_is_file(path)
     suffix = path.suffix.lower()
+    vehicle: dict[str, object] = {}
     if suffix == ".toml":
         spec = toml_reader.read_scenario_toml(path)
         points = load_points(spec.points)
         values = dict(spec.parameters)
         sources = {k: (str(path), spec.parameter_lines.get(k)) for k in values}
+        for key, value in spec.vehicle.items():
+            sources[key] = (str(path), spec.vehicle_lines.get(key))
+            if key in PARAMETER_KEYS:
+                values[key] = value  # type: ignore[assignment]
+            else:
+                vehicle[key] = value
         name = spec.name or path.stem
         origin, heading = spec.origin, spec.heading_at_a
     elif suffix in (".csv", ".xlsx"):
@@ -83,6 +98,18 @@ def load_scenario(
         if key in given:
             values[key] = _override_number(key, given[key])
             sources[key] = (COMMAND_LINE, None)
+    for key in VEHICLE_EXTRA_KEYS:
+        if key in given:
+            vehicle[key] = (
+                given[key] if key == "leg_model" else _override_number(key, given[key])
+            )
+            sources[key] = (COMMAND_LINE, None)
+    # On the command line a radius wins over a bank from the file, and a bank over a radius.
+    if "turn_radius" in given and "max_bank_angle" not in given:
+        vehicle.pop("max_bank_angle", None)
+    elif "max_bank_angle" in given and "turn_radius" not in given:
+        values.pop("turn_radius", None)
+    extra = _vehicle(path, vehicle, values, sources)
     if "origin" in given:
         origin = _override_origin(given["origin"])
     if "heading_at_a" in given:
@@ -100,6 +127,7 @@ def load_scenario(
         source=str(path),
         origin=origin,
         heading_at_a=heading,
+        **extra,
     )
 
 
@@ -185,6 +213,48 @@ def _parameters(
         file, row = sources.get(first, (str(path), None))
         raise InputError("; ".join(problems), file=file, row=row, field=first)
     return params
+
+
+def _vehicle(
+    path: Path,
+    vehicle: dict[str, object],
+    values: dict[str, float],
+    sources: dict[str, tuple[str, int | None]],
+) -> dict[str, object]:
+    """The Scenario fields of the aircraft (leg model, airspeed, radius source); fills the
+    turning radius into ``values`` when it comes from airspeed and bank."""
+    def fail(key: str, message: str) -> InputError:
+        file, row = sources.get(key, (str(path), None))
+        return InputError(message, file=file, row=row, field=key)
+
+    out: dict[str, object] = {}
+    leg_model = vehicle.get("leg_model")
+    if leg_model is not None:
+        if leg_model not in LEG_MODELS:
+            raise fail(
+                "leg_model", f"unknown leg model {leg_model!r}: one of {', '.join(LEG_MODELS)}"
+            )
+        out["leg_model"] = leg_model
+    airspeed = vehicle.get("cruise_airspeed")
+    if airspeed is not None:
+        if not (math.isfinite(airspeed) and 0 < airspeed <= 300):  # type: ignore[operator]
+            raise fail("cruise_airspeed", f"must lie in (0, 300] m/s (got {airspeed!r})")
+        out["cruise_airspeed"] = float(airspeed)  # type: ignore[arg-type]
+    bank = vehicle.get("max_bank_angle")
+    if bank is not None:
+        if not (math.isfinite(bank) and 0 < bank <= MAX_BANK_DEG):  # type: ignore[operator]
+            raise fail(
+                "max_bank_angle", f"must lie in (0, {MAX_BANK_DEG:g}] degrees (got {bank!r})"
+            )
+        if "turn_radius" in values:
+            raise fail(
+                "max_bank_angle",
+                "give either turn_radius or cruise_airspeed with max_bank_angle, not both",
+            )
+        speed = float(airspeed) if airspeed is not None else DEFAULT_CRUISE_AIRSPEED  # type: ignore[arg-type]
+        values["turn_radius"] = turn_radius_from(speed, float(bank))  # type: ignore[arg-type]
+        out["radius_source"] = "airspeed and bank"
+    return out
 
 
 # --- points -------------------------------------------------------------------------------

@@ -23,7 +23,17 @@ else:  # pragma: no cover - exercised only on Python 3.10
     import tomli as tomllib
 
 PARAMETER_KEYS = tuple(f.name for f in fields(Parameters))
-TOP_KEYS = ("name", "points", "heading_at_a", "parameters", "origin")
+TOP_KEYS = ("name", "points", "heading_at_a", "parameters", "origin", "vehicle")
+# [vehicle]: the aircraft. The turning radius and the climb limits may stand here or under
+# [parameters]; cruise_airspeed with max_bank_angle gives the radius when it is not given.
+VEHICLE_KEYS = (
+    "turn_radius",
+    "max_climb_angle",
+    "max_descent_angle",
+    "cruise_airspeed",
+    "max_bank_angle",
+    "leg_model",
+)
 ORIGIN_KEYS = ("lat", "lon", "alt")
 POINTS_SUFFIXES = (".csv", ".xlsx")
 
@@ -39,6 +49,9 @@ class ScenarioSpec:
     parameter_lines: dict[str, int | None] = field(default_factory=dict)
     origin: Origin | None = None
     heading_at_a: tuple[float, float, float] | None = None
+    # [vehicle] values (numbers, and leg_model as a string) and their lines
+    vehicle: dict[str, object] = field(default_factory=dict)
+    vehicle_lines: dict[str, int | None] = field(default_factory=dict)
 
 
 def key_line(text: str, table: str, key: str) -> int | None:
@@ -190,6 +203,39 @@ def read_scenario_toml(path: Path) -> ScenarioSpec:
             )
         parameters[key] = float(value)
 
+    vehicle: dict[str, object] = {}
+    vehicle_lines: dict[str, int | None] = {}
+    if "vehicle" in doc:
+        raw = _table(doc, "vehicle", file, text)
+        _unknown(raw, VEHICLE_KEYS, "vehicle", file, text)
+        for key, value in raw.items():
+            vehicle_lines[key] = key_line(text, "vehicle", key)
+            if key == "leg_model":
+                if not isinstance(value, str):
+                    raise InputError(
+                        f"must be a string (got {value!r})",
+                        file=file,
+                        row=vehicle_lines[key],
+                        field=f"vehicle.{key}",
+                    )
+                vehicle[key] = value
+            elif not _is_number(value):
+                raise InputError(
+                    f"must be a number (got {value!r})",
+                    file=file,
+                    row=vehicle_lines[key],
+                    field=f"vehicle.{key}",
+                )
+            else:
+                vehicle[key] = float(value)
+            if key in parameters:
+                raise InputError(
+                    f"given twice: in [parameters] (line {lines[key]}) and in [vehicle]",
+                    file=file,
+                    row=vehicle_lines[key],
+                    field=f"vehicle.{key}",
+                )
+
     origin = None
     if "origin" in doc:
         raw = _table(doc, "origin", file, text)
@@ -219,4 +265,6 @@ def read_scenario_toml(path: Path) -> ScenarioSpec:
         parameter_lines=lines,
         origin=origin,
         heading_at_a=heading,
+        vehicle=vehicle,
+        vehicle_lines=vehicle_lines,
     )

@@ -1,0 +1,186 @@
+"""The aircraft and its autopilot, in one place: the flight envelope the planner plans with, the
+mock vehicle flies with and the exporter writes for, and the autopilot words (firmwares, autopilot
+ids, parameter names) the link and the mock vehicle speak.
+
+This module imports nothing of the planner, the link or the simulator, so every room can import
+it (``sim/`` included) without the flow of data turning back.
+
+The flight envelope (MODEL.md, "Airplane legs"): a fixed wing turns by banking, so its turning
+radius at airspeed V and bank limit phi is R = V^2 / (g tan phi); it climbs at most at gamma_c and
+descends at most at gamma_d (degrees, 90 = unlimited, the contest's model). A user gives either R
+or V and phi; :func:`turn_radius_from` and :func:`bank_angle_for` convert between them.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+# Standard gravity (m/s^2), as both autopilots use for the bank/turn-rate relation.
+G = 9.80665
+
+# The leg models (MODEL.md, "Leg geometry"). "airplane" is the default whenever R > 0; "cs3d" is
+# the tilted-plane Dubins leg kept to reproduce earlier figures; with R = 0 legs are straight.
+LEG_MODELS = ("airplane", "cs3d")
+DEFAULT_LEG_MODEL = "airplane"
+
+# 90 degrees = no limit: the contest's aircraft, and what the planner assumes when nobody says
+# otherwise (the plan then says so and names its steepest leg).
+UNLIMITED_ANGLE_DEG = 90.0
+
+# A small maritime fixed wing: 25 m/s flies the contest's ~100 km in ~70 minutes.
+DEFAULT_CRUISE_AIRSPEED = 25.0
+# Bank limits the autopilots ship with (ArduPlane ROLL_LIMIT_DEG 45, PX4 FW_R_LIM 50): a user's
+# profile that needs more than this to hold R at V is refused.
+MAX_BANK_DEG = 60.0
+
+# ---------------------------------------------------------------------------------------------
+# Autopilot words
+
+FIRMWARES = ("ardupilot", "px4")
+# MAV_AUTOPILOT enum values (common.xml): ARDUPILOTMEGA = 3, PX4 = 12.
+AUTOPILOT_IDS = {"ardupilot": 3, "px4": 12}
+FIRMWARE_OF_AUTOPILOT = {v: k for k, v in AUTOPILOT_IDS.items()}
+# MAV_PARAM_TYPE: INT16 = 4, REAL32 = 9.
+PARAM_TYPE_INT16 = 4
+PARAM_TYPE_REAL32 = 9
+# The parameter that holds the loiter radius, and its type: ArduPlane WP_LOITER_RAD (int16,
+# metres), PX4 NAV_LOITER_RAD (float, metres). The link sets it to R on upload.
+LOITER_RADIUS_PARAM = {
+    "ardupilot": ("WP_LOITER_RAD", PARAM_TYPE_INT16),
+    "px4": ("NAV_LOITER_RAD", PARAM_TYPE_REAL32),
+}
+# Where each autopilot keeps the rest of the envelope (read by ``--vehicle-from``; served by the
+# mock vehicle). ArduPlane: AIRSPEED_CRUISE (m/s), ROLL_LIMIT_DEG, TECS_CLMB_MAX / TECS_SINK_MAX
+# (m/s, converted to angles at cruise airspeed), WP_RADIUS (acceptance, m). PX4: FW_AIRSPD_TRIM,
+# FW_R_LIM, FW_T_CLMB_MAX / FW_T_SINK_MAX (m/s), NAV_ACC_RAD.
+ENVELOPE_PARAMS = {
+    "ardupilot": {
+        "cruise_airspeed": "AIRSPEED_CRUISE",
+        "bank_limit": "ROLL_LIMIT_DEG",
+        "climb_rate": "TECS_CLMB_MAX",
+        "sink_rate": "TECS_SINK_MAX",
+        "acceptance_radius": "WP_RADIUS",
+    },
+    "px4": {
+        "cruise_airspeed": "FW_AIRSPD_TRIM",
+        "bank_limit": "FW_R_LIM",
+        "climb_rate": "FW_T_CLMB_MAX",
+        "sink_rate": "FW_T_SINK_MAX",
+        "acceptance_radius": "NAV_ACC_RAD",
+    },
+}
+
+# Arcs are densified into waypoints at most this far apart in angle, and close enough that a
+# chord stays within MAX_CHORD_ERROR_M of the arc, so the autopilot flies the planned turn.
+MAX_ARC_STEP_DEG = 16.0
+MAX_CHORD_ERROR_M = 2.0
+
+# Two different radii, two names:
+# * the CAPTURE radius is the correction landmark's: the aircraft's INS is corrected only when it
+#   passes within this 3D distance of the landmark (the vehicle's own database says so);
+# * the ACCEPTANCE radius is the autopilot's: within it a waypoint counts as reached and the
+#   autopilot moves on to the next item (MAV_CMD_NAV_WAYPOINT param2).
+DEFAULT_CAPTURE_RADIUS_M = 5.0
+DEFAULT_ACCEPTANCE_RADIUS_M = 50.0
+
+
+def turn_radius_from(airspeed: float, bank_deg: float) -> float:
+    """R = V^2 / (g tan phi): the coordinated-turn radius at airspeed ``airspeed`` (m/s) and bank
+    ``bank_deg`` (degrees)."""
+    if not (math.isfinite(airspeed) and airspeed > 0):
+        raise ValueError(f"airspeed must be a finite number > 0 m/s, got {airspeed!r}")
+    if not (math.isfinite(bank_deg) and 0 < bank_deg < 90):
+        raise ValueError(f"bank angle must lie in (0, 90) degrees, got {bank_deg!r}")
+    return airspeed * airspeed / (G * math.tan(math.radians(bank_deg)))
+
+
+def bank_angle_for(airspeed: float, radius: float) -> float:
+    """The bank (degrees) that turns on ``radius`` metres at ``airspeed`` m/s; 90 for R = 0."""
+    if radius <= 0:
+        return 90.0
+    return math.degrees(math.atan(airspeed * airspeed / (G * radius)))
+
+
+@dataclass(frozen=True)
+class VehicleProfile:
+    """The aircraft's flight envelope.
+
+    ``turn_radius`` 0 means straight legs (no turn modelled). Climb and descent angles are
+    flight-path angles in degrees, 90 meaning unlimited. ``radius_source`` says where R came from:
+    "turn_radius" (given) or "airspeed and bank" (R = V^2 / (g tan phi)).
+    """
+
+    turn_radius: float = 200.0
+    max_climb_angle: float = UNLIMITED_ANGLE_DEG
+    max_descent_angle: float = UNLIMITED_ANGLE_DEG
+    cruise_airspeed: float = DEFAULT_CRUISE_AIRSPEED
+    leg_model: str = DEFAULT_LEG_MODEL
+    radius_source: str = "turn_radius"
+
+    @property
+    def bank_angle(self) -> float:
+        """The bank (degrees) the aircraft needs to turn on its turning radius at cruise."""
+        return bank_angle_for(self.cruise_airspeed, self.turn_radius)
+
+    @property
+    def climb_limited(self) -> bool:
+        return self.max_climb_angle < UNLIMITED_ANGLE_DEG or (
+            self.max_descent_angle < UNLIMITED_ANGLE_DEG
+        )
+
+    @property
+    def climb_rate(self) -> float:
+        """Largest climb rate (m/s) at cruise airspeed; inf when unlimited."""
+        return _rate(self.cruise_airspeed, self.max_climb_angle)
+
+    @property
+    def sink_rate(self) -> float:
+        """Largest sink rate (m/s) at cruise airspeed; inf when unlimited."""
+        return _rate(self.cruise_airspeed, self.max_descent_angle)
+
+    @property
+    def turn_rate(self) -> float:
+        """Turn rate (rad/s) on the turning radius at cruise airspeed; inf for R = 0."""
+        return math.inf if self.turn_radius <= 0 else self.cruise_airspeed / self.turn_radius
+
+    def validate(self) -> list[str]:
+        """The names of bad fields with why, empty when the profile is valid."""
+        bad = []
+        if not (math.isfinite(self.turn_radius) and self.turn_radius >= 0):
+            bad.append(f"turn_radius must be a finite number >= 0 (got {self.turn_radius!r})")
+        for name in ("max_climb_angle", "max_descent_angle"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and 0 < v <= 90):
+                bad.append(f"{name} must lie in (0, 90] degrees (got {v!r})")
+        v = self.cruise_airspeed
+        if not (math.isfinite(v) and 0 < v <= 300):
+            bad.append(f"cruise_airspeed must lie in (0, 300] m/s (got {v!r})")
+        if self.leg_model not in LEG_MODELS:
+            bad.append(f"leg_model must be one of {', '.join(LEG_MODELS)} (got {self.leg_model!r})")
+        return bad
+
+    def describe(self) -> str:
+        """One line for the plan's output: what the planner assumed of the aircraft."""
+        if self.turn_radius <= 0:
+            legs = "straight legs"
+        else:
+            legs = f"{self.leg_model} legs, turning radius {self.turn_radius:g} m"
+            if self.radius_source != "turn_radius":
+                legs += (
+                    f" (from {self.cruise_airspeed:g} m/s at {self.bank_angle:.1f} deg bank)"
+                )
+        if self.climb_limited:
+            climb = (
+                f"climb <= {self.max_climb_angle:g} deg, "
+                f"descent <= {self.max_descent_angle:g} deg"
+            )
+        else:
+            climb = "unlimited climb and descent (90 deg, the contest's model)"
+        return f"{legs}; {climb}; cruise {self.cruise_airspeed:g} m/s"
+
+
+def _rate(airspeed: float, angle_deg: float) -> float:
+    if angle_deg >= UNLIMITED_ANGLE_DEG:
+        return math.inf
+    return airspeed * math.sin(math.radians(angle_deg))
