@@ -111,6 +111,19 @@ class Encounter:
 
 
 @dataclass(frozen=True)
+class Missed:
+    """A landmark the mission flies to (a waypoint on it) that the flight did not pass within
+    the capture radius of: no correction there."""
+
+    landmark: int
+    id: str
+    kind: str
+    seq: int  # the mission item on it
+    distance: float  # flown from A to the closest approach
+    miss: float  # 3D closest approach, metres
+
+
+@dataclass(frozen=True)
 class CorrectionRow:
     """One correction of a replay: the errors on arrival (before it) and what it did."""
 
@@ -173,6 +186,7 @@ class ReplayReport:
     flight: guidance.Flight | None = field(default=None, repr=False)
     nominal: FlightPath | None = field(default=None, repr=False)
     flown: FlightPath | None = field(default=None, repr=False)
+    missed: tuple[Missed, ...] = ()
 
     @property
     def arrived(self) -> bool:
@@ -199,6 +213,7 @@ class ReplayReport:
             "capture_radius": self.capture_radius,
             "flight_ended": self.flight.ended if self.flight is not None else "",
             "corrections": [asdict(c) for c in self.run.corrections],
+            "missed": [asdict(m) for m in self.missed],
         }
         if self.monte_carlo is not None:
             out["monte_carlo"] = asdict(self.monte_carlo)
@@ -482,6 +497,35 @@ def monte_carlo(
     return MonteCarloSummary(runs, successes, successes / runs, low, high, confidence)
 
 
+def find_missed(
+    nominal: FlightPath,
+    flown: FlightPath,
+    encounters: Sequence[Encounter],
+    scenario: Scenario,
+    capture_radius: float = DEFAULT_CAPTURE_RADIUS_M,
+) -> list[Missed]:
+    """Correction landmarks the mission has a waypoint on (within ``capture_radius``) that the
+    flown track did not pass within ``capture_radius`` of, in mission order."""
+    mask = (scenario.kind == Kind.V) | (scenario.kind == Kind.H)
+    idx = np.flatnonzero(mask)
+    if idx.size == 0 or len(nominal.points) < 2:
+        return []
+    tree = cKDTree(scenario.xyz[idx])
+    met = {e.landmark for e in encounters}
+    out: list[Missed] = []
+    seen: set[int] = set()
+    for p, seq in zip(nominal.points[1:], nominal.seqs[1:], strict=True):
+        for j in tree.query_ball_point(p, r=capture_radius):
+            li = int(idx[j])
+            if li in met or li in seen:
+                continue
+            seen.add(li)
+            distance, miss = closest_approach(flown, scenario.xyz[li], capture_radius)
+            kind = Kind(int(scenario.kind[li])).name
+            out.append(Missed(li, scenario.ids[li], kind, int(seq), distance, miss))
+    return out
+
+
 def flown_path(flight: guidance.Flight) -> FlightPath:
     """The flown track as a path (one point per step of the flight model)."""
     return FlightPath(flight.xyz, tuple(int(c) for c in flight.current), tuple(flight.airspeed))
@@ -550,6 +594,7 @@ def replay(
     path = track.until(b_distance)
     encounters = find_encounters(path, scenario, capture_radius)
     run = _fly(path, encounters, scenario, params, np.random.default_rng(seed), capture_radius)
+    missed = find_missed(nominal, path, encounters, scenario, capture_radius)
     k = min(int(np.searchsorted(track.cumulative, b_distance, side="right")), len(flight.t) - 1)
     mc = None
     if runs > 0:
@@ -568,4 +613,5 @@ def replay(
         flight=flight,
         nominal=nominal,
         flown=path,
+        missed=tuple(missed),
     )
