@@ -380,6 +380,9 @@ class _Autopilot:
             return self._tick_px4_alt_loiter(c, dist)
         # Track the leg prev -> c.
         acc = self._acceptance(c)
+        if dist <= acc and (not self.px4 or abs(s.z - c.pos[2]) <= PX4_ALT_ACCEPTANCE_M):
+            # Already there (the waypoint on A where the aircraft starts): reached at once.
+            return self.reached(c, f"within {dist:.1f} m")
         climb = self._glide(self.prev, c.pos, acc if self.px4 else 0.0)
         dt = self.dt
         if free_turn:
