@@ -1,0 +1,59 @@
+"""The check that matters: the dry run's vehicle flies with the scenario's vehicle profile
+(climb and descent limits included) whatever leg model planned the route, so a route whose
+legs break the limits does not "verify and arrive"."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from gcs_planner.cli import main
+from gcs_planner.core.planner import plan
+from gcs_planner.dry_run import EXIT_LOST, dry_run
+from gcs_planner.scenario.readers import load_scenario
+
+DS2 = {"alpha1": 20, "alpha2": 10, "beta1": 15, "beta2": 20, "theta": 20, "delta": 0.001}
+LIMITS = {"turn_radius": 200.0, "max_climb_angle": 15.0, "max_descent_angle": 15.0}
+FLAGS = [f for k, v in DS2.items() for f in (f"--{k}", str(v))] + [
+    "--turn-radius", "200", "--max-climb-angle", "15", "--max-descent-angle", "15",
+    "--choose", "most-reliable",
+]  # fmt: skip
+
+
+def _caught(d: dict) -> None:
+    """Not verified-and-arrived, and the report says where the flight went wrong."""
+    assert d["verified"] is True
+    assert d["arrived"] is False and d["ok"] is False
+    missed = [r for r in d["rows"] if r["outcome"] == "missed"]
+    lost = [r for r in d["rows"] if r["outcome"] == "lost"]
+    assert missed or lost or d["why"]
+    for r in missed:
+        assert r["miss"] > 5.0 and r["point"] in d["why"]  # named, with its 3D miss distance
+    assert d["max_deviation"] > 5.0
+
+
+def test_steep_cs3d_mission_is_caught_by_the_cli(capsys, dataset_paths):
+    """cs3d plans legs of up to 73 degrees; a 15 degree aircraft cannot fly them."""
+    rc = main(["dry-run", str(dataset_paths[2]), *FLAGS, "--leg-model", "cs3d", "--json"])
+    out, err = capsys.readouterr()
+    d = json.loads(out)
+    assert rc == EXIT_LOST
+    _caught(d)
+    assert "lost" in err and "missed" in err
+
+
+@pytest.fixture(scope="module")
+def steep_plan(dataset_paths):
+    scenario = load_scenario(dataset_paths[2], {**DS2, **LIMITS}).with_vehicle(leg_model="cs3d")
+    return plan(
+        scenario, objectives=("length", "corrections", "probability"), choice="most-reliable"
+    )
+
+
+def test_steep_cs3d_mission_is_caught_by_a_px4_vehicle(steep_plan, dataset_paths):
+    landmarks = load_scenario(dataset_paths[2], {**DS2, **LIMITS})
+    report = dry_run(steep_plan, landmarks, flavour="px4")
+    _caught(report.to_dict())
+    # PX4 will not count a waypoint reached off its altitude: it circles there.
+    assert report.flown_to_b > report.planned_length or not report.arrived
