@@ -57,3 +57,14 @@ def test_steep_cs3d_mission_is_caught_by_a_px4_vehicle(steep_plan, dataset_paths
     _caught(report.to_dict())
     # PX4 will not count a waypoint reached off its altitude: it circles there.
     assert report.flown_to_b > report.planned_length or not report.arrived
+
+
+def test_airplane_legs_within_the_limits_arrive(capsys, dataset_paths):
+    """The counterpart: the default airplane legs respect the 15 degree limits, so the same
+    aircraft flies them, overflies every correction and arrives. (Needs the planner's airplane
+    legs: until they land the default leg model plans cs3d legs and this fails.)"""
+    rc = main(["dry-run", str(dataset_paths[2]), *FLAGS, "--json"])
+    d = json.loads(capsys.readouterr().out)
+    assert rc == 0 and d["ok"], d["why"]
+    assert all(r["outcome"] in ("ok", "failed") for r in d["rows"])
+    assert [r["point"] for r in d["rows"]] == d["route"][1:-1]
