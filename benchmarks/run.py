@@ -190,7 +190,8 @@ def run(cfg: Config) -> str:
     sections.append(
         "## 5. Mission upload over loopback\n\n"
         f"The project's client uploads a {items:,}-item mission to the mock vehicle over UDP "
-        "127.0.0.1 and reads it back to verify it (`sim.vehicle.benchmark_upload`), no faults; "
+        "127.0.0.1 and reads it back to verify it (`benchmarks.upload.benchmark_upload`), no "
+        "faults; "
         f"medians of {cfg.runs} runs.\n\n" + upload.render(upload.run_upload(items, cfg.runs))
     )
     print(sections[-1], flush=True)

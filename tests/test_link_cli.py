@@ -196,7 +196,7 @@ def test_mock_vehicle_flies_with_telemetry_after_upload():
 
 @pytest.mark.parametrize("flavour", ["ardupilot", "px4"])
 def test_benchmark_function_runs(flavour):
-    from sim.vehicle import benchmark_upload
+    from benchmarks.upload import benchmark_upload
 
     result = benchmark_upload(200, flavour)
     assert result["items"] == 200 and result["seconds"] > 0
