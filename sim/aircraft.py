@@ -13,7 +13,7 @@ fixed step (0.5 s at 25 m/s: 12.5 m) flies a circle of radius R as a circle, not
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from gcs_planner.vehicle import G, VehicleProfile
 
@@ -30,13 +30,15 @@ class Envelope:
     bank_limit_deg: float  # 90 = turns of radius 0 (straight-leg plans)
     climb_rate: float  # m/s, > 0
     sink_rate: float  # m/s, > 0
+    # rad/s; inf when the aircraft turns on the spot (turning radius 0). Derived, kept as a
+    # field because the guidance reads it every step.
+    max_turn_rate: float = field(init=False)
 
-    @property
-    def max_turn_rate(self) -> float:
-        """rad/s; inf when the aircraft turns on the spot (turning radius 0)."""
-        if self.bank_limit_deg >= 90.0:
-            return math.inf
-        return G * math.tan(math.radians(self.bank_limit_deg)) / self.airspeed
+    def __post_init__(self) -> None:
+        rate = math.inf
+        if self.bank_limit_deg < 90.0:
+            rate = G * math.tan(math.radians(self.bank_limit_deg)) / self.airspeed
+        object.__setattr__(self, "max_turn_rate", rate)
 
     @property
     def min_radius(self) -> float:

@@ -31,6 +31,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field, replace
+from functools import cached_property
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -66,7 +67,7 @@ class FlightPath:
     seqs: tuple[int, ...]
     speeds: tuple[float, ...]  # cruise speed on the segment ending at point i (0 for the start)
 
-    @property
+    @cached_property
     def cumulative(self) -> np.ndarray:
         seg = np.linalg.norm(np.diff(self.points, axis=0), axis=1)
         return np.concatenate([[0.0], np.cumsum(seg)])
