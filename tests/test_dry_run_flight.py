@@ -68,3 +68,65 @@ def test_airplane_legs_within_the_limits_arrive(capsys, dataset_paths):
     assert rc == 0 and d["ok"], d["why"]
     assert all(r["outcome"] in ("ok", "failed") for r in d["rows"])
     assert [r["point"] for r in d["rows"]] == d["route"][1:-1]
+
+
+def test_steep_cs3d_mission_is_caught_through_mock_vehicle_and_upload_processes(
+    tmp_path, capsys, dataset_paths
+):
+    """The same as a user runs it: plan and export here, `gcs-planner mock-vehicle` in its own
+    process with the workbook as its landmarks and the 15 degree aircraft, `gcs-planner upload`,
+    then MAV_CMD_MISSION_START; the vehicle's STATUSTEXTs say what it missed and that it was
+    lost."""
+    import subprocess
+    import sys
+    import time
+
+    from gcs_planner.link.connection import mavlink, open_link
+    from sim.vehicle import free_udp_port
+
+    workbook = str(dataset_paths[2])
+    out = tmp_path / "steep"
+    assert main(["plan", workbook, *FLAGS, "--leg-model", "cs3d", "--out", str(out)]) == 0
+    mission = tmp_path / "mission.plan"
+    assert main(["export", str(out / "plan.json"), "--format", "plan", "--acceptance-radius",
+                 "1", "--out", str(mission)]) == 0  # fmt: skip
+    capsys.readouterr()
+    port = free_udp_port()
+    limits = ["--turn-radius", "200", "--max-climb-angle", "15", "--max-descent-angle", "15"]
+    scenario = [f for k, v in DS2.items() for f in (f"--{k}", str(v))] + limits
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "gcs_planner", "mock-vehicle", "--connect",
+         f"udpin:127.0.0.1:{port}", "--scenario", workbook, *scenario, "--speedup", "0"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    texts: list[str] = []
+    try:
+        conn = ["--connect", f"udpout:127.0.0.1:{port}", "--quiet", "--wait", "60"]
+        assert main(["upload", str(mission), *conn]) == 0, capsys.readouterr().out
+        link = open_link(f"udpout:127.0.0.1:{port}")
+        try:
+            deadline = time.monotonic() + 120.0  # generous: ends on the vehicle's last word
+            started, asked = False, 0.0
+            while time.monotonic() < deadline and not any("INS LOST" in t for t in texts):
+                if not started and time.monotonic() - asked > 2.0:
+                    asked = time.monotonic()
+                    link.send(link.mav.heartbeat_encode(6, 8, 0, 0, 0))
+                    link.send(link.mav.command_long_encode(
+                        1, 1, mavlink.MAV_CMD_MISSION_START, 0, 0, 0, 0, 0, 0, 0, 0))  # fmt: skip
+                msg = link.recv(0.5)
+                if msg is None:
+                    continue
+                kind = msg.get_type()
+                if kind == "COMMAND_ACK" and msg.command == mavlink.MAV_CMD_MISSION_START:
+                    # The first start is accepted; a repeat while flying is denied (busy).
+                    assert started or msg.result == mavlink.MAV_RESULT_ACCEPTED
+                    started = True
+                elif kind == "STATUSTEXT":
+                    texts.append(msg.text)
+        finally:
+            link.close()
+    finally:
+        proc.send_signal(2)
+        proc.communicate(timeout=60)
+    assert any("MISSED" in t for t in texts), texts
+    assert any("INS LOST" in t for t in texts), texts
