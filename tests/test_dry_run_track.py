@@ -59,9 +59,13 @@ def test_the_report_names_the_acceptance_and_capture_radii(capsys, line_csv):  #
         (["--acceptance-radius", "300"], "--acceptance-radius"),
         (["--acceptance-radius", "x"], "--acceptance-radius"),
         (["--track-out", "track.txt"], "--track-out"),
+        (["--track-out", "__file__/x.geojson"], "--track-out"),
     ],
 )
-def test_bad_flight_flags_are_one_line_and_exit_2(capsys, line_csv, argv, field):  # noqa: F811
+def test_bad_flight_flags_are_one_line_and_exit_2(capsys, tmp_path, line_csv, argv, field):  # noqa: F811
+    blocker = tmp_path / "__file__"
+    blocker.write_text("")  # a file where the track's folder would be
+    argv = [a.replace("__file__", str(blocker)) for a in argv]
     rc, out, err = run(capsys, str(line_csv), *LINE_FLAGS, *argv)
     assert rc == 2 and field in err and len(err.strip().splitlines()) == 1
     assert "Traceback" not in err

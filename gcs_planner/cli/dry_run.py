@@ -109,7 +109,11 @@ def run(args: argparse.Namespace) -> int:
         track=flown,
     )
     if track_out is not None and flown:
-        write_track(track_out, flown[0], landmarks, result.route.ids())
+        try:
+            write_track(track_out, flown[0], landmarks, result.route.ids())
+        except OSError as exc:
+            message = f"cannot write {track_out}: {exc.strerror}"
+            raise InputError(message, field="--track-out") from None
     if args.json:
         sys.stdout.write(json.dumps(report.to_dict(), indent=2) + "\n")
     else:
