@@ -27,7 +27,7 @@ from gcs_planner.core.cost_to_go import cost_to_go
 from gcs_planner.core.probability import propagate, success_probability
 from gcs_planner.core.reach import build_reach_graph
 from gcs_planner.core.route import Leg, Route, evaluate_route
-from gcs_planner.geometry.dubins import cs_lengths
+from gcs_planner.geometry.legs import FlownLeg, LegModel, path_angle_deg, scenario_leg_model
 from gcs_planner.geometry.trajectory import route_trajectory
 from gcs_planner.scenario.model import Kind, Scenario
 
@@ -149,16 +149,17 @@ def bnb_front(
     ctx = _Context(scenario, probability, max_corrections)
     if not dominance:
         res = _search(ctx, None, max_labels, seeds)
-    elif ctx.R == 0:
+    elif not ctx.model.carries_heading:
         res = _relaxed(ctx, max_labels, seeds)
     else:
-        # With turns: first the exact front with straight legs. Every route flown with turns is
-        # the same route with straight legs made longer and less likely to arrive, so that
-        # front bounds each turned front point from below. Then dominance that ignores the
+        # With turns: first the exact front of the relaxation whose legs are the model's
+        # heading-free lower bounds (the chord for cs3d). Every route flown with turns is the
+        # same route with those legs made longer and less likely to arrive, so that front bounds
+        # each turned front point from below. Then dominance that ignores the
         # heading: no proof, but it finds good routes fast (the certain one, the most reliable
         # ones). Both seed the search over simple routes, whose exhaustion, or gaps, is what is
         # reported.
-        floor = _relaxed(ctx.straight(), max_labels, ())
+        floor = _relaxed(ctx.relaxed(), max_labels, ())
         guide = _relaxed(ctx, max_labels, [*seeds, *(f.points for f in floor.front)])
         simple = [f.points for f in guide.front if len(set(f.points)) == len(f.points)]
         res = _search(ctx, None, max_labels, [*seeds, *simple])
@@ -203,26 +204,25 @@ class _Context:
         self.scenario = scenario
         self.probability = probability
         self.params = scenario.params
-        self.R = self.params.turn_radius
+        self.model: LegModel = scenario_leg_model(scenario)
         self.graph = build_reach_graph(scenario)
         self.G = cost_to_go(scenario, self.graph)
         self.kmax = scenario.n - 2 if max_corrections is None else max_corrections
         self.kind_of = [Kind(int(c)) for c in scenario.kind]  # Enum() is slow in the loop
         self.unreliable = scenario.unreliable if probability else np.zeros(scenario.n, dtype=bool)
 
-    def straight(self) -> _Context:
-        """The same search with straight legs. The reach graph and the cost-to-go are made of
-        straight legs already: shared, not built again."""
+    def relaxed(self) -> _Context:
+        """The same search over the heading-free relaxation of the leg model (each leg as long
+        as its lower bound). The reach graph and the cost-to-go are made of those bounds
+        already: shared, not built again."""
         other = copy.copy(self)
-        other.scenario = self.scenario.with_params(turn_radius=0.0)
-        other.params = other.scenario.params
-        other.R = 0.0
+        other.model = self.model.relaxation()
         return other
 
     def seed(self, points: Sequence[int]) -> Found | None:
         """A known route as an incumbent, evaluated under this search's model."""
         points = tuple(int(i) for i in points)
-        route = flown_route(self.scenario, points)
+        route = flown_route(self.scenario, points, self.model)
         if not route.feasible:
             return None
         prob = 1.0
@@ -274,7 +274,7 @@ def _search(
     the sound fallback). Otherwise walks that may not revisit a critical point, with dominance
     among partial routes at the same point that visited the same critical points."""
     t0 = time.perf_counter()
-    scenario, params, R, graph, G = ctx.scenario, ctx.params, ctx.R, ctx.graph, ctx.G
+    scenario, params, model, graph, G = ctx.scenario, ctx.params, ctx.model, ctx.graph, ctx.G
     kmax, kind_of, unreliable = ctx.kmax, ctx.kind_of, ctx.unreliable
     xyz = scenario.xyz
     start, end = graph.start, graph.end
@@ -323,11 +323,10 @@ def _search(
         lo, hi = graph.indptr[node], graph.indptr[node + 1]
         targets = graph.target[lo:hi].astype(np.int64)
         straight = graph.length[lo:hi]
-        if heading is None or R == 0:
-            flown = straight
-            headings = None
-        else:
-            flown, headings = cs_lengths(xyz[node], heading, xyz[targets], R)
+        if model.carries_heading:
+            flown, headings = model.lengths(xyz[node], heading, xyz[targets])
+        else:  # heading-free legs are as long as the graph's arcs
+            flown, headings = straight, None
         v_min = min(s[0] for s in states)
         h_min = min(s[1] for s in states)
         ok = (v_min + flown <= graph.lim_v[targets]) & (h_min + flown <= graph.lim_h[targets])
@@ -367,12 +366,7 @@ def _search(
                 ):
                     continue
                 kept.append((nL, k + 1, new_states, new_mass))
-            if headings is not None:
-                new_heading = headings[idx]
-            elif R > 0:
-                new_heading = (xyz[j] - xyz[node]) / max(float(straight[idx]), 1e-300)
-            else:
-                new_heading = None
+            new_heading = None if headings is None else headings[idx]
             heapq.heappush(
                 heap,
                 (
@@ -407,10 +401,29 @@ def _search(
     )
 
 
-def flown_route(scenario: Scenario, points: tuple[int, ...]) -> Route:
-    """Re-evaluate a route with the scenario's turning radius, independently of the search."""
+def flown_route(
+    scenario: Scenario, points: tuple[int, ...], model: LegModel | None = None
+) -> Route:
+    """Re-evaluate a route under the scenario's leg model (or ``model``), independently of the
+    search: every leg flown again from the heading the previous one ended with."""
     R = scenario.params.turn_radius
+    if model is not None and model.name == "bound":
+        xyz = scenario.xyz[list(points)]
+        bounds = [float(model.lower_bounds(a, b[None, :])[0]) for a, b in zip(xyz, xyz[1:])]
+        return evaluate_route(scenario, points, [Leg(d) for d in bounds], turn_radius=R)
     heading = None if scenario.heading_at_a is None else np.asarray(scenario.heading_at_a, float)
-    traj = route_trajectory(scenario.xyz[list(points)], R, heading)
-    legs = [Leg(leg.length, leg.arc_length, leg.arc_angle) for leg in traj.legs]
+    model = scenario_leg_model(scenario) if model is None else model
+    traj = route_trajectory(scenario.xyz[list(points)], R, heading, model)
+    legs = [flown_leg(leg) for leg in traj.legs]
     return evaluate_route(scenario, points, legs, turn_radius=R)
+
+
+def flown_leg(leg: FlownLeg) -> Leg:
+    """The route table's view of a flown leg."""
+    return Leg(
+        leg.length,
+        leg.arc_length,
+        leg.arc_angle,
+        int(getattr(leg, "helix_turns", 0)),
+        path_angle_deg(leg),
+    )
