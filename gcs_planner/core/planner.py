@@ -16,6 +16,7 @@ from gcs_planner.core.probability import success_probability
 from gcs_planner.core.route import Route, evaluate_route
 from gcs_planner.core.search import straight_front
 from gcs_planner.errors import InfeasibleError
+from gcs_planner.geometry.legs import scenario_leg_model
 from gcs_planner.scenario.model import Scenario
 
 OBJECTIVES = ("length", "corrections", "probability")
@@ -36,6 +37,9 @@ class Plan:
     stats: dict = field(default_factory=dict)
     # The choice was made among the front routes at least this likely to arrive.
     min_probability: float = 0.0
+    # What the user must know about flying these routes: an assumed unlimited climb and the
+    # steepest leg, or legs steeper than the aircraft's limits (planned with cs3d or straight).
+    warnings: tuple[str, ...] = ()
 
     @property
     def route(self) -> Route:
@@ -87,8 +91,7 @@ def plan(
         if o not in OBJECTIVES:
             raise ValueError(f"unknown objective {o!r}")
     use_probability = "probability" in objectives
-    radius = scenario.params.turn_radius
-    if use_probability or radius > 0:
+    if use_probability or scenario_leg_model(scenario).carries_heading:
         result = _branch_and_bound(scenario, use_probability, max_corrections, max_labels)
     else:
         result = _straight(scenario, max_corrections)
@@ -128,7 +131,40 @@ def plan(
         tuple(lower_bounds),
         stats,
         min_probability,
+        climb_warnings(scenario, routes),
     )
+
+
+def climb_warnings(scenario: Scenario, routes: Sequence[Route]) -> tuple[str, ...]:
+    """Say what the plan assumed of the climb, and name every leg the aircraft cannot fly."""
+    v = scenario.vehicle
+    steep: list[tuple[float, int, str, str]] = []  # (|angle|, route, from, to)
+    over: list[str] = []
+    for k, route in enumerate(routes):
+        for prev, stop in zip(route.stops, route.stops[1:]):
+            angle = stop.leg.path_angle if stop.leg else 0.0
+            steep.append((abs(angle), k, prev.id, stop.id))
+            limit = v.max_climb_angle if angle > 0 else v.max_descent_angle
+            if abs(angle) > limit + 1e-6:
+                what = "climbs" if angle > 0 else "descends"
+                over.append(f"route {k} leg {prev.id}->{stop.id} {what} at {abs(angle):.1f} deg")
+    if not steep:
+        return ()
+    worst = max(steep)
+    if not v.climb_limited:
+        return (
+            "assumed unlimited climb and descent (90 deg, the contest's model): give "
+            "--max-climb-angle/--max-descent-angle or [vehicle] limits; steepest leg: "
+            f"route {worst[1]} {worst[2]}->{worst[3]} at {worst[0]:.1f} deg",
+        )
+    if over:
+        limits = f"climb {v.max_climb_angle:g} deg, descent {v.max_descent_angle:g} deg"
+        model = "straight" if v.turn_radius <= 0 else v.leg_model
+        return (
+            f"{len(over)} leg(s) are steeper than the aircraft's limits ({limits}); {model} "
+            "legs plan without them and the aircraft cannot fly these: " + "; ".join(over),
+        )
+    return ()
 
 
 def _straight(scenario: Scenario, max_corrections: int | None):
@@ -175,10 +211,8 @@ def _branch_and_bound(
         "relaxation_rounds": res.rounds,
         "critical_points": len(res.critical),
     }
-    radius = scenario.params.turn_radius
-    model = (
-        f"turning radius {radius:g} m (3D Dubins CS legs)" if radius > 0 else "straight legs"
-    ) + (", uncertain corrections" if use_probability else "")
+    model = scenario.vehicle.describe() + (", uncertain corrections" if use_probability else "")
+    heading_free = not scenario_leg_model(scenario).carries_heading
     if not res.front:
         if res.optimal:
             return [], [], True, f"no feasible route with {model} (exhaustive search)", stats
@@ -199,7 +233,7 @@ def _branch_and_bound(
         how = (
             "dominance on length, corrections and error-state distribution, made exact over "
             "simple routes by decremental state-space relaxation"
-            if radius == 0
+            if heading_free
             else "over whole simple routes (headings make partial routes incomparable)"
         )
         statement = (
@@ -211,7 +245,8 @@ def _branch_and_bound(
         statement = (
             f"not proven within the budget of {max_labels} labels per search: each route's "
             f"gap to its proven lower bound (from the open partial routes and the exact "
-            f"straight-leg front) is given; routes missing from this front are at least "
+            f"front of the heading-free relaxation) is given; routes missing from this front "
+            f"are at least "
             f"{res.open_bound:,.1f} m long"
         )
     return routes, res.lower_bounds, res.optimal, statement, stats
