@@ -17,10 +17,8 @@ from hypothesis import strategies as st
 
 from gcs_planner import plan_json
 from gcs_planner.core.bnb import flown_route
-from gcs_planner.core.route import Leg, evaluate_route
 from gcs_planner.errors import InputError
 from gcs_planner.geometry.dubins import cs_leg
-from gcs_planner.geometry.trajectory import route_trajectory
 from gcs_planner.mission.builder import (
     DEFAULT_CAPTURE_RADIUS,
     DEFAULT_CRUISE_SPEED,

@@ -238,7 +238,7 @@ def _branch_and_bound(
         )
         statement = (
             f"exact: the Pareto front over all simple feasible routes with {model}, proven by "
-            f"exhaustive branch and bound ({res.labels} labels; bound: straight-leg cost-to-go "
+            f"exhaustive branch and bound ({res.labels} labels; bound: heading-free cost-to-go "
             f"per number of further corrections; {how})"
         )
     else:

@@ -260,22 +260,37 @@ class AirplaneLeg:
 
     def point_at_horizontal(self, s_h: float) -> np.ndarray:
         """Position after ``s_h`` horizontal metres along the leg."""
+        return self.points_at_horizontal(np.array([float(s_h)]))[0]
+
+    def points_at_horizontal(self, s_h: np.ndarray) -> np.ndarray:
+        """(m, 3) positions after each of ``s_h`` horizontal metres along the leg."""
         if not self.reachable:
             raise ValueError("the target lies inside the turning circle: this leg is not flown")
-        s_h = min(max(float(s_h), 0.0), self.horizontal_length)
-        z = self._altitude(s_h)
+        s_h = np.clip(np.asarray(s_h, dtype=float), 0.0, self.horizontal_length)
+        h = self.horizontal_length
+        z = self.start[2] + (self.dz * s_h / h if h > 0 else np.full(len(s_h), self.dz))
         turning = self.helix_horizontal + self.arc_horizontal
-        if s_h < turning and self.normal is not None and self.radius > 0:
-            a = s_h / self.radius  # angle turned; the helix is whole turns, so mod 2 pi works
+        xy = np.empty((len(s_h), 2))
+        on_circle = s_h < turning
+        if self.normal is not None and self.radius > 0 and on_circle.any():
+            # the angle turned; the helix is whole turns, so the position repeats every 2 pi
+            a = s_h[on_circle] / self.radius
             u, n, r = self.heading_in[:2], self.normal[:2], self.radius
-            xy = self.start[:2] + r * math.sin(a) * u + r * (1.0 - math.cos(a)) * n
+            xy[on_circle] = (
+                self.start[:2]
+                + r * np.sin(a)[:, None] * u
+                + r * (1.0 - np.cos(a))[:, None] * n
+            )
         else:
+            on_circle[:] = False
+        rest = ~on_circle
+        if rest.any():
             flat0 = self._tangent_flat
-            rest = self.end[:2] - flat0
-            dist = float(np.linalg.norm(rest))
-            frac = 0.0 if dist == 0 else (s_h - turning) / dist
-            xy = flat0 + min(max(frac, 0.0), 1.0) * rest
-        return np.array([xy[0], xy[1], z])
+            span = self.end[:2] - flat0
+            dist = float(np.linalg.norm(span))
+            frac = np.zeros(rest.sum()) if dist == 0 else (s_h[rest] - turning) / dist
+            xy[rest] = flat0 + np.clip(frac, 0.0, 1.0)[:, None] * span
+        return np.column_stack([xy, z])
 
     def point_at(self, s: float) -> np.ndarray:
         """Position after flying ``s`` metres along the leg."""
@@ -306,7 +321,7 @@ class AirplaneLeg:
         if self.helix_horizontal > 0:
             marks.append(self.helix_horizontal)
         marks = sorted(set(marks))
-        out = np.array([self.point_at_horizontal(s) for s in marks])
+        out = self.points_at_horizontal(np.array(marks))
         if len(out) == 1:
             out = np.concatenate([out, self.end[None, :]], axis=0)
         out[-1] = self.end
