@@ -19,7 +19,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from benchmarks import methods, paper, profiling, scaling, turns, upload
+from benchmarks import flyable, methods, paper, profiling, scaling, turns, upload
 from benchmarks.cases import DATA, DATASETS, valid_spec
 from benchmarks.report import machine
 from gcs_planner.atomic import write_atomic
@@ -192,6 +192,22 @@ def run(cfg: Config) -> str:
         f"The project's client uploads a {items:,}-item mission to the mock vehicle over UDP "
         "127.0.0.1 and reads it back to verify it (`sim.vehicle.benchmark_upload`), no faults; "
         f"medians of {cfg.runs} runs.\n\n" + upload.render(upload.run_upload(items, cfg.runs))
+    )
+    print(sections[-1], flush=True)
+
+    print("6. flyable routes ...", flush=True)
+    frows = flyable.run_flyable(cfg.paper_scenarios, 1)
+    sections.append(
+        "## 6. Flyable routes: airplane legs under climb limits
+
+"
+        "`plan(scenario, objectives=...)`, one run each: straight legs, the tilted-plane cs3d "
+        f"leg and airplane legs (R = {flyable.TURN_RADIUS:g} m; horizontal turns, a constant "
+        "flight-path angle within the limits, helices where a leg is too steep). The shortest "
+        "route of each front against the straight-leg front's, the shortest route certain to "
+        "arrive, the steepest leg of any front route and the helix turns the front flies. "
+        "Proof: 'proven' is an exhausted search; otherwise the largest gap between a front "
+        "route and its proven lower bound (default label budget).\n\n" + flyable.render(frows)
     )
     print(sections[-1], flush=True)
 

@@ -183,3 +183,56 @@ def test_every_planned_route_flies_within_the_envelope_at_its_planned_length() -
 
 def test_the_pareto_helper_is_plain() -> None:
     assert pareto([(1.0, 2, 0.0), (2.0, 1, 0.0), (2.0, 2, 0.0)]) == [(2.0, 1, 0.0), (1.0, 2, 0.0)]
+
+
+CONTEST = {
+    1: {"alpha1": 25, "alpha2": 15, "beta1": 20, "beta2": 25, "theta": 30, "delta": 0.001},
+    2: {"alpha1": 20, "alpha2": 10, "beta1": 15, "beta2": 20, "theta": 20, "delta": 0.001},
+}
+
+
+@pytest.mark.parametrize("dataset", [1, 2])
+def test_contest_fronts_within_15_degrees_are_proven_and_flyable(dataset_paths, dataset) -> None:
+    from gcs_planner.scenario.readers import load_scenario
+
+    limits = {"max_climb_angle": 15.0, "max_descent_angle": 15.0}
+    scenario = load_scenario(dataset_paths[dataset], {**CONTEST[dataset], **limits})
+    result = plan(scenario, objectives=("length", "corrections"))
+    assert result.optimal and not result.warnings
+    for route in result.routes:
+        assert all(abs(s.leg.path_angle) <= 15.0 + 1e-9 for s in route.stops[1:])
+        again = flown_route(scenario, route.points)
+        assert again.feasible and again.length == pytest.approx(route.length, abs=1e-6)
+    # the same front with the unlimited airplane is never longer: the limits only cost
+    free = plan(
+        load_scenario(dataset_paths[dataset], CONTEST[dataset]),
+        objectives=("length", "corrections"),
+    )
+    for route in result.routes:
+        best = min(r.length for r in free.routes if r.corrections <= route.corrections)
+        assert route.length >= best - 1e-6
+    assert any("unlimited" in w for w in free.warnings)
+
+
+@pytest.mark.parametrize("dataset", [1, 2])
+def test_cs3d_reproduces_the_earlier_turned_fronts(dataset_paths, dataset) -> None:
+    """The tilted-plane leg of earlier releases, R = 200: README's figures of that model."""
+    from gcs_planner.scenario.readers import load_scenario
+
+    earlier = {1: [(104_876.2, 8), (103_563.2, 9)], 2: [(109_467.7, 12)]}
+    scenario = load_scenario(
+        dataset_paths[dataset],
+        {
+            **CONTEST[dataset],
+            "leg_model": "cs3d",
+            "max_climb_angle": 15.0,
+            "max_descent_angle": 15.0,
+        },
+    )
+    result = plan(scenario, objectives=("length", "corrections"))
+    assert result.optimal
+    assert [(round(r.length, 1), r.corrections) for r in result.routes] == earlier[dataset]
+    # cs3d plans without the climb limits, and says which legs break them (dataset 1's
+    # front has legs of up to 26 degrees)
+    steepest = max(abs(s.leg.path_angle) for r in result.routes for s in r.stops[1:])
+    assert bool(result.warnings) == (steepest > 15.0)
