@@ -196,7 +196,7 @@ def run(cfg: Config) -> str:
     print(sections[-1], flush=True)
 
     print("6. flyable routes ...", flush=True)
-    frows = flyable.run_flyable(cfg.paper_scenarios, 1)
+    frows = flyable.run_flyable(cfg.scenarios, 1)
     sections.append(
         "## 6. Flyable routes: airplane legs under climb limits
 
