@@ -22,7 +22,11 @@ FORMAT = "gcs-planner-plan"
 VERSION = 1
 
 
-def route_to_dict(scenario: Scenario, route: Route, lower_bound: float) -> dict[str, Any]:
+def route_to_dict(
+    scenario: Scenario, route: Route, lower_bound: float, settled: bool = True
+) -> dict[str, Any]:
+    """One front route. ``settled``: no open partial route may still lead to a front route with
+    no more corrections or a higher probability (see ``core.proof``); "optimal" needs it."""
     trajectory = route_trajectory(
         scenario.xyz[list(route.points)],
         route.turn_radius,
@@ -56,7 +60,7 @@ def route_to_dict(scenario: Scenario, route: Route, lower_bound: float) -> dict[
         "length": route.length,
         "corrections": route.corrections,
         "probability": route.probability,
-        "optimal": gap <= 1e-6,
+        "optimal": settled and gap <= 1e-6,
         "gap": gap,
         "lower_bound": lower_bound,
         "route": route.ids(),
@@ -84,7 +88,10 @@ def plan_to_dict(plan: Plan) -> dict[str, Any]:
         },
         "parameters": s.params.to_dict(),
         "objectives": list(plan.objectives),
-        "front": [route_to_dict(s, r, lb) for r, lb in zip(plan.routes, plan.lower_bounds)],
+        "front": [
+            route_to_dict(s, r, lb, ok)
+            for r, lb, ok in zip(plan.routes, plan.lower_bounds, plan.proven())
+        ],
         "chosen": plan.chosen,
         "choice": plan.choice,
         "min_probability": plan.min_probability,
