@@ -16,6 +16,7 @@ from gcs_planner.core.choose import choose as choose_route
 from gcs_planner.core.probability import success_probability
 from gcs_planner.core.route import Route, evaluate_route
 from gcs_planner.core.search import straight_front
+from gcs_planner.core.seeding import certain_front
 from gcs_planner.errors import InfeasibleError
 from gcs_planner.scenario.model import Scenario
 
@@ -182,12 +183,20 @@ def _with_probability(scenario: Scenario, route: Route) -> Route:
 def _branch_and_bound(
     scenario: Scenario, use_probability: bool, max_corrections: int | None, budget: Budget
 ):
+    # With the probability objective, the two-objective straight-leg front seeds the search
+    # (its fewest-corrections end first of all) and bounds each route from below.
+    certain = certain_front(scenario, max_corrections) if use_probability else None
     res = bnb_front(
         scenario,
         probability=use_probability,
         max_corrections=max_corrections,
         budget=budget,
+        seeds=certain.seeds if certain else (),
     )
+    if certain is not None:
+        res.lower_bounds = [
+            max(lb, certain.floor(g.corrections)) for g, lb in zip(res.front, res.lower_bounds)
+        ]
     stats = {
         "search_seconds": res.seconds,
         "labels": res.labels,
