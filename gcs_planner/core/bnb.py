@@ -25,6 +25,7 @@ import numpy as np
 
 from gcs_planner.core.budget import DEFAULT_MAX_LABELS, Budget
 from gcs_planner.core.cost_to_go import cost_to_go
+from gcs_planner.core.prefilter import FanBound, covered_fan
 from gcs_planner.core.probability import propagate, success_probability
 from gcs_planner.core.proof import PROB_EPS, settled
 from gcs_planner.core.reach import build_reach_graph
@@ -288,6 +289,8 @@ def _search(
     start, end = graph.start, graph.end
     heading_a = None if scenario.heading_at_a is None else np.asarray(scenario.heading_at_a, float)
     relaxed = critical is not None
+    fan = FanBound(G, scenario.n)
+    is_v_point = scenario.kind == Kind.V
     # Per (point, critical points visited): the partial routes kept, as (L, k, states, mass).
     archive: dict[tuple[int, frozenset[int]], list[tuple[float, int, dict, float]]] = {}
 
@@ -341,6 +344,10 @@ def _search(
         v_min = min(s[0] for s in states)
         h_min = min(s[1] for s in states)
         ok = (v_min + flown <= graph.lim_v[targets]) & (h_min + flown <= graph.lim_h[targets])
+        inner = np.flatnonzero(ok & (targets != end))
+        carried = np.where(is_v_point[targets[inner]], h_min, v_min) + flown[inner]
+        rows = fan.rows(targets[inner], carried)
+        ok[inner[covered_fan(L + flown[inner], k + 1, rows, inc.best(mass))]] = False
         for idx in np.flatnonzero(ok):
             j = int(targets[idx])
             if j in path and (not relaxed or j in critical):
