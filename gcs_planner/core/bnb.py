@@ -27,7 +27,7 @@ from gcs_planner.core.budget import DEFAULT_MAX_LABELS, Budget
 from gcs_planner.core.cost_to_go import cost_to_go
 from gcs_planner.core.prefilter import FanBound, covered_fan
 from gcs_planner.core.probability import propagate, success_probability
-from gcs_planner.core.proof import PROB_EPS, settled
+from gcs_planner.core.proof import PROB_EPS, lower_bounds, settled
 from gcs_planner.core.reach import build_reach_graph
 from gcs_planner.core.route import Leg, Route, evaluate_route
 from gcs_planner.geometry.dubins import cs_lengths
@@ -407,21 +407,12 @@ def _search(
     found = sorted(inc.found, key=lambda g: (g.corrections, g.length))
     live = [e for e in heap if not inc.covers(e[2], e[4], e[8], sum(e[5].values()))]
     open_bound = min((e[0] for e in live), default=math.inf)
-    lower = []
-    for g in found:
-        # The least length an open label can still reach with <= g's corrections and at least
-        # g's probability: the proven lower bound of g's point of the front.
-        lb = g.length
-        for e in live:
-            L, k, to_go = e[2], e[4], e[8]
-            m = min(len(to_go), g.corrections - k + 1)
-            if m > 0 and sum(e[5].values()) >= g.probability - PROB_EPS:
-                lb = min(lb, L + float(np.min(to_go[:m])))
-        lower.append(lb)
+    open_routes = [(e[2], e[4], e[8], sum(e[5].values())) for e in live]
+    lower = lower_bounds(found, open_routes)
     complete = not live
     proven = settled(
         found,
-        [(e[2], e[4], e[8], sum(e[5].values())) for e in live],
+        open_routes,
         inc.best,
         kmax,
         ctx.probability,

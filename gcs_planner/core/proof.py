@@ -26,6 +26,40 @@ import numpy as np
 PROB_EPS = 1e-12
 
 
+def _padded(live: Sequence[tuple[float, int, np.ndarray, float]]) -> np.ndarray:
+    """The open partial routes' bounds per m as one matrix, each row carried on with its last
+    entry (which holds for every larger m)."""
+    width = max(len(t) for _, _, t, _ in live)
+    rows = np.empty((len(live), width))
+    for i, (_, _, t, _) in enumerate(live):
+        rows[i, : len(t)] = t
+        rows[i, len(t) :] = t[-1]
+    return rows
+
+
+def lower_bounds(
+    front: Sequence, live: Sequence[tuple[float, int, np.ndarray, float]]
+) -> list[float]:
+    """Per front route g: the least length an open partial route can still reach with <= g's
+    corrections and at least g's probability (g's own length when none can): the proven lower
+    bound of g's point of the front. The bounds per m never grow with m (more corrections
+    allowed), so "at most c - k more" reads the entry at c - k."""
+    if not live:
+        return [g.length for g in front]
+    rows = _padded(live)
+    L = np.array([x[0] for x in live])
+    k = np.array([x[1] for x in live])
+    mass = np.array([x[3] for x in live])
+    at = np.arange(len(live))
+    out = []
+    for g in front:
+        more = g.corrections - k
+        usable = (more >= 0) & (mass >= g.probability - PROB_EPS)
+        reach = L + rows[at, np.clip(more, 0, rows.shape[1] - 1)]
+        out.append(min(g.length, float(reach[usable].min())) if usable.any() else g.length)
+    return out
+
+
 def fewest_open_corrections(
     L: float, k: int, to_go: np.ndarray, mass: float, best: Callable[[float], np.ndarray], kmax: int
 ) -> float:
