@@ -20,7 +20,11 @@ FORMAT = "gcs-planner-plan"
 VERSION = 1
 
 
-def route_to_dict(scenario: Scenario, route: Route, lower_bound: float) -> dict[str, Any]:
+def route_to_dict(
+    scenario: Scenario, route: Route, lower_bound: float, settled: bool = True
+) -> dict[str, Any]:
+    """One front route. ``settled``: no open partial route may still lead to a front route with
+    no more corrections or a higher probability (see ``core.proof``); "optimal" needs it."""
     trajectory = scenario_trajectory(scenario, route.points)
     legs = []
     for prev, stop, geo in zip(route.stops[:-1], route.stops[1:], trajectory.legs):
@@ -52,7 +56,7 @@ def route_to_dict(scenario: Scenario, route: Route, lower_bound: float) -> dict[
         "length": route.length,
         "corrections": route.corrections,
         "probability": route.probability,
-        "optimal": gap <= 1e-6,
+        "optimal": settled and gap <= 1e-6,
         "gap": gap,
         "lower_bound": lower_bound,
         "route": route.ids(),
@@ -88,7 +92,10 @@ def plan_to_dict(plan: Plan) -> dict[str, Any]:
         },
         "warnings": list(plan.warnings),
         "objectives": list(plan.objectives),
-        "front": [route_to_dict(s, r, lb) for r, lb in zip(plan.routes, plan.lower_bounds)],
+        "front": [
+            route_to_dict(s, r, lb, ok)
+            for r, lb, ok in zip(plan.routes, plan.lower_bounds, plan.proven())
+        ],
         "chosen": plan.chosen,
         "choice": plan.choice,
         "min_probability": plan.min_probability,

@@ -157,10 +157,14 @@ def render(result: Plan) -> str:
         f"  {'':1} {'length m':>11} {'corr':>4} {'P success':>9} {'gap m':>7}  route",
     ]
     certain, reliable = result.shortest_certain, result.most_reliable
+    proven = result.proven()
     for i, (r, gap) in enumerate(zip(result.routes, result.gaps())):
         mark = "*" if i == result.chosen else " "
         ids = " ".join(r.ids())
-        row = f"{r.length:>11.1f} {r.corrections:>4} {r.probability:>9.4f} {gap:>7.1f}"
+        # "?" after the gap: not settled, routes with fewer corrections or a higher
+        # probability may still be missing from the front (see core.proof).
+        unsure = " " if proven[i] else "?"
+        row = f"{r.length:>11.1f} {r.corrections:>4} {r.probability:>9.4f} {gap:>7.1f}{unsure}"
         out.append(f"  {mark} {row}  {ids}")
     if "probability" in result.objectives:
         out.append(

@@ -11,10 +11,12 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 from gcs_planner.core.bnb import DEFAULT_MAX_LABELS, PROB_EPS, bnb_front, flown_route
+from gcs_planner.core.budget import Budget, ProgressCallback
 from gcs_planner.core.choose import choose as choose_route
 from gcs_planner.core.probability import success_probability
 from gcs_planner.core.route import Route, evaluate_route
 from gcs_planner.core.search import straight_front
+from gcs_planner.core.seeding import certain_front
 from gcs_planner.errors import InfeasibleError
 from gcs_planner.geometry.legs import scenario_leg_model
 from gcs_planner.scenario.model import Scenario
@@ -40,6 +42,14 @@ class Plan:
     # What the user must know about flying these routes: an assumed unlimited climb and the
     # steepest leg, or legs steeper than the aircraft's limits (planned with cs3d or straight).
     warnings: tuple[str, ...] = ()
+    # Per route: proven on the front, and no route with no more corrections (nor, with the
+    # probability objective, at least its probability) left unexplored. Empty: every route is.
+    settled: tuple[bool, ...] = ()
+
+    def proven(self) -> tuple[bool, ...]:
+        """Per route, whether its "optimal" flag holds: settled and with no gap."""
+        flags = self.settled or (True,) * len(self.routes)
+        return tuple(s and gap <= 1e-6 for s, gap in zip(flags, self.gaps()))
 
     @property
     def route(self) -> Route:
@@ -76,12 +86,19 @@ def plan(
     choice: str = "compromise",
     weights: Sequence[float] | None = None,
     max_corrections: int | None = None,
-    max_labels: int = DEFAULT_MAX_LABELS,
+    max_labels: int | None = DEFAULT_MAX_LABELS,
     min_probability: float = 0.0,
+    time_limit: float | None = None,
+    progress: ProgressCallback | None = None,
 ) -> Plan:
     """Plan a scenario. Raises InfeasibleError (with the reason) when no route exists, or
     none on the front arrives with at least ``min_probability`` (the route is chosen among
-    those that do; the front is reported whole)."""
+    those that do; the front is reported whole).
+
+    The budget of the branch and bound (turns, probability): ``max_labels`` per search (None:
+    unlimited) and ``time_limit`` seconds in all (None: unlimited); ``progress`` is called
+    with a :class:`~gcs_planner.core.budget.Progress` about twice a second meanwhile. When the
+    budget ends the search, the plan says what is proven (``optimal`` False, per-route gaps)."""
     if not 0.0 <= min_probability <= 1.0:
         raise ValueError(f"min_probability must be within [0, 1], not {min_probability}")
     if objectives is None:
@@ -92,15 +109,18 @@ def plan(
             raise ValueError(f"unknown objective {o!r}")
     use_probability = "probability" in objectives
     if use_probability or scenario_leg_model(scenario).carries_heading:
-        result = _branch_and_bound(scenario, use_probability, max_corrections, max_labels)
+        budget = Budget(max_labels, time_limit, progress)
+        result = _branch_and_bound(scenario, use_probability, max_corrections, budget)
     else:
         result = _straight(scenario, max_corrections)
     routes, lower_bounds, optimal, statement, stats = result
+    settled = stats.pop("settled", None) or [True] * len(routes)
     if not routes:
         raise InfeasibleError(f"{scenario.name}: {statement}")
     order = sorted(range(len(routes)), key=lambda i: (routes[i].corrections, routes[i].length))
     routes = [routes[i] for i in order]
     lower_bounds = [lower_bounds[i] for i in order]
+    settled = [bool(settled[i]) for i in order]
     # Every route's probability is exact (re-evaluated), whichever objectives were searched.
     eligible = [i for i, r in enumerate(routes) if r.probability >= min_probability - PROB_EPS]
     if not eligible:
@@ -131,7 +151,8 @@ def plan(
         tuple(lower_bounds),
         stats,
         min_probability,
-        climb_warnings(scenario, routes),
+        warnings=climb_warnings(scenario, routes),
+        settled=tuple(settled),
     )
 
 
@@ -196,14 +217,22 @@ def _with_probability(scenario: Scenario, route: Route) -> Route:
 
 
 def _branch_and_bound(
-    scenario: Scenario, use_probability: bool, max_corrections: int | None, max_labels: int
+    scenario: Scenario, use_probability: bool, max_corrections: int | None, budget: Budget
 ):
+    # With the probability objective, the two-objective straight-leg front seeds the search
+    # (its fewest-corrections end first of all) and bounds each route from below.
+    certain = certain_front(scenario, max_corrections) if use_probability else None
     res = bnb_front(
         scenario,
         probability=use_probability,
         max_corrections=max_corrections,
-        max_labels=max_labels,
+        budget=budget,
+        seeds=certain.seeds if certain else (),
     )
+    if certain is not None:
+        res.lower_bounds = [
+            max(lb, certain.floor(g.corrections)) for g, lb in zip(res.front, res.lower_bounds)
+        ]
     stats = {
         "search_seconds": res.seconds,
         "labels": res.labels,
@@ -222,7 +251,8 @@ def _branch_and_bound(
             False,
             (
                 f"no feasible route found with {model} within the search budget of "
-                f"{max_labels} labels ({res.open_labels} partial routes left open)"
+                f"{budget.describe()} ({res.open_labels} partial routes left open), so "
+                f"infeasibility is not proven: {budget.advice()}"
             ),
             stats,
         )
@@ -242,11 +272,16 @@ def _branch_and_bound(
             f"per number of further corrections; {how})"
         )
     else:
+        unsettled = len(res.front) - sum(res.proven or ())
         statement = (
-            f"not proven within the budget of {max_labels} labels per search: each route's "
-            f"gap to its proven lower bound (from the open partial routes and the exact "
-            f"front of the heading-free relaxation) is given; routes missing from this front "
-            f"are at least "
-            f"{res.open_bound:,.1f} m long"
+            f"not proven within the budget of {budget.describe()} ({budget.advice()}): each "
+            f"route's gap to its proven lower bound (from the open partial routes and the "
+            f"exact front of the heading-free relaxation) is given; routes missing from this "
+            f"front are at least "
+            f"{res.open_bound:,.1f} m long; {unsettled} of {len(res.front)} routes are not "
+            f"marked optimal because partial routes that may lead to front routes with no "
+            f"more corrections (or a higher probability) are still open"
         )
+    if res.proven is not None:
+        stats["settled"] = list(res.proven)
     return routes, res.lower_bounds, res.optimal, statement, stats
