@@ -19,7 +19,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from benchmarks import flight, methods, paper, profiling, scaling, turns, upload
+from benchmarks import flight, flyable, methods, paper, profiling, scaling, turns, upload
 from benchmarks.cases import DATA, DATASETS, valid_spec
 from benchmarks.report import machine
 from gcs_planner.atomic import write_atomic
@@ -166,10 +166,14 @@ def run(cfg: Config) -> str:
     print("3. turns and uncertain corrections ...", flush=True)
     trows = turns.run_turns(cfg.scenarios, cfg.runs)
     sections.append(
-        f"## 3. Turns (R = {turns.TURN_RADIUS:g} m) and uncertain corrections\n\n"
-        "`plan(scenario, objectives=...)` in this process, median of "
-        f"{cfg.runs} runs. Largest gap: the largest distance between a front route's length "
-        "and its proven lower bound.\n\n" + turns.render(trows)
+        f"## 3. Every mode: straight legs and turns (R = {turns.TURN_RADIUS:g} m), two and "
+        "three objectives, heading at A free or given\n\n"
+        "`plan(scenario, objectives=...)` in this process with the default budget, median of "
+        f'{cfg.runs} runs. Proof: "proven" (the exact front), or the largest gap between a '
+        "front route's length and its proven lower bound, how many routes are settled (their "
+        '"optimal" flag holds: no open partial route may still add a route with no more '
+        "corrections or a higher probability) and the length below which the front is "
+        "complete.\n\n" + turns.render(trows)
     )
     print(sections[-1], flush=True)
 
@@ -196,9 +200,23 @@ def run(cfg: Config) -> str:
     )
     print(sections[-1], flush=True)
 
-    print("6. flight ...", flush=True)
+    print("6. flyable routes ...", flush=True)
+    frows = flyable.run_flyable(cfg.scenarios, 1)
     sections.append(
-        "## 6. The mock vehicle flies the longest front route\n\n"
+        "## 6. Flyable routes: airplane legs under climb limits\n\n"
+        "`plan(scenario, objectives=...)`, one run each: straight legs, the tilted-plane cs3d "
+        f"leg and airplane legs (R = {flyable.TURN_RADIUS:g} m; horizontal turns, a constant "
+        "flight-path angle within the limits, helices where a leg is too steep). The shortest "
+        "route of each front against the straight-leg front's, the shortest route certain to "
+        "arrive, the steepest leg of any front route and the helix turns the front flies. "
+        "Proof: 'proven' is an exhausted search; otherwise the largest gap between a front "
+        "route and its proven lower bound (default label budget).\n\n" + flyable.render(frows)
+    )
+    print(sections[-1], flush=True)
+
+    print("7. flight ...", flush=True)
+    sections.append(
+        "## 7. The mock vehicle flies the longest front route\n\n"
         "Front (length, corrections), R = 200 m, exported with the dry run's 1 m acceptance "
         "radius; `sim.replay.replay` (flight model and autopilot, then the INS along the flown "
         "track) against the chord replay it replaced (items joined by straight segments), "

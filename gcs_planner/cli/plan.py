@@ -71,6 +71,8 @@ COLUMNS = (
     ("leg m", "{:>10.1f}"),
     ("arc m", "{:>7.1f}"),
     ("turn °", "{:>6.1f}"),
+    ("path °", "{:>6.1f}"),
+    ("helix", "{:>5}"),
     ("total m", "{:>10.1f}"),
     ("v err", "{:>7.3f}"),
     ("h err", "{:>7.3f}"),
@@ -86,6 +88,8 @@ def table_rows(route: Route) -> list[list]:
         leg = s.leg.length if s.leg else 0.0
         arc = s.leg.arc if s.leg else 0.0
         turn = math.degrees(s.leg.turn_angle) if s.leg else 0.0
+        path = s.leg.path_angle if s.leg else 0.0
+        helix = s.leg.helix_turns if s.leg else 0
         vm = s.v_margin if math.isfinite(s.v_margin) else float("nan")
         hm = s.h_margin if math.isfinite(s.h_margin) else float("nan")
         kind = s.kind.name + ("*" if s.unreliable else "")
@@ -97,6 +101,8 @@ def table_rows(route: Route) -> list[list]:
                 leg,
                 arc,
                 turn,
+                path,
+                helix,
                 s.cumulative,
                 s.v_arrival,
                 s.h_arrival,
@@ -136,6 +142,8 @@ def render(result: Plan) -> str:
             if "probability" in result.objectives
             else ""
         ),
+        f"vehicle: {s.vehicle.describe()}",
+        *(f"warning: {w}" for w in result.warnings),
         f"optimality: {result.statement}",
         "",
         f"Pareto front ({len(result.routes)} route{'' if len(result.routes) == 1 else 's'}; "
@@ -149,10 +157,14 @@ def render(result: Plan) -> str:
         f"  {'':1} {'length m':>11} {'corr':>4} {'P success':>9} {'gap m':>7}  route",
     ]
     certain, reliable = result.shortest_certain, result.most_reliable
+    proven = result.proven()
     for i, (r, gap) in enumerate(zip(result.routes, result.gaps())):
         mark = "*" if i == result.chosen else " "
         ids = " ".join(r.ids())
-        row = f"{r.length:>11.1f} {r.corrections:>4} {r.probability:>9.4f} {gap:>7.1f}"
+        # "?" after the gap: not settled, routes with fewer corrections or a higher
+        # probability may still be missing from the front (see core.proof).
+        unsure = " " if proven[i] else "?"
+        row = f"{r.length:>11.1f} {r.corrections:>4} {r.probability:>9.4f} {gap:>7.1f}{unsure}"
         out.append(f"  {mark} {row}  {ids}")
     if "probability" in result.objectives:
         out.append(
