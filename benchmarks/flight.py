@@ -5,7 +5,7 @@ run's 1 m acceptance radius and its longest route is replayed: the flight model 
 (sim/guidance.py, fixed 0.5 s step) plus the INS replay along the flown track, against the
 chord replay it replaced (the mission's items joined by straight segments, no autopilot), both
 timed in this process. Also the flown length against the planned one and the largest deviation
-from the mission's path.
+from the planned path.
 
     python -m benchmarks.flight [--runs N]
 """
@@ -24,6 +24,7 @@ from benchmarks.report import seconds, table
 from gcs_planner.core.planner import plan
 from gcs_planner.dry_run import DRY_RUN_ACCEPTANCE_RADIUS_M, max_deviation
 from gcs_planner.mission.builder import build_mission
+from gcs_planner.mission.geo_exports import trajectory_local
 from gcs_planner.plan_json import plan_to_dict
 from sim import replay as replay_mod
 from sim.guidance import AutopilotParams
@@ -87,7 +88,7 @@ def run_flight(specs: list[str], runs: int) -> list[FlightRow]:
                     flavour,
                     route.length,
                     report.flown.length,
-                    max_deviation(report)[0],
+                    max_deviation(report, trajectory_local(plan_to_dict(result), longest, 2.0))[0],
                     len(mission.items),
                     statistics.median(flight_t),
                     statistics.median(chord_t),

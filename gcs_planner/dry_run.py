@@ -37,6 +37,7 @@ from gcs_planner.link.mission_client import MissionClient
 from gcs_planner.link.params import set_parameter
 from gcs_planner.link.protocol import DEFAULT_RETRIES, DEFAULT_TIMEOUT_S
 from gcs_planner.mission.builder import build_mission
+from gcs_planner.mission.geo_exports import trajectory_local
 from gcs_planner.plan_json import plan_to_dict
 from gcs_planner.scenario.model import Scenario
 from sim import replay as replay_mod
@@ -52,6 +53,11 @@ VEHICLE_REQUEST_TIMEOUT_S = 1.0
 DRY_RUN_ACCEPTANCE_RADIUS_M = 1
 # PX4's acceptance radius parameter (fixed wing: param2 is not used).
 PX4_ACCEPTANCE_PARAM = "NAV_ACC_RAD"
+# The planned path's sampling for the deviation (the figure is within half of it).
+DEVIATION_STEP_M = 2.0
+# Loiters the exporter writes for the planner's helices (LOITER_TURNS, LOITER_TO_ALT); the last
+# item (the end action) is not one of them.
+LOITER_COMMANDS = frozenset({18, 31})
 
 
 @dataclass(frozen=True)
@@ -115,6 +121,7 @@ class DryRunReport:
     acceptance_radius: float = DRY_RUN_ACCEPTANCE_RADIUS_M
     capture_radius: float = 0.0
     flight_notes: tuple[str, ...] = ()
+    helices: int = 0  # loiter items of the mission (the planner's helices)
     runs: int = 0
     success_rate: float | None = None
     success_ci: tuple[float, float] | None = None
@@ -125,7 +132,11 @@ class DryRunReport:
         return self.mission_length - self.planned_length
 
     @property
-    def length_within_tolerance(self) -> bool:
+    def length_within_tolerance(self) -> bool | None:
+        """The stored mission's chords against the planned length; None when the mission has
+        helices (loiters), which its chords cannot measure (the flight does)."""
+        if self.helices:
+            return None
         return abs(self.length_difference) <= self.length_tolerance
 
     @property
@@ -225,7 +236,8 @@ def dry_run(
     if request_timeout is None:
         request_timeout = min(VEHICLE_REQUEST_TIMEOUT_S, timeout * (retries + 1) / 4)
     route = plan.route
-    mission = build_mission(plan_to_dict(plan), firmware=flavour, capture_radius=acceptance_radius)
+    plan_dict = plan_to_dict(plan)
+    mission = build_mission(plan_dict, firmware=flavour, capture_radius=acceptance_radius)
     loiter = mission.loiter_param[1] if mission.loiter_param else None
     faults = FaultRates(drop=loss) if loss > 0 else None
     port = free_udp_port()
@@ -285,7 +297,7 @@ def dry_run(
     end = replayed.flown_length
     rows += [_missed_row(m, planned) for m in replayed.missed if m.distance <= end]
     rows.sort(key=lambda r: r.distance)
-    dev, dev_at = max_deviation(replayed)
+    dev, dev_at = max_deviation(replayed, trajectory_local(plan_dict, step=DEVIATION_STEP_M))
     arcs = sum(s.leg.arc for s in route.stops if s.leg is not None)
     mc = replayed.monte_carlo
     return DryRunReport(
@@ -330,20 +342,17 @@ def dry_run(
         acceptance_radius=float(acceptance_radius),
         capture_radius=capture_radius,
         flight_notes=replayed.flight.notes if replayed.flight is not None else (),
+        helices=sum(it.command in LOITER_COMMANDS for it in mission.items[:-1]),
     )
 
 
-def max_deviation(report: replay_mod.ReplayReport, step: float = 1.0) -> tuple[float, float]:
-    """(largest 3D distance of the flown track to B from the mission's path, where: flown from
-    A). The mission's path is resampled every ``step`` metres, so the figure is within
-    ``step`` / 2 of the exact one."""
-    if report.flown is None or report.nominal is None or len(report.nominal.points) < 2:
+def max_deviation(report: replay_mod.ReplayReport, planned: np.ndarray) -> tuple[float, float]:
+    """(largest 3D distance of the flown track to B from the ``planned`` path, where: flown from
+    A). The planned path is a polyline sampled at most ``DEVIATION_STEP_M`` apart, so the figure
+    is within half that of the exact one."""
+    if report.flown is None or len(planned) == 0:
         return 0.0, 0.0
-    nominal = report.nominal
-    cum = nominal.cumulative
-    samples = np.linspace(0.0, cum[-1], max(int(cum[-1] / step) + 2, 2))
-    dense = np.column_stack([np.interp(samples, cum, nominal.points[:, i]) for i in range(3)])
-    dist, _ = cKDTree(dense).query(report.flown.points)
+    dist, _ = cKDTree(planned).query(report.flown.points)
     k = int(np.argmax(dist))
     return float(dist[k]), float(report.flown.cumulative[k])
 

@@ -1,7 +1,8 @@
 """The dry run's flown track beside the mission's path, as GeoJSON or KML (``--track-out``).
 
-Two LineStrings in WGS84 (longitude, latitude, metres above mean sea level): the stored mission's
-path (its items joined by straight chords) and the track the mock vehicle flew to B, plus one
+LineStrings in WGS84 (longitude, latitude, metres above mean sea level): the planned path (the
+plan's legs, helices included), the stored mission's path (its items joined by straight chords)
+and the track the mock vehicle flew to B, plus one
 Point per correction landmark of the route, saying whether the flight corrected there or missed
 it and by how much (3D closest approach).
 """
@@ -30,11 +31,18 @@ def _geodetic(frame: Any, points: np.ndarray) -> list[list[float]]:
 
 
 def track_features(
-    report: replay_mod.ReplayReport, scenario: Scenario, route: Sequence[str]
+    report: replay_mod.ReplayReport,
+    scenario: Scenario,
+    route: Sequence[str],
+    planned: np.ndarray | None = None,
 ) -> list[dict[str, Any]]:
-    """GeoJSON features: mission path, flown track, route landmarks with their outcome."""
+    """GeoJSON features: planned path, mission path, flown track, route landmarks with their
+    outcome."""
     frame = replay_mod.scenario_frame(scenario)
     feats: list[dict[str, Any]] = []
+    if planned is not None and len(planned) > 1:
+        length = float(np.linalg.norm(np.diff(planned, axis=0), axis=1).sum())
+        feats.append(_line("planned path", _geodetic(frame, planned), length))
     assert report.nominal is not None and report.flown is not None
     nominal = _geodetic(frame, report.nominal.points)
     feats.append(_line("mission path", nominal, report.mission_length))
@@ -68,16 +76,27 @@ def _line(name: str, coords: list[list[float]], length: float) -> dict[str, Any]
     }
 
 
-def geojson_text(report: replay_mod.ReplayReport, scenario: Scenario, route: Sequence[str]) -> str:
-    collection = {"type": "FeatureCollection", "features": track_features(report, scenario, route)}
+def geojson_text(
+    report: replay_mod.ReplayReport,
+    scenario: Scenario,
+    route: Sequence[str],
+    planned: np.ndarray | None = None,
+) -> str:
+    feats = track_features(report, scenario, route, planned)
+    collection = {"type": "FeatureCollection", "features": feats}
     return json.dumps(collection, indent=1) + "\n"
 
 
-def kml_text(report: replay_mod.ReplayReport, scenario: Scenario, route: Sequence[str]) -> str:
+def kml_text(
+    report: replay_mod.ReplayReport,
+    scenario: Scenario,
+    route: Sequence[str],
+    planned: np.ndarray | None = None,
+) -> str:
     kml = ET.Element("kml", xmlns="http://www.opengis.net/kml/2.2")
     doc = ET.SubElement(kml, "Document")
     ET.SubElement(doc, "name").text = f"dry run of {scenario.name}"
-    for feat in track_features(report, scenario, route):
+    for feat in track_features(report, scenario, route, planned):
         mark = ET.SubElement(doc, "Placemark")
         props = feat["properties"]
         ET.SubElement(mark, "name").text = props["name"]
@@ -99,9 +118,13 @@ def kml_text(report: replay_mod.ReplayReport, scenario: Scenario, route: Sequenc
 
 
 def write_track(
-    path: str, report: replay_mod.ReplayReport, scenario: Scenario, route: Sequence[str]
+    path: str,
+    report: replay_mod.ReplayReport,
+    scenario: Scenario,
+    route: Sequence[str],
+    planned: np.ndarray | None = None,
 ) -> Path:
     """Write the track file, KML for a .kml name, GeoJSON otherwise (atomically)."""
     if path.lower().endswith(".kml"):
-        return write_atomic(path, kml_text(report, scenario, route))
-    return write_atomic(path, geojson_text(report, scenario, route))
+        return write_atomic(path, kml_text(report, scenario, route, planned))
+    return write_atomic(path, geojson_text(report, scenario, route, planned))

@@ -59,15 +59,37 @@ def test_steep_cs3d_mission_is_caught_by_a_px4_vehicle(steep_plan, dataset_paths
     assert report.flown_to_b > report.planned_length or not report.arrived
 
 
-def test_airplane_legs_within_the_limits_arrive(capsys, dataset_paths):
-    """The counterpart: the default airplane legs respect the 15 degree limits, so the same
-    aircraft flies them, overflies every correction and arrives. (Needs the planner's airplane
-    legs: until they land the default leg model plans cs3d legs and this fails.)"""
-    rc = main(["dry-run", str(dataset_paths[2]), *FLAGS, "--json"])
-    d = json.loads(capsys.readouterr().out)
-    assert rc == 0 and d["ok"], d["why"]
-    assert all(r["outcome"] in ("ok", "failed") for r in d["rows"])
-    assert [r["point"] for r in d["rows"]] == d["route"][1:-1]
+@pytest.fixture(scope="module")
+def airplane_plan(dataset_paths):
+    scenario = load_scenario(dataset_paths[2], {**DS2, **LIMITS})  # default: airplane legs
+    return plan(
+        scenario, objectives=("length", "corrections", "probability"), choice="most-reliable"
+    )
+
+
+def test_airplane_legs_within_the_limits_are_flown_as_planned_and_arrive(
+    airplane_plan, dataset_paths
+):
+    """The counterpart: the default airplane legs respect the 15 degree limits (helices where a
+    leg is too steep), so the same aircraft flies them and overflies every planned correction,
+    in order, for both autopilots; the Monte Carlo over that flight agrees with the planned
+    probability, and a draw where the unreliable points work arrives."""
+    landmarks = load_scenario(dataset_paths[2], {**DS2, **LIMITS})
+    assert airplane_plan.scenario.vehicle.leg_model == "airplane"
+    for flavour in ("ardupilot", "px4"):
+        report = dry_run(airplane_plan, landmarks, flavour=flavour, runs=400)
+        assert report.verified and report.corrections_as_planned, flavour
+        assert not report.missed and all(r.miss <= 5.0 for r in report.rows)
+        low, high = report.success_ci or (0.0, 0.0)
+        assert low <= report.planned_probability <= high
+        assert report.flown_to_b == pytest.approx(report.planned_length, rel=0.01)
+    for seed in range(40):
+        report = dry_run(airplane_plan, landmarks, seed=seed)
+        if report.arrived:
+            break
+    else:
+        raise AssertionError(f"no arriving draw in 40 seeds (P = {report.planned_probability})")
+    assert report.ok and [r.point for r in report.rows] == list(report.route[1:-1])
 
 
 def test_steep_cs3d_mission_is_caught_through_mock_vehicle_and_upload_processes(

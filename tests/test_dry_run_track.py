@@ -24,7 +24,7 @@ def test_flown_track_is_written_as_geojson_beside_the_mission_path(capsys, tmp_p
     d = json.loads(out)
     feats = json.loads(dest.read_text())["features"]
     lines = {f["properties"]["name"]: f for f in feats if f["geometry"]["type"] == "LineString"}
-    assert set(lines) == {"mission path", "flown track"}
+    assert set(lines) == {"planned path", "mission path", "flown track"}
     flown = lines["flown track"]
     assert flown["properties"]["length_m"] == pytest.approx(d["flown_to_b"], abs=0.01)
     assert len(flown["geometry"]["coordinates"]) > len(
@@ -43,7 +43,7 @@ def test_flown_track_as_kml(capsys, tmp_path, line_csv):  # noqa: F811
     root = ET.fromstring(dest.read_text())
     ns = {"k": "http://www.opengis.net/kml/2.2"}
     names = [n.text for n in root.iterfind(".//k:Placemark/k:name", ns)]
-    assert names[:2] == ["mission path", "flown track"]
+    assert names[:3] == ["planned path", "mission path", "flown track"]
 
 
 def test_the_report_names_the_acceptance_and_capture_radii(capsys, line_csv):  # noqa: F811

@@ -13,11 +13,19 @@ from gcs_planner.cli.common import (
     load_scenario_from_args,
     plan_from_args,
 )
-from gcs_planner.dry_run import DRY_RUN_ACCEPTANCE_RADIUS_M, EXIT_LOST, DryRunReport, dry_run
+from gcs_planner.dry_run import (
+    DEVIATION_STEP_M,
+    DRY_RUN_ACCEPTANCE_RADIUS_M,
+    EXIT_LOST,
+    DryRunReport,
+    dry_run,
+)
 from gcs_planner.dry_run_track import write_track
 from gcs_planner.errors import InputError, LinkError
 from gcs_planner.link.mission_client import FIRMWARES
 from gcs_planner.link.protocol import DEFAULT_TIMEOUT_S
+from gcs_planner.mission.geo_exports import trajectory_local
+from gcs_planner.plan_json import plan_to_dict
 from sim.replay import CHORD_SHORTFALL, QUANTISATION_M
 
 EPILOG = f"""exit codes: 0 the mission verified and the replay arrived; 2 bad input; 3 no feasible
@@ -110,7 +118,8 @@ def run(args: argparse.Namespace) -> int:
     )
     if track_out is not None and flown:
         try:
-            write_track(track_out, flown[0], landmarks, result.route.ids())
+            planned = trajectory_local(plan_to_dict(result), step=DEVIATION_STEP_M)
+            write_track(track_out, flown[0], landmarks, result.route.ids(), planned)
         except OSError as exc:
             message = f"cannot write {track_out}: {exc.strerror}"
             raise InputError(message, field="--track-out") from None
@@ -146,6 +155,8 @@ def render(r: DryRunReport) -> str:
         out.append(f"  attempt {n} failed: {error}")
     out += ["", _table(r), ""]
     within = "within" if r.length_within_tolerance else "OUTSIDE"
+    if r.length_within_tolerance is None:
+        within = f"not measured ({r.helices} helices: the chords skip them) against"
     out.append(
         f"length: the stored mission flies {r.mission_length:,.1f} m from A to B, planned "
         f"{r.planned_length:,.1f} m: difference {r.length_difference:+.2f} m, {within} the "
@@ -156,7 +167,7 @@ def render(r: DryRunReport) -> str:
         f"flight: {r.flavour} mode AUTO with the scenario's vehicle profile flies "
         f"{r.flown_to_b:,.1f} m to B in {r.flight_seconds / 60:.1f} min, planned "
         f"{r.planned_length:,.1f} m: difference {r.flown_difference:+.1f} m; largest deviation "
-        f"from the mission's path {r.max_deviation:.1f} m (3D), {r.max_deviation_at:,.0f} m from "
+        f"from the planned path {r.max_deviation:.1f} m (3D), {r.max_deviation_at:,.0f} m from "
         f"A; acceptance radius {r.acceptance_radius:g} m, capture radius {r.capture_radius:g} m"
     )
     for note in r.flight_notes:
