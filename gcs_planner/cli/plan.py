@@ -7,7 +7,7 @@ import math
 import sys
 from pathlib import Path
 
-from gcs_planner.atomic import write_atomic
+from gcs_planner.atomic import check_output_dir, write_atomic
 from gcs_planner.cli.common import (
     add_plan_arguments,
     add_scenario_arguments,
@@ -32,6 +32,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.out:
+        check_output_dir(args.out)  # before the search, not after it
     scenario = load_scenario_from_args(args)
     result = plan_from_args(args, scenario)
 

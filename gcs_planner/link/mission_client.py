@@ -15,7 +15,7 @@ from typing import Any
 
 from gcs_planner.errors import LinkError
 from gcs_planner.link.connection import Link, mavlink
-from gcs_planner.link.params import set_loiter_radius
+from gcs_planner.link.params import read_parameter, set_loiter_radius
 from gcs_planner.link.progress import Progress
 from gcs_planner.link.protocol import (
     DEFAULT_RETRIES,
@@ -28,7 +28,7 @@ from gcs_planner.link.protocol import (
     mission_differences,
 )
 from gcs_planner.mission.items import MAV_MISSION_TYPE_MISSION, MissionItem
-from gcs_planner.vehicle import FIRMWARE_OF_AUTOPILOT, FIRMWARES
+from gcs_planner.vehicle import FIRMWARE_OF_AUTOPILOT, FIRMWARES, LOITER_RADIUS_PARAM
 
 _COMMAND_OK = (mavlink.MAV_RESULT_ACCEPTED, mavlink.MAV_RESULT_IN_PROGRESS)
 _NOT_VEHICLES = {mavlink.MAV_TYPE_GCS, mavlink.MAV_TYPE_GIMBAL, mavlink.MAV_TYPE_ADSB}
@@ -176,7 +176,12 @@ class MissionClient:
 
     def _give_up(self, what: str) -> LinkError:
         extra = ""
-        if self.link.refused_signature:
+        if self.link.peer_signed and not self.link.signed:
+            extra = (
+                " (the vehicle signs its messages and ignores unsigned ones: give its key "
+                "with --signing-key)"
+            )
+        elif self.link.refused_signature:
             extra = f" ({self.link.refused_signature} message(s) refused: unsigned or another key)"
         return LinkError(f"{what}: no answer after {self.retries + 1} attempts{extra}")
 
@@ -367,6 +372,20 @@ class MissionClient:
                     raise LinkError(f"the vehicle refused to make item {seq} current: {msg.text}")
             self.retry_count += 1
         raise self._give_up(f"set current item {seq}")
+
+    def check_loiter_parameter(self) -> None:
+        """Raise a :class:`LinkError` naming the parameter when the vehicle has no loiter-radius
+        parameter under its firmware's name (autopilots stay silent about unknown names)."""
+        firmware = self.firmware if self.firmware in FIRMWARES else "ardupilot"
+        name = LOITER_RADIUS_PARAM[firmware][0]
+        try:
+            read_parameter(self.link, self._target(), name, timeout=self.timeout, retries=1)
+        except LinkError:
+            raise LinkError(
+                f"the vehicle did not answer a read of {name}, the {firmware} loiter radius "
+                "the plan's turning radius is set in; nothing was uploaded (use "
+                "--keep-loiter-radius to upload without setting it)"
+            ) from None
 
     # The whole job ----------------------------------------------------------------------------
     def upload_verified(
