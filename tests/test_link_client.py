@@ -204,7 +204,7 @@ def test_verification_catches_a_vehicle_that_changes_items(monkeypatch):
     """A vehicle that stores something else than it was sent must make upload_verified fail."""
     items = make_items(10)
     with session("px4") as (vehicle, client):
-        original = vehicle._commit
+        original = vehicle.missions.commit
 
         def corrupt(stored):
             stored = list(stored)
@@ -213,7 +213,7 @@ def test_verification_catches_a_vehicle_that_changes_items(monkeypatch):
                 stored[3] = MissionItem(**{**f, "x": f["x"] + 50})
             original(stored[:-1])
 
-        monkeypatch.setattr(vehicle, "_commit", corrupt)
+        monkeypatch.setattr(vehicle.missions, "commit", corrupt)
         with pytest.raises(LinkError, match="differs") as info:
             client.upload_verified(items)
         assert "item 3: x" in str(info.value)
