@@ -255,7 +255,7 @@ class MockVehicle:
     def _incoming(self, msg: Any, now: float) -> Iterable[Any]:
         # Where it came from, kept with it through the fault injector's delays: a transfer is
         # bound to its sender's address as well as its ids.
-        msg._gcs_address = getattr(self.link.conn, "last_address", None)
+        msg._gcs_address = self.link.last_sender
         if self.drop_link_duplicates:
             key = bytes(msg.get_msgbuf())
             if key in self._seen_set:

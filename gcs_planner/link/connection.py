@@ -7,6 +7,7 @@ MAVLink 2 framing are set up in one place.
 
 from __future__ import annotations
 
+import errno
 import os
 import re
 import socket
@@ -129,6 +130,11 @@ class Link:
             reason = getattr(exc, "strerror", None) or str(exc)
             raise InputError(f"cannot open {connection!r}: {reason}", field="--connect") from None
         self.mav = self.conn.mav
+        # The UDP address the last datagram came from (udpin only; None otherwise): a vehicle
+        # binds a transfer to it, since two ground stations may use the same ids.
+        self.last_sender: Any = None
+        if isinstance(self.conn, mavutil.mavudp) and self.conn.udp_server:
+            self.conn.recv = self._udp_recv_noting_sender
         self.signed = signing_key is not None
         if signing_key is not None:
             enable_signing(self.conn, signing_key)
@@ -136,6 +142,20 @@ class Link:
         self.peer_signed = 0  # signed frames heard while we do not sign: the peer wants a key
         self.bad_data = 0
         self._send_lock = threading.Lock()
+
+    def _udp_recv_noting_sender(self, n: int | None = None) -> bytes:
+        """pymavlink's mavudp.recv for a listening socket, keeping the sender's address."""
+        conn = self.conn
+        try:
+            data, sender = conn.port.recvfrom(65535)
+        except OSError as exc:
+            if exc.errno in (errno.EAGAIN, errno.EWOULDBLOCK, errno.ECONNREFUSED):
+                return b""
+            raise
+        conn.clients.add(sender)
+        conn.clients_last_alive[sender] = time.time()
+        self.last_sender = sender
+        return data
 
     # The sending side -------------------------------------------------------------------------
     def send(self, msg: Any) -> None:
