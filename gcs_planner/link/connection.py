@@ -133,8 +133,8 @@ class Link:
         # The UDP address the last datagram came from (udpin only; None otherwise): a vehicle
         # binds a transfer to it, since two ground stations may use the same ids.
         self.last_sender: Any = None
-        if isinstance(self.conn, mavutil.mavudp) and self.conn.udp_server:
-            self.conn.recv = self._udp_recv_noting_sender
+        if isinstance(self.conn, mavutil.mavudp):
+            self.conn.recv = self._udp_recv
         self.signed = signing_key is not None
         if signing_key is not None:
             enable_signing(self.conn, signing_key)
@@ -143,8 +143,10 @@ class Link:
         self.bad_data = 0
         self._send_lock = threading.Lock()
 
-    def _udp_recv_noting_sender(self, n: int | None = None) -> bytes:
-        """pymavlink's mavudp.recv for a listening socket, keeping the sender's address."""
+    def _udp_recv(self, n: int | None = None) -> bytes:
+        """pymavlink's mavudp.recv, keeping the sender's address, and knowing that MAVLink frames
+        never span UDP datagrams: a truncated frame left by the previous datagram is dropped
+        instead of swallowing the frames of this one (pymavlink parses UDP as a byte stream)."""
         conn = self.conn
         try:
             data, sender = conn.port.recvfrom(65535)
@@ -152,9 +154,17 @@ class Link:
             if exc.errno in (errno.EAGAIN, errno.EWOULDBLOCK, errno.ECONNREFUSED):
                 return b""
             raise
-        conn.clients.add(sender)
-        conn.clients_last_alive[sender] = time.time()
+        if conn.udp_server:
+            conn.clients.add(sender)
+            conn.clients_last_alive[sender] = time.time()
+        elif conn.broadcast:
+            conn.last_address = sender
         self.last_sender = sender
+        if _partial_frame_pending(conn.mav):
+            conn.mav.buf = bytearray()
+            conn.mav.buf_index = 0
+            conn.mav.expected_length = mavlink.HEADER_LEN_V1 + 2
+            self.bad_data += 1
         return data
 
     # The sending side -------------------------------------------------------------------------
@@ -209,6 +219,25 @@ class Link:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+def _partial_frame_pending(mav: Any) -> bool:
+    """True when pymavlink's parse buffer holds the start of a frame and not all of it."""
+    n = mav.buf_len()
+    if n == 0:
+        return False
+    buf, i = mav.buf, mav.buf_index
+    if buf[i] == 0xFD:  # MAVLink 2: 10-byte header, 2-byte CRC, 13-byte signature if flagged
+        if n < 3:
+            return True
+        need = buf[i + 1] + 12 + (13 if buf[i + 2] & 0x01 else 0)
+    elif buf[i] == 0xFE:  # MAVLink 1: 6-byte header, 2-byte CRC
+        if n < 2:
+            return True
+        need = buf[i + 1] + 8
+    else:
+        return False  # garbage: the parser skips it as a bad prefix
+    return n < need
 
 
 def _is_signed(msg: Any) -> bool:
