@@ -244,6 +244,14 @@ class MissionClient:
                 seq = int(msg.seq)
                 if not 0 <= seq < count:
                     raise LinkError(f"the vehicle asked for item {seq} of a {count}-item mission")
+                if seq > highest + 1:
+                    # The vehicle holds items we never sent: someone with our ids is feeding it.
+                    raise LinkError(
+                        f"the vehicle asked for item {seq} but was sent only up to item "
+                        f"{highest}: another ground station with the same ids "
+                        f"({self.mav.srcSystem}/{self.mav.srcComponent}) is uploading; give "
+                        "each its own --source-system"
+                    )
                 attempts = 0
                 requested = seq
                 highest = max(highest, seq)

@@ -44,7 +44,7 @@ RESULT_TEXT = {
     mavlink.MAV_MISSION_INVALID_PARAM7: "an item's altitude (z) is invalid or out of range",
     mavlink.MAV_MISSION_INVALID_SEQUENCE: "an item arrived out of sequence",
     mavlink.MAV_MISSION_DENIED: "the vehicle is not accepting mission commands now (busy with "
-    "another transfer?)",
+    "another ground station's transfer?)",
     mavlink.MAV_MISSION_OPERATION_CANCELLED: "the vehicle cancelled the transfer (it timed out "
     "waiting for items)",
 }
