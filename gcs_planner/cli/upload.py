@@ -112,13 +112,16 @@ def run(args: argparse.Namespace) -> int:
         vehicle = client.vehicle
         assert vehicle is not None
         if (
-            Path(args.file).suffix.lower() == ".waypoints"
+            Path(args.file).suffix.lower() in (".waypoints", ".json")
             and args.firmware is None
             and vehicle.firmware in FIRMWARES
         ):
             # A .waypoints file does not say which firmware it was written for (its row 0 is
-            # home either way): number its items as the vehicle does.
-            mission = load_mission_file(args.file, firmware=vehicle.firmware)
+            # home either way), and a plan JSON is built into a mission here: both follow the
+            # vehicle's firmware.
+            mission = load_mission_file(
+                args.file, firmware=vehicle.firmware, route_index=args.route_index
+            )
         if (
             mission.firmware is not None
             and vehicle.firmware in FIRMWARES
