@@ -343,11 +343,11 @@ class MissionServer:
                 # with the same ids are uploading at once. Neither mission is stored.
                 self.upload = None
                 self.conflicts += 1
-                self.ack(peer, mavlink.MAV_MISSION_ERROR)
                 self.statustext(
                     "Mission upload aborted: two uploads with the same ids interleaved",
                     mavlink.MAV_SEVERITY_WARNING,
                 )
+                self.ack(peer, mavlink.MAV_MISSION_ERROR)
                 return
             self.ack(peer, mavlink.MAV_MISSION_INVALID_SEQUENCE)
             return
