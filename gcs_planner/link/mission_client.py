@@ -233,7 +233,6 @@ class MissionClient:
         requested: int | None = None  # the item last sent, answering a request
         sent_at = time.monotonic()
         resent = False
-        guessed = False  # the item sent now was inferred, not requested
         highest = -1  # the highest item the vehicle asked for
         sent_upto = -1  # the highest item sent, asked for or inferred
         last_progress = time.monotonic()
@@ -257,16 +256,18 @@ class MissionClient:
                     continue
                 if msg.get_type() == "MISSION_ACK":
                     if msg.type == mavlink.MAV_MISSION_ACCEPTED:
-                        if highest == count - 1:
+                        if count == 0 or sent_upto == count - 1:
                             return
                         continue  # a late acknowledgement of an earlier transfer
                     if msg.type == mavlink.MAV_MISSION_INVALID_SEQUENCE:
-                        if resent and not guessed and requested is not None:
-                            if requested + 1 < count:
-                                requested += 1
-                                sent_upto = max(sent_upto, requested)
-                                guessed, resent, sent_at = True, False, now
-                                self.link.send(item_to_message(self.mav, items[requested], ts, tc))
+                        # In reply to a resent item j: the vehicle has j (it would have taken it
+                        # otherwise) and its request for j + 1 was lost. A wrong guess costs
+                        # only a refusal; the vehicle's own re-request sets us right.
+                        if resent and requested is not None and requested + 1 < count:
+                            requested += 1
+                            sent_upto = max(sent_upto, requested)
+                            resent, sent_at = False, now
+                            self.link.send(item_to_message(self.mav, items[requested], ts, tc))
                         continue
                     raise LinkError(f"upload refused: {describe_result(msg.type)}")
                 seq = int(msg.seq)
@@ -287,7 +288,7 @@ class MissionClient:
                 requested = seq
                 highest = max(highest, seq)
                 sent_upto = max(sent_upto, seq)
-                resent, guessed, sent_at = False, False, now
+                resent, sent_at = False, now
                 self.link.send(item_to_message(self.mav, items[seq], ts, tc))
                 bar.update(highest + 1)
         finally:
