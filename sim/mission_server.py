@@ -5,8 +5,9 @@ What a real autopilot does, modelled from ArduPilot's ``MissionItemProtocol`` an
 
 * one transfer at a time, bound to the ground station that started it: anyone else (other
   system/component ids, or the same ids from another network address) is DENIED until it ends;
-* an upload is a restartable series of requests: ArduPilot asks with the legacy MISSION_REQUEST,
-  PX4 with MISSION_REQUEST_INT; an item not received within ``request_timeout`` is asked for
+* an upload is a restartable series of requests: ArduPilot asks with the legacy MISSION_REQUEST;
+  PX4 with MISSION_REQUEST_INT until a ground station speaks the legacy messages to it, then with
+  MISSION_REQUEST (its ``_int_mode``); an item not received within ``request_timeout`` is asked for
   again and an upload silent for ``upload_timeout`` is cancelled;
 * a MISSION_REQUEST is answered with the legacy float MISSION_ITEM and a MISSION_REQUEST_INT
   with MISSION_ITEM_INT, as both autopilots answer;
@@ -212,6 +213,7 @@ class MissionServer:
         self.completed: tuple[Peer, int] | None = None
         self.acks_sent: list[int] = []  # MAV_MISSION_RESULT of every MISSION_ACK sent
         self.conflicts = 0  # uploads aborted because two senders with the same ids interleaved
+        self.int_mode = flavour != "ardupilot"  # PX4 answers in the spelling it last heard
         self.commit([])
 
     # What it holds ----------------------------------------------------------------------------
@@ -249,9 +251,9 @@ class MissionServer:
     def _request(self, up: Upload, now: float) -> None:
         up.last_request = now
         encode = (
-            self.mav.mission_request_encode
-            if self.flavour == "ardupilot"
-            else self.mav.mission_request_int_encode
+            self.mav.mission_request_int_encode
+            if self.int_mode
+            else self.mav.mission_request_encode
         )
         self.send(encode(up.peer[0], up.peer[1], up.expected, MAV_MISSION_TYPE_MISSION))
 
@@ -269,6 +271,10 @@ class MissionServer:
     # Handlers ---------------------------------------------------------------------------------
     def handle(self, msg: Any, peer: Peer, address: Any = None) -> None:
         kind = msg.get_type()
+        if self.flavour == "px4" and kind in ("MISSION_ITEM", "MISSION_REQUEST"):
+            self.int_mode = False
+        elif self.flavour == "px4" and kind in ("MISSION_ITEM_INT", "MISSION_REQUEST_INT"):
+            self.int_mode = True
         if kind in ("MISSION_ITEM_INT", "MISSION_ITEM"):
             self.on_item(msg, peer, address)
         elif kind == "MISSION_COUNT":
