@@ -75,8 +75,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from gcs_planner.atomic import check_output_file
     from gcs_planner.plan_json import load_plan
 
+    check_output_file(args.out)
     plan = load_plan(args.plan)
     path, mission = export(plan, args.fmt, args.out, **mission_options(args, str(args.plan)))
     if mission.origin_is_default:

@@ -7,13 +7,14 @@ import math
 import sys
 from pathlib import Path
 
-from gcs_planner.atomic import write_atomic
+from gcs_planner.atomic import check_output_dir, write_atomic
 from gcs_planner.cli.common import (
     add_plan_arguments,
     add_scenario_arguments,
     load_scenario_from_args,
     plan_from_args,
 )
+from gcs_planner.cli.vehicle_from import add_vehicle_from_argument, apply_vehicle_from
 from gcs_planner.core.planner import Plan
 from gcs_planner.core.route import Route
 
@@ -26,12 +27,16 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     )
     add_scenario_arguments(p)
     add_plan_arguments(p)
+    add_vehicle_from_argument(p)
     p.add_argument("--json", action="store_true", help="print one JSON object, nothing else")
     p.add_argument("--out", type=Path, help="folder for plan.json, route.csv and the mission files")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.out:
+        check_output_dir(args.out)  # before the search, not after it
+    apply_vehicle_from(args)
     scenario = load_scenario_from_args(args)
     result = plan_from_args(args, scenario)
 
