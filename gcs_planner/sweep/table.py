@@ -85,6 +85,11 @@ class ResultTable:
         path = out / PARQUET
         if out.exists() and not out.is_dir():
             raise InputError("is a file, not a folder for the results", file=str(out))
+        try:  # now, not after the first cell: a folder that cannot be made is bad input
+            out.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            reason = exc.strerror or str(exc)
+            raise InputError(f"cannot create the folder: {reason}", file=str(out)) from None
         if not path.exists():
             return cls(out)
         if not resume:
