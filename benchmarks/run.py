@@ -202,13 +202,13 @@ def run(cfg: Config) -> str:
 
     print("6. sweeps on Dask ...", flush=True)
     n, k = cfg.sweep_scenarios, cfg.sweep_corrections
-    timings = sweep_bench.run_benchmark(n, k)
+    timings, ratios = sweep_bench.run_benchmark(n, k, rounds=2 if n < 10 else 8)
     sections.append(
         "## 6. Sweeps on Dask against a serial loop\n\n"
         "The same cells (`gcs_planner.sweep.run_cell`) in a loop in one process, on the local "
         "cluster `gcs-planner sweep` starts (2 worker processes, 1 thread each), and on a "
         "`dask scheduler` with `dask worker` processes started separately (`benchmarks/sweep.py`)."
-        "\n\n" + sweep_bench.render(timings, n, k, 200.0)
+        "\n\n" + sweep_bench.render(timings, ratios, n, k, 200.0)
     )
     print(sections[-1], flush=True)
 

@@ -25,7 +25,7 @@ from distributed import LocalCluster
 from gcs_planner.core.planner import plan
 from gcs_planner.scenario.generate import DATASET1, random_scenario
 from gcs_planner.scenario.readers import load_scenario
-from gcs_planner.sweep import expand, read_results, read_spec, run_sweep
+from gcs_planner.sweep import expand, read_results, read_spec, run_sweep, runner
 from gcs_planner.sweep.table import PARQUET, ResultTable
 
 cloudpickle.register_pickle_by_value(sweep_tasks)
@@ -221,6 +221,24 @@ def test_a_killed_worker_s_cells_are_run_again_and_nothing_is_lost(tmp_path: Pat
     alone = sweep_tasks.run_cell(victim)
     assert [r["length"] for r in redone] == pytest.approx([r["length"] for r in alone])
     assert [r["route_ids"] for r in redone] == [r["route_ids"] for r in alone]
+
+
+def test_more_cells_than_the_in_flight_window_all_finish(
+    tmp_path: Path, cluster, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # The window is a tuning constant; a small one makes this sweep refill it many times.
+    monkeypatch.setattr(runner, "IN_FLIGHT", 3)
+    log = tmp_path / "ran.log"
+    task = functools.partial(sweep_tasks.logged, log=str(log))
+    result = run_sweep(
+        small_spec(tmp_path, seeds=5),
+        tmp_path / "out",
+        scheduler=cluster.scheduler_address,
+        task=task,
+    )
+    assert (result.cells, result.ran) == (12, 12)
+    assert len(by_cell(read_results(tmp_path / "out"))) == 12
+    assert set(logged_keys(log).values()) == {1} and len(logged_keys(log)) == 12
 
 
 def wait_for(condition, what: str, proc: subprocess.Popen | None = None) -> None:

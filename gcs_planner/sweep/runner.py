@@ -11,6 +11,7 @@ when the sweep is interrupted, so a resumed sweep loses at most the cells of the
 
 from __future__ import annotations
 
+import itertools
 import logging
 import time
 import uuid
@@ -25,6 +26,9 @@ from gcs_planner.sweep.spec import SweepSpec, read_spec
 from gcs_planner.sweep.task import cell_inputs, finish_row, run_cell
 
 SUMMARY_PNG = "summary.png"
+# Cells handed to the scheduler at a time: enough to keep any cluster busy, few enough that a
+# sweep of millions of cells does not hold millions of tasks in the scheduler's memory.
+IN_FLIGHT = 10_000
 DEFAULT_WORKERS = 2
 
 
@@ -181,13 +185,23 @@ def _run(client, todo: list[Cell], table, task, progress: Progress, save_interva
     from distributed import as_completed
 
     token = uuid.uuid4().hex[:8]  # keys unique across sweeps sent to one long-lived scheduler
-    futures = {
-        client.submit(task, cell, key=f"sweep-{token}-{cell.index}-{cell.key}"): cell
-        for cell in todo
-    }
+    pending = iter(todo)
+    futures: dict = {}
+
+    def submit(n: int) -> list:
+        new = []
+        for cell in itertools.islice(pending, n):
+            future = client.submit(task, cell, key=f"sweep-{token}-{cell.index}-{cell.key}")
+            futures[future] = cell
+            new.append(future)
+        return new
+
+    flow = as_completed(submit(IN_FLIGHT))
     done = failed = infeasible = 0
     last_save = time.perf_counter()
-    for future in as_completed(futures):
+    for future in flow:
+        for new in submit(1):  # one in for each one out: the scheduler holds IN_FLIGHT at most
+            flow.add(new)
         cell = futures.pop(future)
         try:
             rows = future.result()
