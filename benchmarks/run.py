@@ -1,6 +1,6 @@
 """The benchmark suite: the project's exact search against NSGA-II, a MILP and a plain label
 search; scaling with the number of points; turns and uncertain corrections; the paper's routes;
-mission upload over loopback.
+mission upload over loopback; sweeps on Dask against a serial loop.
 
     python -m benchmarks                       # the full run (tens of minutes)
     python -m benchmarks --quick               # smoke run in seconds (CI)
@@ -20,6 +20,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from benchmarks import flyable, methods, paper, profiling, scaling, turns, upload
+from benchmarks import sweep as sweep_bench
 from benchmarks.cases import DATA, DATASETS, valid_spec
 from benchmarks.report import machine
 from gcs_planner.atomic import write_atomic
@@ -41,6 +42,8 @@ class Config:
     out: Path
     command: str
     upload_items: int = 1000
+    sweep_scenarios: int = 200
+    sweep_corrections: int = sweep_bench.CORRECTIONS
 
 
 def parse(argv: list[str] | None) -> tuple[Config, bool]:
@@ -105,6 +108,8 @@ def parse(argv: list[str] | None) -> tuple[Config, bool]:
             out=args.out,
             command=f"{COMMAND} --quick",
             upload_items=100,
+            sweep_scenarios=4,
+            sweep_corrections=150,
         )
     else:
         cfg = Config(
@@ -210,6 +215,18 @@ def run(cfg: Config) -> str:
         "arrive, the steepest leg of any front route and the helix turns the front flies. "
         "Proof: 'proven' is an exhausted search; otherwise the largest gap between a front "
         "route and its proven lower bound (default label budget).\n\n" + flyable.render(frows)
+    )
+    print(sections[-1], flush=True)
+
+    print("7. sweeps on Dask ...", flush=True)
+    n, k = cfg.sweep_scenarios, cfg.sweep_corrections
+    timings, ratios = sweep_bench.run_benchmark(n, k, rounds=2 if n < 10 else 8)
+    sections.append(
+        "## 7. Sweeps on Dask against a serial loop\n\n"
+        "The same cells (`gcs_planner.sweep.run_cell`) in a loop in one process, on the local "
+        "cluster `gcs-planner sweep` starts (2 worker processes, 1 thread each), and on a "
+        "`dask scheduler` with `dask worker` processes started separately (`benchmarks/sweep.py`)."
+        "\n\n" + sweep_bench.render(timings, ratios, n, k, 200.0)
     )
     print(sections[-1], flush=True)
 

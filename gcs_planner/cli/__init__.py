@@ -16,7 +16,7 @@ from gcs_planner import __version__
 from gcs_planner.errors import GcsPlannerError
 
 # Subcommand modules, in the order `--help` lists them.
-COMMANDS = ("plan", "export", "upload", "download", "mock_vehicle", "dry_run")
+COMMANDS = ("plan", "export", "upload", "download", "mock_vehicle", "dry_run", "sweep")
 
 
 def build_parser() -> argparse.ArgumentParser:
