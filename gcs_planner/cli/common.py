@@ -7,14 +7,16 @@ import argparse
 import math
 from typing import TYPE_CHECKING
 
-from gcs_planner.core.choose import CHOICES
 from gcs_planner.errors import InputError
-from gcs_planner.mission.georef import parse_origin
-from gcs_planner.scenario.model import Scenario
+from gcs_planner.policy import DEFAULT_MIN_PROBABILITY
 from gcs_planner.vehicle import LEG_MODELS
 
 if TYPE_CHECKING:
     from gcs_planner.core.planner import Plan
+    from gcs_planner.scenario.model import Scenario
+
+# The route choices (gcs_planner.core.choose.CHOICES, not imported: it pulls numpy in).
+CHOICES = ("compromise", "shortest", "fewest", "most-reliable")
 
 # flag -> Parameters field
 PARAMETER_FLAGS = {
@@ -69,6 +71,7 @@ def _vector(text: str) -> tuple[float, float, float]:
 
 
 def load_scenario_from_args(args: argparse.Namespace, path: str | None = None) -> Scenario:
+    from gcs_planner.mission.georef import parse_origin
     from gcs_planner.scenario.readers import load_scenario
 
     overrides: dict = {
@@ -91,7 +94,12 @@ def add_plan_arguments(parser: argparse.ArgumentParser) -> None:
         help="comma-separated subset of length,corrections,probability (default: "
         "length,corrections, plus probability when the scenario has unreliable points)",
     )
-    parser.add_argument("--choose", default="compromise", choices=CHOICES, help="route choice")
+    parser.add_argument(
+        "--choose",
+        default="compromise",
+        choices=CHOICES,
+        help="route choice among the routes that reach --min-probability (default compromise)",
+    )
     parser.add_argument(
         "--weights", help="weights of the objectives for a weighted compromise, e.g. 1,0.5"
     )
@@ -101,9 +109,11 @@ def add_plan_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--min-probability",
         type=float,
-        default=0.0,
+        default=DEFAULT_MIN_PROBABILITY,
         metavar="P",
-        help="choose only among front routes that arrive with probability >= P (default 0)",
+        help="choose only among front routes that arrive with probability >= P (default "
+        f"{DEFAULT_MIN_PROBABILITY:g}; 0 for the plain compromise); when none does, the most "
+        "reliable route is chosen, and it is exported only with --allow-risky",
     )
 
 
@@ -111,6 +121,7 @@ def plan_from_args(args: argparse.Namespace, scenario: Scenario) -> Plan:
     """Plan ``scenario`` with the flags of :func:`add_plan_arguments`; bad flags are InputError."""
     from gcs_planner.core.planner import OBJECTIVES, plan
 
+    objectives = None
     if args.objectives:
         objectives = tuple(o.strip() for o in args.objectives.split(",") if o.strip())
         unknown = [o for o in objectives if o not in OBJECTIVES]
@@ -120,25 +131,16 @@ def plan_from_args(args: argparse.Namespace, scenario: Scenario) -> Plan:
                 f"choose from {', '.join(OBJECTIVES)}",
                 field="--objectives",
             )
-    else:
-        objectives = ("length", "corrections")
-        if scenario.unreliable.any():
-            objectives += ("probability",)
     weights = None
     if args.weights:
         try:
             weights = [float(w) for w in args.weights.split(",")]
         except ValueError:
             raise InputError(f"not numbers: {args.weights!r}", field="--weights") from None
-    if args.choose == "most-reliable" and "probability" not in objectives:
-        objectives += ("probability",)
     if not 0.0 <= args.min_probability <= 1.0:
         raise InputError(
             f"{args.min_probability:g} is not a probability (0 to 1)", field="--min-probability"
         )
-    if args.min_probability > 0 and "probability" not in objectives:
-        # The routes that satisfy it may all lie off the (length, corrections) front.
-        objectives += ("probability",)
     try:
         return plan(
             scenario,

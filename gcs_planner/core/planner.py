@@ -16,6 +16,7 @@ from gcs_planner.core.probability import success_probability
 from gcs_planner.core.route import Route, evaluate_route
 from gcs_planner.core.search import straight_front
 from gcs_planner.errors import InfeasibleError
+from gcs_planner.policy import DEFAULT_MIN_PROBABILITY, choose_index, default_objectives
 from gcs_planner.scenario.model import Scenario
 
 OBJECTIVES = ("length", "corrections", "probability")
@@ -34,8 +35,15 @@ class Plan:
     statement: str
     lower_bounds: tuple[float, ...]  # per route: a proven lower bound on its front value
     stats: dict = field(default_factory=dict)
-    # The choice was made among the front routes at least this likely to arrive.
+    # The choice was made among the front routes at least this likely to arrive ...
     min_probability: float = 0.0
+    # ... unless none was: then the most reliable route is chosen and this is False.
+    threshold_met: bool = True
+
+    @property
+    def front(self) -> tuple[Route, ...]:
+        """The Pareto front's routes (sorted by corrections, then length)."""
+        return self.routes
 
     @property
     def route(self) -> Route:
@@ -73,16 +81,17 @@ def plan(
     weights: Sequence[float] | None = None,
     max_corrections: int | None = None,
     max_labels: int = DEFAULT_MAX_LABELS,
-    min_probability: float = 0.0,
+    min_probability: float = DEFAULT_MIN_PROBABILITY,
 ) -> Plan:
-    """Plan a scenario. Raises InfeasibleError (with the reason) when no route exists, or
-    none on the front arrives with at least ``min_probability`` (the route is chosen among
-    those that do; the front is reported whole)."""
+    """Plan a scenario. Raises InfeasibleError (with the reason) when no route exists.
+
+    ``objectives`` None: the policy's (:func:`gcs_planner.policy.default_objectives`). The route
+    is chosen among the front routes at least ``min_probability`` likely to arrive; when none
+    is, the most reliable one is chosen and ``threshold_met`` is False. The front is reported
+    whole either way."""
     if not 0.0 <= min_probability <= 1.0:
         raise ValueError(f"min_probability must be within [0, 1], not {min_probability}")
-    if objectives is None:
-        objectives = ("length", "corrections")
-    objectives = tuple(objectives)
+    objectives = default_objectives(scenario, objectives, choice)
     for o in objectives:
         if o not in OBJECTIVES:
             raise ValueError(f"unknown objective {o!r}")
@@ -99,24 +108,13 @@ def plan(
     routes = [routes[i] for i in order]
     lower_bounds = [lower_bounds[i] for i in order]
     # Every route's probability is exact (re-evaluated), whichever objectives were searched.
-    eligible = [i for i, r in enumerate(routes) if r.probability >= min_probability - PROB_EPS]
-    if not eligible:
-        best = max(r.probability for r in routes)
-        raise InfeasibleError(
-            f"{scenario.name}: no route on the front arrives with probability >= "
-            f"{min_probability:g}; the most reliable one found arrives with {best:.4f} "
-            f"({statement})"
-        )
-    picked = [routes[i] for i in eligible]
-    chosen = eligible[
-        choose_route(
-            [r.length for r in picked],
-            [r.corrections for r in picked],
-            [r.probability for r in picked] if use_probability else None,
-            choice,
-            weights,
-        )
-    ]
+    chosen, threshold_met = choose_index(
+        routes,
+        choice=choice,
+        weights=weights,
+        min_probability=min_probability,
+        use_probability=use_probability,
+    )
     return Plan(
         scenario,
         tuple(routes),
@@ -128,6 +126,7 @@ def plan(
         tuple(lower_bounds),
         stats,
         min_probability,
+        threshold_met,
     )
 
 

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from gcs_planner.errors import InputError
-from gcs_planner.scenario import csv_reader, toml_reader, xlsx
+from gcs_planner.scenario import csv_reader, toml_reader
 from gcs_planner.scenario.model import PARAMETER_NAMES, Kind, Origin, Parameters, Scenario
 from gcs_planner.vehicle import (
     DEFAULT_CRUISE_AIRSPEED,
@@ -139,6 +139,8 @@ def load_points(path: str | os.PathLike[str]) -> Points:
     if suffix == ".csv":
         table = csv_reader.read_csv_cells(path)
     elif suffix == ".xlsx":
+        from gcs_planner.scenario import xlsx  # openpyxl: only for workbooks
+
         table = xlsx.read_workbook_cells(path)
     else:
         raise InputError(
