@@ -31,6 +31,10 @@ class RiskyRouteError(GcsPlannerError):
     exit_code = 3
 
 
+class RiskyRouteWarning(UserWarning):
+    """A route less likely to arrive than the safe default was exported, as asked."""
+
+
 def default_objectives(
     scenario: Scenario,
     objectives: Sequence[str] | None = None,
@@ -71,6 +75,8 @@ def choose_index(
         raise ValueError(f"min_probability must be within [0, 1], not {min_probability}")
     if not routes:
         raise ValueError("empty front")
+    # The most reliable route is chosen on probability whatever the objectives searched.
+    use_probability = use_probability or choice == "most-reliable"
     lengths = [r.length for r in routes]
     corrections = [r.corrections for r in routes]
     probabilities = [r.probability for r in routes]
