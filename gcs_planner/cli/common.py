@@ -42,7 +42,11 @@ VEHICLE_FLAGS = {
 
 def add_scenario_arguments(parser: argparse.ArgumentParser, positional: bool = True) -> None:
     if positional:
-        parser.add_argument("scenario", help="scenario file: .toml, .csv or contest .xlsx")
+        parser.add_argument(
+            "scenario",
+            help="scenario file: .toml, points .csv (x,y,z or lat,lon,alt), .geojson or "
+            "contest .xlsx",
+        )
     group = parser.add_argument_group("scenario parameters (override the scenario file)")
     for name, help_text in PARAMETER_FLAGS.items():
         group.add_argument(f"--{name.replace('_', '-')}", dest=name, type=float, help=help_text)
