@@ -111,6 +111,28 @@ def _label_points(ax, xs, ys, ids: list[str], **kw) -> None:
         )
 
 
+def side_profile(plan: dict, route_index: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """(distance flown in metres, altitude z in metres) along the route's flown polyline: the
+    side view an operator reads climbs, descents and helices from."""
+    track = trajectory_local(plan, route_index)
+    return _flown_distance(track), track[:, 2]
+
+
+def sawtooth(entry: dict, component: str, resets: str) -> tuple[np.ndarray, np.ndarray]:
+    """(distance flown in metres, error in units) of one error component along a front entry,
+    corrections succeeding: it grows along each leg to the arrival error the plan states and
+    drops to 0 at each point of kind ``resets`` ("V" for the vertical error, "H" for the
+    horizontal one)."""
+    legs = entry["legs"]
+    along = np.array([0.0] + [float(leg["cumulative"]) for leg in legs])
+    arrival = np.array([0.0] + [float(leg[f"{component}_error"]) for leg in legs])
+    kinds = np.array(["A"] + [str(leg.get("kind", "")) for leg in legs])
+    after = np.where(kinds == resets, 0.0, arrival)
+    after[0] = 0.0
+    # (s_i, after_i) -> (s_i+1, arrival_i+1), then the drop to after_i+1
+    return np.repeat(along, 2)[1:], np.column_stack([arrival, after]).ravel()[1:]
+
+
 def _side_view(ax, track: np.ndarray, stops_along: np.ndarray, route: np.ndarray, ids, kinds):
     """Altitude against distance flown, from the flown polyline: climbs, descents and helices
     appear as flown, not as straight lines between the points."""
@@ -136,6 +158,7 @@ def _side_view(ax, track: np.ndarray, stops_along: np.ndarray, route: np.ndarray
     _label_points(ax, stops_along / KM, route[:, 2], ids)
     ax.set_ylabel("altitude z (m)")
     ax.set_title("side view: altitude against distance flown")
+    ax.margins(y=0.12)
     ax.grid(True, alpha=0.3)
 
 
@@ -328,14 +351,10 @@ def _budget(ax, entry: dict, along, kinds, component: str, resets: str, unreliab
     legs = entry["legs"]
     arrival = np.array([0.0] + [float(leg[f"{component}_error"]) for leg in legs])
     limit = np.array([np.nan] + [float(leg[f"{component}_limit"]) for leg in legs])
-    after = np.where(kinds == resets, 0.0, arrival)
-    after[0] = 0.0
     x = along / KM
-    # Saw: (s_i, after_i) -> (s_i+1, arrival_i+1) -> drop to after_i+1.
-    sx = np.repeat(x, 2)[1:]
-    sy = np.column_stack([arrival, after]).ravel()[1:]
+    sx, sy = sawtooth(entry, component, resets)
     colour = COLOURS["V"] if component == "v" else COLOURS["H"]
-    ax.plot(sx, sy, color=colour, lw=1.6)
+    ax.plot(sx / KM, sy, color=colour, lw=1.6)
     ax.scatter(x[1:], arrival[1:], s=22, color=colour, zorder=3)
     ax.scatter(x[1:], limit[1:], marker="_", s=260, linewidths=2.5, color=LIMIT, zorder=4)
     ax.vlines(x[1:], arrival[1:], limit[1:], color=MARGIN, lw=3, alpha=0.5, zorder=2)
@@ -426,7 +445,7 @@ def front_png(plan: dict) -> bytes:
             zorder=2,
             label=f"P(arrive) below {floor:g}: not chosen by default",
         )
-    if with_p and n <= 12:
+    if with_p and 1 < n <= 12:
         for c, L, pr in zip(corr, length, prob, strict=True):
             ax.annotate(
                 f"P {pr:.3f}",
@@ -436,6 +455,11 @@ def front_png(plan: dict) -> bytes:
                 fontsize=9,
                 color="0.3",
             )
+    # The chosen route is named in the legend, so that no label covers a point however many.
+    text = f"chosen ({plan.get('choice', 'chosen')}): route {chosen}, "
+    text += f"{corr[chosen]:.0f} corrections, {length[chosen]:.2f} km"
+    if with_p:
+        text += f", P(arrive) {prob[chosen]:.3f}"
     ax.scatter(
         corr[chosen],
         length[chosen],
@@ -444,25 +468,19 @@ def front_png(plan: dict) -> bytes:
         edgecolors=COLOURS["B"],
         linewidths=2.2,
         zorder=3,
-        label=f"chosen route ({plan.get('choice', 'chosen')})",
+        label=text,
     )
-    text = f"route {chosen}: {corr[chosen]:.0f} corrections, {length[chosen]:.2f} km"
-    if with_p:
-        text += f", P {prob[chosen]:.3f}"
     if n == 1:
-        text += "\nthe only route on the front: no other is shorter, needs fewer corrections"
-        text += " or is likelier to arrive" if with_p else ""
-    # Text towards the middle of the plot, so it never pushes the axes out of the figure.
-    right = n > 1 and corr[chosen] > (corr.min() + corr.max()) / 2
-    ax.annotate(
-        text,
-        (corr[chosen], length[chosen]),
-        xytext=(-16 if right else 16, -26 if n > 1 and length[chosen] > length.mean() else 18),
-        textcoords="offset points",
-        ha="right" if right else "left",
-        fontsize=11,
-        color=COLOURS["B"],
-    )
+        ax.text(
+            0.03,
+            0.97,
+            "The front has one route: no other feasible route is shorter,\n"
+            "needs fewer corrections" + (" or is likelier to arrive." if with_p else "."),
+            transform=ax.transAxes,
+            va="top",
+            fontsize=11,
+            color="0.25",
+        )
     if n == 1:  # a lone point: show a sensible window around it, not a zero-width axis
         ax.set_xlim(corr[0] - 1.5, corr[0] + 4.5)
         ax.set_ylim(length[0] * 0.97, length[0] * 1.03)
@@ -472,7 +490,7 @@ def front_png(plan: dict) -> bytes:
     ax.set_ylabel("flown length (km)")
     ax.xaxis.get_major_locator().set_params(integer=True)
     ax.grid(True, alpha=0.3)
-    fig.legend(loc="outside lower center", ncol=2, fontsize=9, frameon=False)
+    fig.legend(loc="outside lower center", ncol=1, fontsize=10, frameon=False)
     scen = (plan.get("scenario") or {}).get("name", "scenario")
     ax.set_title(
         f"{scen}: Pareto front ({n} route{'' if n == 1 else 's'}; objectives: "
