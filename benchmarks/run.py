@@ -218,10 +218,10 @@ def startup_section(runs: int) -> str:
     return (
         "## 6. Start-up: the command line as whole processes\n\n"
         "Each row a fresh process (`python -m gcs_planner`, what the installed script runs), "
-        f"medians of {max(runs, 3)} interleaved rounds; the floor is a bare "
+        f"medians of {runs} interleaved rounds; the floor is a bare "
         "`python -c 'import numpy, scipy.spatial'` measured in the same rounds. The last column "
         "is what start-up, reading the workbook and writing the JSON add to the floor and the "
-        "search.\n\n" + startup.render(startup.run_startup(max(runs, 3)))
+        "search.\n\n" + startup.render(startup.run_startup(runs))
     )
 
 
