@@ -362,7 +362,7 @@ def _budget(ax, entry: dict, along, kinds, component: str, resets: str, unreliab
     for n in range(1, len(x)):
         margin = limit[n] - arrival[n]
         ax.annotate(
-            f"{margin:.1f}",
+            f"{margin:.2f}" if margin < 1 else f"{margin:.1f}",
             (x[n], limit[n]),
             xytext=(0, 5),
             textcoords="offset points",
