@@ -197,7 +197,8 @@ def render(result: Plan) -> str:
                 if certain is not None
                 else "none on this front"
             )
-            + f"; most reliable: P={result.routes[reliable].probability:.4f}, "
+            + f"; most reliable: P arrive {result.routes[reliable].probability:.4f} (lost "
+            f"{1 - result.routes[reliable].probability:.4f}), "
             f"{result.routes[reliable].length:,.1f} m"
         )
     out += [
