@@ -24,6 +24,7 @@ import gcs_planner
 from benchmarks.cases import DATA
 from benchmarks.report import seconds, table
 
+EXAMPLE = Path(__file__).resolve().parents[1] / "missions" / "example" / "scenario.toml"
 FLOOR = ("python -c 'import numpy, scipy.spatial'", ["-c", "import numpy, scipy.spatial"])
 DATASET1_FLAGS = ["--alpha1", "25", "--alpha2", "15", "--beta1", "20", "--beta2", "25",
                   "--theta", "30", "--delta", "0.001"]  # fmt: skip
@@ -32,6 +33,8 @@ COMMANDS = (
     ("gcs-planner --help", ["--help"]),
     ("gcs-planner plan dataset1.xlsx --json (defaults: R 200 m, 3 objectives)",
      ["plan", str(DATA / "dataset1.xlsx"), *DATASET1_FLAGS, "--json"]),
+    ("gcs-planner plan missions/example/scenario.toml --json (a CSV: no openpyxl)",
+     ["plan", str(EXAMPLE), "--json"]),
     ("gcs-planner plan dataset1.xlsx --json --turn-radius 0 --objectives length,corrections",
      ["plan", str(DATA / "dataset1.xlsx"), *DATASET1_FLAGS, "--json", "--turn-radius", "0",
       "--objectives", "length,corrections"]),
