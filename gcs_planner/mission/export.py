@@ -8,6 +8,7 @@ from __future__ import annotations
 import os
 from collections.abc import Callable
 from pathlib import Path
+from types import ModuleType
 from typing import Any
 
 from gcs_planner.atomic import write_atomic
@@ -33,7 +34,7 @@ FORMATS: dict[str, tuple[str, Callable[[dict, Mission], str | bytes]]] = {
 }
 
 
-def _pictures():  # noqa: ANN202 - a module
+def _pictures() -> ModuleType:
     # matplotlib takes most of a second to import: only the pictures pay for it.
     from gcs_planner.mission import pictures
 

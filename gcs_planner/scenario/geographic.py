@@ -46,7 +46,7 @@ def _number(value: object) -> float | None:
     return None
 
 
-def _checked(path: Path, row: int, cells: dict[str, object], labels: dict[str, str]):
+def _checked(path: Path, row: int, cells: dict[str, object], labels: dict[str, str]) -> list[float]:
     out = []
     for column in ("lat", "lon", "alt"):
         value = _number(cells[column])
@@ -82,13 +82,12 @@ def to_local(
     from gcs_planner.mission.georef import LocalFrame
 
     header, rows, labels = table
+    if not rows:
+        raise InputError("no points after the header (header only)", file=str(path), row=header)
     geo = np.array([_checked(path, row, cells, labels) for row, cells in rows], dtype=float)
-    geo = geo.reshape(-1, 3)
     if origin is None:
         start = next((i for i, (_, cells) in enumerate(rows) if is_start(cells["kind"])), 0)
-        origin = Origin(float(geo[start, 0]), float(geo[start, 1]), 0.0) if len(geo) else None
-    if origin is None:  # no rows: the points check says so
-        return (header, rows, {**labels, "x": "lon", "y": "lat", "z": "alt"}), Origin(0, 0)
+        origin = Origin(float(geo[start, 0]), float(geo[start, 1]), 0.0)
     x, y, z = LocalFrame(origin).to_local(geo[:, 0], geo[:, 1], geo[:, 2])
     local_rows = []
     for i, (row, cells) in enumerate(rows):
