@@ -19,7 +19,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from benchmarks import flyable, methods, paper, profiling, scaling, turns, upload
+from benchmarks import flyable, methods, paper, profiling, scaling, startup, turns, upload
 from benchmarks import sweep as sweep_bench
 from benchmarks.cases import DATA, DATASETS, valid_spec
 from benchmarks.report import machine
@@ -46,7 +46,7 @@ class Config:
     sweep_corrections: int = sweep_bench.CORRECTIONS
 
 
-def parse(argv: list[str] | None) -> tuple[Config, bool]:
+def parse(argv: list[str] | None) -> tuple[Config, bool, bool]:
     ap = argparse.ArgumentParser(
         prog=COMMAND,
         description="Benchmarks of the exact search against NSGA-II, a MILP and a plain search.",
@@ -84,6 +84,11 @@ def parse(argv: list[str] | None) -> tuple[Config, bool]:
         "--profile",
         action="store_true",
         help="only profile straight_front (dataset 1, 5,000 points) and print it",
+    )
+    ap.add_argument(
+        "--startup",
+        action="store_true",
+        help="only time the command line's start (section 6) and print it",
     )
     ap.add_argument("--out", type=Path, default=DEFAULT_OUT)
     args = ap.parse_args(argv)
@@ -124,7 +129,7 @@ def parse(argv: list[str] | None) -> tuple[Config, bool]:
             out=args.out,
             command=" ".join([COMMAND, *(argv if argv is not None else sys.argv[1:])]),
         )
-    return cfg, args.profile
+    return cfg, args.profile, args.startup
 
 
 def run(cfg: Config) -> str:
@@ -230,6 +235,10 @@ def run(cfg: Config) -> str:
     )
     print(sections[-1], flush=True)
 
+    print("8. start-up ...", flush=True)
+    sections.append(startup_section(cfg.runs))
+    print(sections[-1], flush=True)
+
     took = time.perf_counter() - started
     head = (
         "# Benchmark results\n\n"
@@ -240,10 +249,24 @@ def run(cfg: Config) -> str:
     return "\n\n".join([head, *sections]) + "\n"
 
 
+def startup_section(runs: int) -> str:
+    return (
+        "## 8. Start-up: the command line as whole processes\n\n"
+        "Each row a fresh process (`python -m gcs_planner`, what the installed script runs), "
+        f"medians of {runs} interleaved rounds; the floor is a bare "
+        "`python -c 'import numpy, scipy.spatial'` measured in the same rounds. The last column "
+        "is what start-up, reading the workbook and writing the JSON add to the floor and the "
+        "search.\n\n" + startup.render(startup.run_startup(runs))
+    )
+
+
 def main(argv: list[str] | None = None) -> None:
-    cfg, profile_only = parse(argv)
+    cfg, profile_only, startup_only = parse(argv)
     if profile_only:
         print(profiling.profile())
+        return
+    if startup_only:
+        print(startup_section(cfg.runs))
         return
     needed = {spec for spec in [*cfg.scenarios, *cfg.paper_scenarios] if spec in DATASETS}
     missing = [str(DATA / f"{spec}.xlsx") for spec in sorted(needed)]

@@ -6,9 +6,6 @@ from __future__ import annotations
 import argparse
 import sys
 
-from gcs_planner.cli.upload import connect_client
-from gcs_planner.link.envelope import read_envelope
-
 
 def add_vehicle_from_argument(p: argparse.ArgumentParser) -> None:
     p.add_argument(
@@ -23,6 +20,10 @@ def apply_vehicle_from(args: argparse.Namespace) -> None:
     """Fill the envelope flags the user left unset from the vehicle on ``args.vehicle_from``."""
     if not getattr(args, "vehicle_from", None):
         return
+    # The link (pymavlink) loads only when an autopilot is asked: plan starts fast without it.
+    from gcs_planner.cli.upload import connect_client
+    from gcs_planner.link.envelope import read_envelope
+
     link_args = argparse.Namespace(
         connect=args.vehicle_from,
         baud=57600,
