@@ -1,6 +1,7 @@
 """The benchmark suite: the project's exact search against NSGA-II, a MILP and a plain label
 search; scaling with the number of points; turns and uncertain corrections; the paper's routes;
-mission upload over loopback; sweeps on Dask against a serial loop.
+mission upload over loopback; sweeps on Dask against a serial loop; the mock vehicle flying the
+longest front route.
 
     python -m benchmarks                       # the full run (tens of minutes)
     python -m benchmarks --quick               # smoke run in seconds (CI)
@@ -19,7 +20,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from benchmarks import flyable, methods, paper, profiling, scaling, startup, turns, upload
+from benchmarks import flight, flyable, methods, paper, profiling, scaling, startup, turns, upload
 from benchmarks import sweep as sweep_bench
 from benchmarks.cases import DATA, DATASETS, valid_spec
 from benchmarks.report import machine
@@ -204,7 +205,8 @@ def run(cfg: Config) -> str:
     sections.append(
         "## 5. Mission upload over loopback\n\n"
         f"The project's client uploads a {items:,}-item mission to the mock vehicle over UDP "
-        "127.0.0.1 and reads it back to verify it (`sim.vehicle.benchmark_upload`), no faults; "
+        "127.0.0.1 and reads it back to verify it (`benchmarks.upload.benchmark_upload`), no "
+        "faults; "
         f"medians of {cfg.runs} runs.\n\n" + upload.render(upload.run_upload(items, cfg.runs))
     )
     print(sections[-1], flush=True)
@@ -237,6 +239,17 @@ def run(cfg: Config) -> str:
 
     print("8. start-up ...", flush=True)
     sections.append(startup_section(cfg.runs))
+    print(sections[-1], flush=True)
+
+    print("9. flight ...", flush=True)
+    sections.append(
+        "## 9. The mock vehicle flies the longest front route\n\n"
+        "Front (length, corrections), R = 200 m, exported with the dry run's 1 m acceptance "
+        "radius; `sim.replay.replay` (flight model and autopilot, then the INS along the flown "
+        "track) against the chord replay it replaced (items joined by straight segments), "
+        f"medians of {cfg.runs} runs in this process.\n\n"
+        + flight.render(flight.run_flight(cfg.scenarios, cfg.runs))
+    )
     print(sections[-1], flush=True)
 
     took = time.perf_counter() - started

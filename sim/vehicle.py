@@ -28,7 +28,9 @@ from gcs_planner.mission.items import MissionItem
 from gcs_planner.scenario.model import Scenario
 from gcs_planner.vehicle import ENVELOPE_PARAMS
 from sim import replay as replay_mod
+from sim import telemetry
 from sim.faults import FaultInjector, FaultRates
+from sim.guidance import AutopilotParams
 from sim.mission_server import MissionServer, seq_from_param
 from sim.param_server import ParamServer, parameter_table
 
@@ -78,6 +80,7 @@ class MockVehicle:
         capture_radius: float = replay_mod.DEFAULT_CAPTURE_RADIUS_M,
         drop_link_duplicates: bool = True,
         baud: int = 57600,
+        speedup: float | None = 100.0,
     ) -> None:
         if flavour not in FLAVOURS:
             raise ValueError(f"flavour must be one of {FLAVOURS}, got {flavour!r}")
@@ -91,6 +94,9 @@ class MockVehicle:
         self.heartbeat_period = heartbeat_period
         self.capture_radius = capture_radius
         self.drop_link_duplicates = drop_link_duplicates
+        # Simulated seconds per wall second of a flight started by MISSION_START (1: real time,
+        # None: fast-forward).
+        self.speedup = speedup
         self.link = Link(
             connection,
             baud=baud,
@@ -133,6 +139,7 @@ class MockVehicle:
         self.statustexts: list[str] = []  # what it announced, for tests and logs
         self.acks_sent = self.missions.acks_sent  # MAV_MISSION_RESULT of every MISSION_ACK
         self.last_report: replay_mod.ReplayReport | None = None
+        self.flying = False  # HEARTBEAT says armed, mode AUTO while the flight plays
 
     # Lifecycle --------------------------------------------------------------------------------
     def start(self) -> MockVehicle:
@@ -206,15 +213,8 @@ class MockVehicle:
         self._send(self.mav.statustext_encode(severity, text[:50].encode("ascii", "replace")))
 
     def _heartbeat(self) -> None:
-        self._send(
-            self.mav.heartbeat_encode(
-                mavlink.MAV_TYPE_FIXED_WING,
-                _AUTOPILOT[self.flavour],
-                mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
-                0,
-                mavlink.MAV_STATE_STANDBY,
-            )
-        )
+        fields = telemetry.heartbeat_fields(self.flavour, self.flying)
+        self._send(self.mav.heartbeat_encode(*fields))
 
     def _mission_current(self) -> None:
         self.missions.mission_current()
@@ -315,7 +315,7 @@ class MockVehicle:
             else:
                 result = mavlink.MAV_RESULT_ACCEPTED
                 self._fly_thread = threading.Thread(
-                    target=self.fly, kwargs={"time_scale": 100.0}, daemon=True
+                    target=self.fly, kwargs={"time_scale": self.speedup}, daemon=True
                 )
                 self._fly_thread.start()
         self._send(self.mav.command_ack_encode(msg.command, result))
@@ -326,7 +326,8 @@ class MockVehicle:
         return self.parameters[_CRUISE_PARAM[self.flavour]]
 
     def replay(self, *, seed: int = 0, runs: int = 0) -> replay_mod.ReplayReport:
-        """Replay the stored mission against the vehicle's landmark database (no telemetry)."""
+        """Fly the stored mission in mode AUTO (sim/guidance.py) with the landmark database's
+        vehicle profile and this vehicle's parameters, and replay the INS (no telemetry)."""
         if self.scenario is None:
             raise RuntimeError("the mock vehicle was started without a scenario to fly in")
         report = replay_mod.replay(
@@ -337,6 +338,8 @@ class MockVehicle:
             home_at_seq0=self.flavour == "ardupilot",
             capture_radius=self.capture_radius,
             cruise_speed=self.cruise_speed,
+            flavour=self.flavour,
+            autopilot=AutopilotParams.from_parameters(self.flavour, self.parameters),
         )
         self.last_report = report
         return report
@@ -344,88 +347,35 @@ class MockVehicle:
     def fly(
         self, *, seed: int = 0, time_scale: float | None = None, position_messages: int = 100
     ) -> replay_mod.ReplayReport:
-        """Replay and send its telemetry: GLOBAL_POSITION_INT (at most ``position_messages``
-        over the flight, or 10 Hz of wall time when paced), MISSION_ITEM_REACHED at each
-        waypoint, STATUSTEXT at each correction and on loss. ``time_scale``: simulated seconds
-        per wall second; None sends the whole flight at once (still rate-limited)."""
+        """Fly and send the telemetry (sim/telemetry.py): HEARTBEAT armed in AUTO,
+        GLOBAL_POSITION_INT, ATTITUDE, VFR_HUD, MISSION_CURRENT, MISSION_ITEM_REACHED and a
+        STATUSTEXT at each correction and on loss. ``time_scale``: simulated seconds per wall
+        second; None sends the whole flight at once with at most ``position_messages``
+        positions."""
         report = self.replay(seed=seed)
         assert self.scenario is not None
-        mission = self.mission
-        path = replay_mod.decode_path(
-            mission,
-            self.scenario,
-            home_at_seq0=self.flavour == "ardupilot",
-            cruise_speed=self.cruise_speed,
-            capture_radius=self.capture_radius,
-        )
-        frame = replay_mod.scenario_frame(self.scenario)
-        end = report.run.flown_length
-        events: list[tuple[float, int, Any]] = []
-        for d, seq in zip(path.cumulative, path.seqs, strict=True):
-            if seq >= 0 and d <= end:
-                events.append((float(d), 0, seq))
-        for row in report.run.corrections:
-            events.append((row.distance, 1, row))
-        if not report.run.arrived:
-            events.append((end, 2, report.run.lost_reason or "lost"))
-        events.sort(key=lambda e: (e[0], e[1]))
-        speed = max(self.cruise_speed, 1e-3)
-        sim_rate = None if time_scale is None else speed * time_scale  # metres per wall second
-        step = max(end / max(position_messages, 1), 1.0)
-        start = time.monotonic()
-        next_pos = 0.0
-        k = 0
-        while not self._stop.is_set():
-            if sim_rate is None:
-                reached = next_pos
-            else:
-                reached = (time.monotonic() - start) * sim_rate
-            reached = min(reached, end)
-            while k < len(events) and events[k][0] <= reached:
-                self._event(events[k])
-                k += 1
-            self._position(frame, path, reached, speed)
-            if reached >= end and k >= len(events):
-                break
-            if sim_rate is None:
-                next_pos += step
-                time.sleep(0.002)
-            else:
-                time.sleep(0.1)
+        self.flying = True
+        self._heartbeat()
+        try:
+            telemetry.play(
+                report,
+                replay_mod.scenario_frame(self.scenario),
+                self._send,
+                self.mav,
+                statustext=self._statustext,
+                set_current=self._fly_current,
+                stop=self._stop,
+                time_scale=time_scale,
+                max_positions=position_messages,
+            )
+        finally:
+            self.flying = False
         return report
 
-    def _event(self, event: tuple[float, int, Any]) -> None:
-        _, kind, payload = event
-        if kind == 0:
-            with self._lock:
-                self._current = payload
-            self._send(self.mav.mission_item_reached_encode(payload))
-        elif kind == 1:
-            row = payload
-            outcome = "ok" if row.succeeded else ("FAILED" if row.succeeded is False else "LOST")
-            self._statustext(
-                f"{row.kind} fix {row.id} {outcome} v{row.v_before:.1f} h{row.h_before:.1f}",
-                mavlink.MAV_SEVERITY_INFO if row.within_limits else mavlink.MAV_SEVERITY_CRITICAL,
-            )
-        else:
-            self._statustext(f"INS LOST: {payload}", mavlink.MAV_SEVERITY_CRITICAL)
-
-    def _position(self, frame: Any, path: replay_mod.FlightPath, d: float, speed: float) -> None:
-        x, y, z = path.position_at(d)
-        lat, lon, alt = frame.to_geodetic(x, y, z)
-        self._send(
-            self.mav.global_position_int_encode(
-                int(time.monotonic() * 1000) & 0xFFFFFFFF,
-                round(lat * 1e7),
-                round(lon * 1e7),
-                round(alt * 1000),
-                round((alt - frame.origin.alt) * 1000),
-                0,
-                0,
-                0,
-                65535,
-            )
-        )
+    def _fly_current(self, seq: int) -> None:
+        with self._lock:
+            self._current = seq
+        self._mission_current()
 
 
 def free_udp_port() -> int:
@@ -435,33 +385,3 @@ def free_udp_port() -> int:
     with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
         s.bind(("127.0.0.1", 0))
         return int(s.getsockname()[1])
-
-
-def benchmark_upload(n_items: int = 1000, flavour: str = "ardupilot") -> dict[str, float]:
-    """Upload and verify an ``n_items`` mission to a mock vehicle over UDP loopback, no faults.
-
-    Returns the seconds taken (total, upload, read-back) for the benchmark to report.
-    """
-    from gcs_planner.link.connection import open_link
-    from gcs_planner.link.mission_client import MissionClient
-
-    port = free_udp_port()
-    items = [
-        MissionItem(i, 0, 16, x=305_000_000 + 97 * i, y=1_235_000_000 + 89 * i, z=500.0 + i % 7)
-        for i in range(n_items)
-    ]
-    with MockVehicle(f"udpin:127.0.0.1:{port}", flavour=flavour, capacity=max(n_items, 1)):
-        link = open_link(f"udpout:127.0.0.1:{port}")
-        try:
-            client = MissionClient(link)
-            client.connect(timeout=10.0)
-            report = client.upload_verified(items)
-        finally:
-            link.close()
-    return {
-        "items": float(n_items),
-        "seconds": report.seconds,
-        "upload_seconds": report.upload_seconds,
-        "verify_seconds": report.verify_seconds,
-        "retries": float(report.retries),
-    }

@@ -27,6 +27,16 @@ def _rate(text: str) -> float:
     return value
 
 
+def _speedup(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}") from None
+    if not (value >= 0 and value < float("inf")):
+        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}")
+    return value
+
+
 def run(args: argparse.Namespace) -> int:
     check_connection(args.connect)  # a typo is named before the scenario is read
     scenario = load_scenario_from_args(args, args.scenario)
@@ -46,6 +56,7 @@ def run(args: argparse.Namespace) -> int:
         signing_key=key_from_passphrase(args.signing_key) if args.signing_key else None,
         capture_radius=args.capture_radius,
         baud=args.baud,
+        speedup=args.speedup or None,
     )
     print(
         f"mock vehicle ({args.flavour}, system {args.system_id}) on {args.connect} with "
@@ -100,7 +111,16 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "--capture-radius",
         type=float,
         default=DEFAULT_CAPTURE_RADIUS_M,
-        help=f"landmark capture radius in metres (default {DEFAULT_CAPTURE_RADIUS_M:g})",
+        help="landmark CAPTURE radius (3D, metres) within which a correction works "
+        f"(default {DEFAULT_CAPTURE_RADIUS_M:g})",
+    )
+    p.add_argument(
+        "--speedup",
+        type=_speedup,
+        default=100.0,
+        metavar="N",
+        help="a flight started by MISSION_START plays N times faster than real time "
+        "(1: real time; 0: as fast as the link takes it; default 100)",
     )
     g = p.add_argument_group("fault injection (seeded)")
     for name in ("drop", "duplicate", "delay", "reorder"):
