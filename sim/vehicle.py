@@ -26,7 +26,7 @@ from typing import Any
 from gcs_planner.link.connection import Link, mavlink
 from gcs_planner.mission.items import MissionItem
 from gcs_planner.scenario.model import Scenario
-from gcs_planner.vehicle import ENVELOPE_PARAMS
+from gcs_planner.vehicle import ENVELOPE_PARAMS, FIRMWARES
 from sim import replay as replay_mod
 from sim import telemetry
 from sim.faults import FaultInjector, FaultRates
@@ -34,11 +34,7 @@ from sim.guidance import AutopilotParams
 from sim.mission_server import MissionServer, seq_from_param
 from sim.param_server import ParamServer, parameter_table
 
-FLAVOURS = ("ardupilot", "px4")
-_AUTOPILOT = {
-    "ardupilot": mavlink.MAV_AUTOPILOT_ARDUPILOTMEGA,
-    "px4": mavlink.MAV_AUTOPILOT_PX4,
-}
+FLAVOURS = FIRMWARES
 _CRUISE_PARAM = {flavour: ENVELOPE_PARAMS[flavour]["cruise_airspeed"] for flavour in FLAVOURS}
 
 
