@@ -306,7 +306,8 @@ class MockVehicle:
             result = mavlink.MAV_RESULT_ACCEPTED if ok else mavlink.MAV_RESULT_DENIED
         elif msg.command == mavlink.MAV_CMD_MISSION_START:
             busy = self._fly_thread is not None and self._fly_thread.is_alive()
-            if self.scenario is None or not self.mission or busy:
+            home_only = 1 if self.flavour == "ardupilot" else 0  # ArduPilot's home stays
+            if self.scenario is None or len(self.mission) <= home_only or busy:
                 result = mavlink.MAV_RESULT_DENIED
             else:
                 result = mavlink.MAV_RESULT_ACCEPTED
