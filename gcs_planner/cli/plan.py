@@ -145,6 +145,12 @@ def render(result: Plan) -> str:
             if result.min_probability > 0
             else ""
         )
+        + (
+            "; ? = not settled: routes with no more corrections or a higher probability may "
+            "still be missing"
+            if not all(result.proven())
+            else ""
+        )
         + "):",
         f"  {'':1} {'length m':>11} {'corr':>4} {'P success':>9} {'gap m':>7}  route",
     ]
