@@ -5,8 +5,10 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 from typing import TYPE_CHECKING
 
+from gcs_planner.core.budget import DEFAULT_MAX_LABELS, terminal_progress
 from gcs_planner.errors import InputError
 from gcs_planner.policy import DEFAULT_MIN_PROBABILITY
 from gcs_planner.vehicle import LEG_MODELS
@@ -119,6 +121,49 @@ def add_plan_arguments(parser: argparse.ArgumentParser) -> None:
         f"{DEFAULT_MIN_PROBABILITY:g}; 0 for the plain compromise); when none does, the most "
         "reliable route is chosen, and it is exported only with --allow-risky",
     )
+    budget = parser.add_argument_group(
+        "search budget (turns and the probability objective: a branch and bound that proves "
+        "its front by exhausting its queue; when the budget ends it first, each route's gap is "
+        "reported)"
+    )
+    budget.add_argument(
+        "--time-limit",
+        type=_seconds,
+        metavar="SECONDS",
+        help="stop the search after this many seconds (default: no limit)",
+    )
+    budget.add_argument(
+        "--max-labels",
+        type=_labels,
+        metavar="N",
+        help=f"partial routes each search may expand (default {DEFAULT_MAX_LABELS:,}; "
+        "0: no limit, then --time-limit bounds the search)",
+    )
+    budget.add_argument(
+        "--progress",
+        action="store_true",
+        help="show the search's progress on stderr (default: only when stderr is a terminal)",
+    )
+
+
+def _seconds(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected seconds, got {text!r}") from None
+    if not (math.isfinite(value) and value >= 0):
+        raise argparse.ArgumentTypeError(f"expected seconds >= 0, got {text!r}")
+    return value
+
+
+def _labels(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected labels >= 0, got {text!r}")
+    return value
 
 
 def plan_from_args(args: argparse.Namespace, scenario: Scenario) -> Plan:
@@ -145,6 +190,11 @@ def plan_from_args(args: argparse.Namespace, scenario: Scenario) -> Plan:
         raise InputError(
             f"{args.min_probability:g} is not a probability (0 to 1)", field="--min-probability"
         )
+    max_labels = getattr(args, "max_labels", None)
+    if max_labels is None:
+        max_labels = DEFAULT_MAX_LABELS
+    show = getattr(args, "progress", False) or sys.stderr.isatty()
+    progress = terminal_progress(sys.stderr) if show else None
     try:
         return plan(
             scenario,
@@ -153,6 +203,12 @@ def plan_from_args(args: argparse.Namespace, scenario: Scenario) -> Plan:
             weights=weights,
             max_corrections=args.max_corrections,
             min_probability=args.min_probability,
+            max_labels=max_labels or None,
+            time_limit=getattr(args, "time_limit", None),
+            progress=progress,
         )
     except ValueError as exc:
         raise InputError(str(exc)) from None
+    finally:
+        if progress is not None:
+            progress.finish()

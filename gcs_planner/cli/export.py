@@ -31,12 +31,16 @@ def add_mission_arguments(p: argparse.ArgumentParser) -> None:
         help="amsl: MAV_FRAME_GLOBAL (default); relative: MAV_FRAME_GLOBAL_RELATIVE_ALT, "
         "above home at A",
     )
+    # The autopilot's waypoint ACCEPTANCE radius (param2), not the landmark's CAPTURE radius;
+    # --capture-radius is its old, misleading name, kept as a deprecated alias.
     g.add_argument(
+        "--acceptance-radius",
         "--capture-radius",
+        dest="acceptance_radius",
         type=float,
         default=DEFAULT_CAPTURE_RADIUS,
-        help="acceptance radius of the correction waypoints, whole metres "
-        f"(default {DEFAULT_CAPTURE_RADIUS})",
+        help="waypoint acceptance radius of the correction waypoints, whole metres "
+        f"(default {DEFAULT_CAPTURE_RADIUS}; --capture-radius is a deprecated alias)",
     )
     g.add_argument(
         "--cruise-speed",
@@ -53,7 +57,7 @@ def mission_options(args: argparse.Namespace, source: str = "") -> dict:
         "route_index": args.route_index,
         "firmware": args.firmware,
         "altitude_frame": args.altitude_frame,
-        "capture_radius": args.capture_radius,
+        "capture_radius": args.acceptance_radius,
         "cruise_speed": args.cruise_speed,
         "at_end": args.at_end,
         "origin": None if args.origin is None else parse_origin(args.origin),
@@ -114,8 +118,10 @@ def risk_check(args: argparse.Namespace, plan: dict) -> str | None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from gcs_planner.atomic import check_output_file
     from gcs_planner.plan_json import load_plan
 
+    check_output_file(args.out)
     plan = load_plan(args.plan)
     warning = risk_check(args, plan)
     path, mission = export(plan, args.fmt, args.out, **mission_options(args, str(args.plan)))

@@ -8,12 +8,14 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from gcs_planner.atomic import check_output_dir
 from gcs_planner.cli.common import (
     add_plan_arguments,
     add_scenario_arguments,
     load_scenario_from_args,
     plan_from_args,
 )
+from gcs_planner.cli.vehicle_from import add_vehicle_from_argument, apply_vehicle_from
 
 if TYPE_CHECKING:
     from gcs_planner.core.planner import Plan
@@ -28,6 +30,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     )
     add_scenario_arguments(p)
     add_plan_arguments(p)
+    add_vehicle_from_argument(p)
     p.add_argument("--json", action="store_true", help="print one JSON object, nothing else")
     p.add_argument(
         "--out",
@@ -47,6 +50,9 @@ def run(args: argparse.Namespace) -> int:
     from gcs_planner import plan_json
     from gcs_planner.policy import check_exportable
 
+    if args.out:
+        check_output_dir(args.out)  # before the search, not after it
+    apply_vehicle_from(args)
     scenario = load_scenario_from_args(args)
     result = plan_from_args(args, scenario)
     plan_dict = plan_json.plan_to_dict(result)
@@ -91,6 +97,8 @@ COLUMNS = (
     ("leg m", "{:>10.1f}"),
     ("arc m", "{:>7.1f}"),
     ("turn °", "{:>6.1f}"),
+    ("path °", "{:>6.1f}"),
+    ("helix", "{:>5}"),
     ("total m", "{:>10.1f}"),
     ("v err", "{:>7.3f}"),
     ("h err", "{:>7.3f}"),
@@ -106,6 +114,8 @@ def table_rows(route: Route) -> list[list]:
         leg = s.leg.length if s.leg else 0.0
         arc = s.leg.arc if s.leg else 0.0
         turn = math.degrees(s.leg.turn_angle) if s.leg else 0.0
+        path = s.leg.path_angle if s.leg else 0.0
+        helix = s.leg.helix_turns if s.leg else 0
         vm = s.v_margin if math.isfinite(s.v_margin) else float("nan")
         hm = s.h_margin if math.isfinite(s.h_margin) else float("nan")
         kind = s.kind.name + ("*" if s.unreliable else "")
@@ -117,6 +127,8 @@ def table_rows(route: Route) -> list[list]:
                 leg,
                 arc,
                 turn,
+                path,
+                helix,
                 s.cumulative,
                 s.v_arrival,
                 s.h_arrival,
@@ -156,6 +168,8 @@ def render(result: Plan) -> str:
             if "probability" in result.objectives
             else ""
         ),
+        f"vehicle: {s.vehicle.describe()}",
+        *(f"warning: {w}" for w in result.warnings),
         f"optimality: {result.statement}",
         "",
         f"Pareto front ({len(result.routes)} route{'' if len(result.routes) == 1 else 's'}; "
@@ -169,12 +183,16 @@ def render(result: Plan) -> str:
         f"  {'':1} {'length m':>11} {'corr':>4} {'P arrive':>9} {'P lost':>7} {'gap m':>7}  route",
     ]
     certain, reliable = result.shortest_certain, result.most_reliable
+    proven = result.proven()
     for i, (r, gap) in enumerate(zip(result.routes, result.gaps())):
         mark = "*" if i == result.chosen else " "
         ids = " ".join(r.ids())
+        # "?" after the gap: not settled, routes with fewer corrections or a higher
+        # probability may still be missing from the front (see core.proof).
+        unsure = " " if proven[i] else "?"
         row = (
             f"{r.length:>11.1f} {r.corrections:>4} {r.probability:>9.4f} "
-            f"{1 - r.probability:>7.4f} {gap:>7.1f}"
+            f"{1 - r.probability:>7.4f} {gap:>7.1f}{unsure}"
         )
         out.append(f"  {mark} {row}  {ids}")
     if not result.threshold_met:
