@@ -167,10 +167,13 @@ class VehicleProfile:
         else:
             legs = f"{self.leg_model} legs, turning radius {self.turn_radius:g} m"
             if self.radius_source != "turn_radius":
-                legs += f" (from {self.cruise_airspeed:g} m/s at {self.bank_angle:.1f} deg bank)"
+                legs += (
+                    f" (from {self.cruise_airspeed:g} m/s at {self.bank_angle:.1f} deg bank)"
+                )
         if self.climb_limited:
             climb = (
-                f"climb <= {self.max_climb_angle:g} deg, descent <= {self.max_descent_angle:g} deg"
+                f"climb <= {self.max_climb_angle:g} deg, "
+                f"descent <= {self.max_descent_angle:g} deg"
             )
         else:
             climb = "unlimited climb and descent (90 deg, the contest's model)"

@@ -26,7 +26,7 @@ from typing import Any
 from gcs_planner.link.connection import Link, mavlink
 from gcs_planner.mission.items import MissionItem
 from gcs_planner.scenario.model import Scenario
-from gcs_planner.vehicle import ENVELOPE_PARAMS
+from gcs_planner.vehicle import ENVELOPE_PARAMS, FIRMWARES
 from sim import replay as replay_mod
 from sim import telemetry
 from sim.faults import FaultInjector, FaultRates
@@ -34,11 +34,7 @@ from sim.guidance import AutopilotParams
 from sim.mission_server import MissionServer, seq_from_param
 from sim.param_server import ParamServer, parameter_table
 
-FLAVOURS = ("ardupilot", "px4")
-_AUTOPILOT = {
-    "ardupilot": mavlink.MAV_AUTOPILOT_ARDUPILOTMEGA,
-    "px4": mavlink.MAV_AUTOPILOT_PX4,
-}
+FLAVOURS = FIRMWARES
 _CRUISE_PARAM = {flavour: ENVELOPE_PARAMS[flavour]["cruise_airspeed"] for flavour in FLAVOURS}
 
 
@@ -310,7 +306,8 @@ class MockVehicle:
             result = mavlink.MAV_RESULT_ACCEPTED if ok else mavlink.MAV_RESULT_DENIED
         elif msg.command == mavlink.MAV_CMD_MISSION_START:
             busy = self._fly_thread is not None and self._fly_thread.is_alive()
-            if self.scenario is None or not self.mission or busy:
+            home_only = 1 if self.flavour == "ardupilot" else 0  # ArduPilot's home stays
+            if self.scenario is None or len(self.mission) <= home_only or busy:
                 result = mavlink.MAV_RESULT_DENIED
             else:
                 result = mavlink.MAV_RESULT_ACCEPTED

@@ -266,3 +266,26 @@ def test_two_uploads_at_once_never_leave_a_mixed_mission(same_ids):
                     # verified, then replaced by the other one's later upload: it must be whole
                     other = b if name == "a" else a
                     assert stored_equals(vehicle, other)
+
+
+@pytest.mark.parametrize("flavour", ["ardupilot", "px4"])
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_a_30_item_mission_at_30_percent_loss_is_never_reported_failed(flavour, seed):
+    """Issue 14: at 20-30 % loss, uploads the vehicle held were reported failed (exit 4)."""
+    loss = FaultRates(drop=0.3)
+    items = make_items(30)
+    with session(flavour, faults_out=loss, faults_in=loss, fault_seed=seed) as (vehicle, client):
+        client.upload_verified(items)
+        assert stored_equals(vehicle, items)
+
+
+def test_a_read_back_that_fails_is_not_called_a_different_mission(monkeypatch):
+    items = make_items(6)
+    with session("px4", client_kw=dict(timeout=0.2, retries=1)) as (vehicle, client):
+        monkeypatch.setattr(vehicle.missions, "on_request_list", lambda msg, peer: None)
+        with pytest.raises(LinkError) as info:
+            client.upload_verified(items)
+        text = str(info.value)
+        assert "acknowledged the whole upload" in text and "could not be read back" in text
+        assert "differs" not in text
+        assert stored_equals(vehicle, items)

@@ -220,3 +220,14 @@ def test_two_uploads_with_the_same_ids_interleaving_are_aborted_not_mixed():
         assert vehicle.missions.conflicts == 1
         assert any("interleaved" in t for t in vehicle.statustexts)
         assert vehicle.mission == ITEMS[:2]
+
+
+def test_mission_start_with_home_alone_is_denied():
+    from gcs_planner.scenario.generate import random_scenario
+
+    with vehicle_and_peer("ardupilot", scenario=random_scenario(5, 0)) as (vehicle, link):
+        link.send(link.mav.command_long_encode(1, 1, mavlink.MAV_CMD_MISSION_START, 0, 0, 0, 0, 0,
+                                               0, 0, 0))  # fmt: skip
+        ack = wait_for(link, of("COMMAND_ACK"))
+        assert ack is not None and ack.result == mavlink.MAV_RESULT_DENIED
+        assert len(vehicle.mission) == 1

@@ -155,9 +155,12 @@ class Link:
                 return b""
             raise
         if conn.udp_server:
-            conn.clients.add(sender)
-            conn.clients_last_alive[sender] = time.time()
-        elif conn.broadcast:
+            if hasattr(conn, "clients"):  # answers go to every client heard (pymavlink >= 2.4.41)
+                conn.clients.add(sender)
+                conn.clients_last_alive[sender] = time.time()
+            else:
+                conn.last_address = sender
+        elif getattr(conn, "broadcast", False):
             conn.last_address = sender
         self.last_sender = sender
         if _partial_frame_pending(conn.mav):
@@ -192,7 +195,9 @@ class Link:
                 # pymavlink's robust parser turns most bad frames into BAD_DATA; what slips
                 # through (a field it cannot unpack) is counted the same way.
                 self.bad_data += 1
-                continue
+                msg = None
+                if time.monotonic() >= deadline:
+                    return None
             if msg is not None:
                 if msg.get_type() == "BAD_DATA":
                     if "signature" in str(getattr(msg, "reason", "")).lower():

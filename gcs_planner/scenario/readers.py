@@ -114,7 +114,9 @@ def load_scenario(
             sources[key] = (COMMAND_LINE, None)
     for key in VEHICLE_EXTRA_KEYS:
         if key in given:
-            vehicle[key] = given[key] if key == "leg_model" else _override_number(key, given[key])
+            vehicle[key] = (
+                given[key] if key == "leg_model" else _override_number(key, given[key])
+            )
             sources[key] = (COMMAND_LINE, None)
     # On the command line a radius wins over a bank from the file, and a bank over a radius.
     if "turn_radius" in given and "max_bank_angle" not in given:
@@ -248,7 +250,6 @@ def _vehicle(
 ) -> dict[str, object]:
     """The Scenario fields of the aircraft (leg model, airspeed, radius source); fills the
     turning radius into ``values`` when it comes from airspeed and bank."""
-
     def fail(key: str, message: str) -> InputError:
         file, row = sources.get(key, (str(path), None))
         return InputError(message, file=file, row=row, field=key)
