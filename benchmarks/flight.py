@@ -26,11 +26,12 @@ from gcs_planner.dry_run import DRY_RUN_ACCEPTANCE_RADIUS_M, max_deviation
 from gcs_planner.mission.builder import build_mission
 from gcs_planner.mission.geo_exports import trajectory_local
 from gcs_planner.plan_json import plan_to_dict
+from gcs_planner.vehicle import FIRMWARES
 from sim import replay as replay_mod
 from sim.guidance import AutopilotParams
 
 TURN_RADIUS = 200.0
-FLAVOURS = ("ardupilot", "px4")
+FLAVOURS = FIRMWARES
 
 
 @dataclass(frozen=True)

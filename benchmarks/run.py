@@ -1,6 +1,7 @@
 """The benchmark suite: the project's exact search against NSGA-II, a MILP and a plain label
 search; scaling with the number of points; turns and uncertain corrections; the paper's routes;
-mission upload over loopback; the mock vehicle flying the longest front route.
+mission upload over loopback; sweeps on Dask against a serial loop; the mock vehicle flying the
+longest front route.
 
     python -m benchmarks                       # the full run (tens of minutes)
     python -m benchmarks --quick               # smoke run in seconds (CI)
@@ -19,7 +20,8 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from benchmarks import flight, flyable, methods, paper, profiling, scaling, turns, upload
+from benchmarks import flight, flyable, methods, paper, profiling, scaling, startup, turns, upload
+from benchmarks import sweep as sweep_bench
 from benchmarks.cases import DATA, DATASETS, valid_spec
 from benchmarks.report import machine
 from gcs_planner.atomic import write_atomic
@@ -41,9 +43,11 @@ class Config:
     out: Path
     command: str
     upload_items: int = 1000
+    sweep_scenarios: int = 200
+    sweep_corrections: int = sweep_bench.CORRECTIONS
 
 
-def parse(argv: list[str] | None) -> tuple[Config, bool]:
+def parse(argv: list[str] | None) -> tuple[Config, bool, bool]:
     ap = argparse.ArgumentParser(
         prog=COMMAND,
         description="Benchmarks of the exact search against NSGA-II, a MILP and a plain search.",
@@ -82,6 +86,11 @@ def parse(argv: list[str] | None) -> tuple[Config, bool]:
         action="store_true",
         help="only profile straight_front (dataset 1, 5,000 points) and print it",
     )
+    ap.add_argument(
+        "--startup",
+        action="store_true",
+        help="only time the command line's start (section 6) and print it",
+    )
     ap.add_argument("--out", type=Path, default=DEFAULT_OUT)
     args = ap.parse_args(argv)
     if min(args.runs, args.nsga_seeds) < 1 or args.time_limit <= 0 or args.nsga_budget <= 0:
@@ -105,6 +114,8 @@ def parse(argv: list[str] | None) -> tuple[Config, bool]:
             out=args.out,
             command=f"{COMMAND} --quick",
             upload_items=100,
+            sweep_scenarios=4,
+            sweep_corrections=150,
         )
     else:
         cfg = Config(
@@ -119,7 +130,7 @@ def parse(argv: list[str] | None) -> tuple[Config, bool]:
             out=args.out,
             command=" ".join([COMMAND, *(argv if argv is not None else sys.argv[1:])]),
         )
-    return cfg, args.profile
+    return cfg, args.profile, args.startup
 
 
 def run(cfg: Config) -> str:
@@ -214,9 +225,25 @@ def run(cfg: Config) -> str:
     )
     print(sections[-1], flush=True)
 
-    print("7. flight ...", flush=True)
+    print("7. sweeps on Dask ...", flush=True)
+    n, k = cfg.sweep_scenarios, cfg.sweep_corrections
+    timings, ratios = sweep_bench.run_benchmark(n, k, rounds=2 if n < 10 else 8)
     sections.append(
-        "## 7. The mock vehicle flies the longest front route\n\n"
+        "## 7. Sweeps on Dask against a serial loop\n\n"
+        "The same cells (`gcs_planner.sweep.run_cell`) in a loop in one process, on the local "
+        "cluster `gcs-planner sweep` starts (2 worker processes, 1 thread each), and on a "
+        "`dask scheduler` with `dask worker` processes started separately (`benchmarks/sweep.py`)."
+        "\n\n" + sweep_bench.render(timings, ratios, n, k, 200.0)
+    )
+    print(sections[-1], flush=True)
+
+    print("8. start-up ...", flush=True)
+    sections.append(startup_section(cfg.runs))
+    print(sections[-1], flush=True)
+
+    print("9. flight ...", flush=True)
+    sections.append(
+        "## 9. The mock vehicle flies the longest front route\n\n"
         "Front (length, corrections), R = 200 m, exported with the dry run's 1 m acceptance "
         "radius; `sim.replay.replay` (flight model and autopilot, then the INS along the flown "
         "track) against the chord replay it replaced (items joined by straight segments), "
@@ -235,10 +262,25 @@ def run(cfg: Config) -> str:
     return "\n\n".join([head, *sections]) + "\n"
 
 
+def startup_section(runs: int) -> str:
+    return (
+        "## 8. Start-up: the command line as whole processes\n\n"
+        "Each row a fresh process (`python -m gcs_planner`, what the installed script runs), "
+        f"medians of {runs} interleaved rounds; the floor is a bare "
+        "`python -c 'import numpy, scipy.spatial'` measured in the same rounds. \"Above floor + "
+        'search" is what start-up, reading the scenario and writing the JSON add; CPU time '
+        "(user + system) is steadier than wall time on a shared machine.\n\n"
+        + startup.render(startup.run_startup(runs))
+    )
+
+
 def main(argv: list[str] | None = None) -> None:
-    cfg, profile_only = parse(argv)
+    cfg, profile_only, startup_only = parse(argv)
     if profile_only:
         print(profiling.profile())
+        return
+    if startup_only:
+        print(startup_section(cfg.runs))
         return
     needed = {spec for spec in [*cfg.scenarios, *cfg.paper_scenarios] if spec in DATASETS}
     missing = [str(DATA / f"{spec}.xlsx") for spec in sorted(needed)]

@@ -8,9 +8,10 @@ from benchmarks.report import seconds, table
 from gcs_planner.link.connection import open_link
 from gcs_planner.link.mission_client import MissionClient
 from gcs_planner.mission.items import MissionItem
+from gcs_planner.vehicle import FIRMWARES
 from sim.vehicle import MockVehicle, free_udp_port
 
-FLAVOURS = ("ardupilot", "px4")
+FLAVOURS = FIRMWARES
 
 
 def benchmark_upload(n_items: int = 1000, flavour: str = "ardupilot") -> dict[str, float]:

@@ -99,6 +99,7 @@ def plan_to_dict(plan: Plan) -> dict[str, Any]:
         "chosen": plan.chosen,
         "choice": plan.choice,
         "min_probability": plan.min_probability,
+        "threshold_met": plan.threshold_met,
         "shortest_certain": plan.shortest_certain,
         "most_reliable": plan.most_reliable,
         "optimality": {"optimal": plan.optimal, "statement": plan.statement},

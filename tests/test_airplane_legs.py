@@ -236,3 +236,52 @@ def test_cs3d_reproduces_the_earlier_turned_fronts(dataset_paths, dataset) -> No
     # front has legs of up to 26 degrees)
     steepest = max(abs(s.leg.path_angle) for r in result.routes for s in r.stops[1:])
     assert bool(result.warnings) == (steepest > 15.0)
+
+
+def test_planned_three_objective_front_with_helices_equals_enumeration() -> None:
+    """Through ``plan()``, whose floor and seeds come from the heading-free front: a floor made
+    with R = 0 would drop the legs only a helix can fly and cut real routes off."""
+    compared = with_helices = 0
+    for seed in range(60):
+        scenario = climbing_scenario(seed)
+        if scenario.params.turn_radius == 0:
+            continue
+        want = enumerate_front(scenario, probability=True)
+        if not want:
+            continue
+        p = plan(
+            scenario,
+            objectives=("length", "corrections", "probability"),
+            min_probability=0.0,
+            max_labels=None,
+        )
+        assert p.optimal
+        got = sorted(
+            (round(r.length, 6), r.corrections, round(-r.probability, 12)) for r in p.routes
+        )
+        assert [g[1:] for g in got] == [w[1:] for w in sorted(want)], seed
+        np.testing.assert_allclose([g[0] for g in got], [w[0] for w in sorted(want)], atol=1e-6)
+        compared += 1
+        with_helices += any(s.leg.helix_turns for r in p.routes for s in r.stops[1:])
+    assert compared >= 15 and with_helices >= 3
+
+
+def test_the_certain_front_floors_every_route_flown_with_helices() -> None:
+    """The floor the three-objective search uses bounds every feasible route from below, helix
+    legs included (a straight-leg floor made with R = 0 would not: it drops too-steep legs)."""
+    from test_bnb import all_routes
+
+    from gcs_planner.core.seeding import certain_front
+
+    below = 0
+    for seed in range(60):
+        scenario = climbing_scenario(seed)
+        if scenario.params.turn_radius == 0:
+            continue
+        floor = certain_front(scenario)
+        for points in all_routes(scenario):
+            route = flown_route(scenario, points)
+            if route.feasible:
+                assert floor.floor(route.corrections) <= route.length + 1e-6, (seed, points)
+                below += any(s.leg.helix_turns for s in route.stops[1:])
+    assert below >= 10

@@ -19,6 +19,7 @@ from gcs_planner.core.search import straight_front
 from gcs_planner.core.seeding import certain_front
 from gcs_planner.errors import InfeasibleError
 from gcs_planner.geometry.legs import scenario_leg_model
+from gcs_planner.policy import DEFAULT_MIN_PROBABILITY, choose_index, default_objectives
 from gcs_planner.scenario.model import Scenario
 
 OBJECTIVES = ("length", "corrections", "probability")
@@ -37,8 +38,10 @@ class Plan:
     statement: str
     lower_bounds: tuple[float, ...]  # per route: a proven lower bound on its front value
     stats: dict = field(default_factory=dict)
-    # The choice was made among the front routes at least this likely to arrive.
+    # The choice was made among the front routes at least this likely to arrive ...
     min_probability: float = 0.0
+    # ... unless none was: then the most reliable route is chosen and this is False.
+    threshold_met: bool = True
     # What the user must know about flying these routes: an assumed unlimited climb and the
     # steepest leg, or legs steeper than the aircraft's limits (planned with cs3d or straight).
     warnings: tuple[str, ...] = ()
@@ -50,6 +53,11 @@ class Plan:
         """Per route, whether its "optimal" flag holds: settled and with no gap."""
         flags = self.settled or (True,) * len(self.routes)
         return tuple(s and gap <= 1e-6 for s, gap in zip(flags, self.gaps()))
+
+    @property
+    def front(self) -> tuple[Route, ...]:
+        """The Pareto front's routes (sorted by corrections, then length)."""
+        return self.routes
 
     @property
     def route(self) -> Route:
@@ -87,13 +95,16 @@ def plan(
     weights: Sequence[float] | None = None,
     max_corrections: int | None = None,
     max_labels: int | None = DEFAULT_MAX_LABELS,
-    min_probability: float = 0.0,
+    min_probability: float = DEFAULT_MIN_PROBABILITY,
     time_limit: float | None = None,
     progress: ProgressCallback | None = None,
 ) -> Plan:
-    """Plan a scenario. Raises InfeasibleError (with the reason) when no route exists, or
-    none on the front arrives with at least ``min_probability`` (the route is chosen among
-    those that do; the front is reported whole).
+    """Plan a scenario. Raises InfeasibleError (with the reason) when no route exists.
+
+    ``objectives`` None: the policy's (:func:`gcs_planner.policy.default_objectives`). The route
+    is chosen among the front routes at least ``min_probability`` likely to arrive; when none
+    is, the most reliable one is chosen and ``threshold_met`` is False. The front is reported
+    whole either way.
 
     The budget of the branch and bound (turns, probability): ``max_labels`` per search (None:
     unlimited) and ``time_limit`` seconds in all (None: unlimited); ``progress`` is called
@@ -101,9 +112,7 @@ def plan(
     budget ends the search, the plan says what is proven (``optimal`` False, per-route gaps)."""
     if not 0.0 <= min_probability <= 1.0:
         raise ValueError(f"min_probability must be within [0, 1], not {min_probability}")
-    if objectives is None:
-        objectives = ("length", "corrections")
-    objectives = tuple(objectives)
+    objectives = default_objectives(scenario, objectives, choice)
     for o in objectives:
         if o not in OBJECTIVES:
             raise ValueError(f"unknown objective {o!r}")
@@ -122,24 +131,13 @@ def plan(
     lower_bounds = [lower_bounds[i] for i in order]
     settled = [bool(settled[i]) for i in order]
     # Every route's probability is exact (re-evaluated), whichever objectives were searched.
-    eligible = [i for i, r in enumerate(routes) if r.probability >= min_probability - PROB_EPS]
-    if not eligible:
-        best = max(r.probability for r in routes)
-        raise InfeasibleError(
-            f"{scenario.name}: no route on the front arrives with probability >= "
-            f"{min_probability:g}; the most reliable one found arrives with {best:.4f} "
-            f"({statement})"
-        )
-    picked = [routes[i] for i in eligible]
-    chosen = eligible[
-        choose_route(
-            [r.length for r in picked],
-            [r.corrections for r in picked],
-            [r.probability for r in picked] if use_probability else None,
-            choice,
-            weights,
-        )
-    ]
+    chosen, threshold_met = choose_index(
+        routes,
+        choice=choice,
+        weights=weights,
+        min_probability=min_probability,
+        use_probability=use_probability,
+    )
     return Plan(
         scenario,
         tuple(routes),
@@ -151,6 +149,7 @@ def plan(
         tuple(lower_bounds),
         stats,
         min_probability,
+        threshold_met,
         warnings=climb_warnings(scenario, routes),
         settled=tuple(settled),
     )

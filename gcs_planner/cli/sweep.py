@@ -1,0 +1,73 @@
+"""`gcs-planner sweep SPEC.toml --out DIR`: a study over scenarios and parameters on Dask."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from gcs_planner.errors import InputError
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "sweep",
+        help="plan many scenarios x parameter values as tasks on Dask (local or a cluster)",
+        description="Run a sweep spec: every scenario with every set of values, each cell one "
+        "plan (and optional dry run) on Dask. Writes DIR/results.parquet, results.csv and "
+        "summary.png. Needs the sweep extra: pip install 'gcs-planner[sweep]'.",
+    )
+    p.add_argument("spec", help="sweep spec (.toml); see missions/sweep-example.toml")
+    p.add_argument("--out", type=Path, required=True, help="folder for the results")
+    p.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="submit to this running Dask scheduler (tcp://HOST:8786) instead of starting a "
+        "local cluster; the scenario files must be readable by its workers at the same paths",
+    )
+    p.add_argument(
+        "--workers",
+        type=int,
+        default=2,
+        help="worker processes of the local cluster (default 2, one thread each)",
+    )
+    p.add_argument(
+        "--resume", action="store_true", help="keep the finished cells in DIR, run the others"
+    )
+    p.add_argument(
+        "--dashboard-address",
+        default="127.0.0.1:0",
+        help="the local cluster's dashboard (default: a free port on 127.0.0.1, printed)",
+    )
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from gcs_planner.sweep import INSTALL_HINT, missing_dependencies
+
+    missing = missing_dependencies()
+    if missing:
+        raise InputError(f"sweep needs {' and '.join(missing)}: {INSTALL_HINT}")
+    if args.workers < 1:
+        raise InputError(f"must be >= 1 (got {args.workers})", field="--workers")
+    if args.scheduler is not None and not args.scheduler.strip():
+        raise InputError("is empty: give the scheduler's address", field="--scheduler")
+
+    from gcs_planner.sweep import read_spec, run_sweep
+
+    spec = read_spec(args.spec)
+    result = run_sweep(
+        spec,
+        args.out,
+        scheduler=args.scheduler,
+        workers=args.workers,
+        resume=args.resume,
+        dashboard_address=args.dashboard_address,
+        stream=sys.stdout,
+    )
+    print(
+        f"{result.ran} cells run ({result.failed} failed, {result.infeasible} infeasible), "
+        f"{result.skipped} already done, in {result.seconds:.1f} s"
+    )
+    print(f"wrote {', '.join(str(p) for p in result.files)}")
+    return 0

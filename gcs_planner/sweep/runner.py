@@ -1,0 +1,227 @@
+"""Running a sweep on Dask: every unfinished cell one task, results saved as cells finish.
+
+By default the sweep starts a ``distributed.LocalCluster`` of worker processes on this machine
+and closes it at the end; given a scheduler address it submits to that cluster instead and
+leaves it running. Dask does the rest a home-made pool would have to: a worker that dies has its
+tasks run again elsewhere (its nanny starts a new one), and the dashboard shows the cluster.
+
+The table is saved at most every ``save_interval`` seconds while cells finish, at the end, and
+when the sweep is interrupted, so a resumed sweep loses at most the cells of the last interval.
+"""
+
+from __future__ import annotations
+
+import itertools
+import logging
+import time
+import uuid
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TextIO
+
+from gcs_planner.errors import InputError
+from gcs_planner.sweep.cells import Cell, expand
+from gcs_planner.sweep.spec import SweepSpec, read_spec
+from gcs_planner.sweep.task import cell_inputs, finish_row, run_cell
+
+SUMMARY_PNG = "summary.png"
+# Cells handed to the scheduler at a time: enough to keep any cluster busy, few enough that a
+# sweep of millions of cells does not hold millions of tasks in the scheduler's memory.
+IN_FLIGHT = 10_000
+DEFAULT_WORKERS = 2
+
+
+@dataclass(frozen=True)
+class SweepResult:
+    out: Path
+    cells: int  # in the spec
+    skipped: int  # finished by an earlier run (--resume)
+    ran: int  # finished by this run
+    failed: int  # of those, status "error"
+    infeasible: int
+    seconds: float
+    dashboard: str
+    files: tuple[Path, ...]
+
+
+class Progress:
+    """Cells done, failed and the ETA on one line: rewritten in place on a terminal, a new line
+    every ``every`` seconds otherwise (a log file should not fill with carriage returns)."""
+
+    def __init__(self, stream: TextIO | None, total: int, every: float = 10.0) -> None:
+        self.stream = stream
+        self.total = total
+        self.tty = bool(stream is not None and stream.isatty())
+        self.every = 0.5 if self.tty else every
+        self.started = time.perf_counter()
+        self.last = 0.0
+
+    def line(self, done: int, failed: int) -> str:
+        elapsed = time.perf_counter() - self.started
+        eta = "-"
+        if 0 < done < self.total:
+            eta = _duration(elapsed / done * (self.total - done))
+        return (
+            f"cells {done}/{self.total} done, {failed} failed, "
+            f"elapsed {_duration(elapsed)}, ETA {eta}"
+        )
+
+    def update(self, done: int, failed: int, final: bool = False) -> None:
+        if self.stream is None:
+            return
+        now = time.perf_counter()
+        if not final and now - self.last < self.every:
+            return
+        self.last = now
+        text = self.line(done, failed)
+        if self.tty:
+            self.stream.write("\r" + text + ("\n" if final else ""))
+        else:
+            self.stream.write(text + "\n")
+        self.stream.flush()
+
+
+def _duration(seconds: float) -> str:
+    seconds = int(round(seconds))
+    if seconds < 60:
+        return f"{seconds}s"
+    minutes, seconds = divmod(seconds, 60)
+    if minutes < 60:
+        return f"{minutes}m{seconds:02d}s"
+    hours, minutes = divmod(minutes, 60)
+    return f"{hours}h{minutes:02d}m"
+
+
+def run_sweep(
+    spec: SweepSpec | str | Path,
+    out: str | Path,
+    *,
+    scheduler: str | None = None,
+    workers: int = DEFAULT_WORKERS,
+    threads_per_worker: int = 1,
+    resume: bool = False,
+    dashboard_address: str = "127.0.0.1:0",
+    save_interval: float = 1.0,
+    stream: TextIO | None = None,
+    task: Callable[[Cell], list[dict]] = run_cell,
+) -> SweepResult:
+    """Run the sweep ``spec`` (a SweepSpec or the path of its TOML) into the folder ``out``.
+
+    ``scheduler``: the address of an existing Dask scheduler (``tcp://host:8786``); without it a
+    LocalCluster of ``workers`` processes is started and closed. ``resume``: keep the finished
+    cells of an earlier run in ``out`` and run only the others. ``stream``: where progress lines
+    go (None: nowhere). ``task`` runs one cell on a worker; it must be importable there.
+    """
+    from gcs_planner.sweep.summary import summary_png
+    from gcs_planner.sweep.table import CSV, PARQUET, ResultTable
+
+    if not isinstance(spec, SweepSpec):
+        spec = read_spec(spec)
+    if workers < 1 or threads_per_worker < 1:
+        raise InputError("workers and threads per worker must be >= 1", field="--workers")
+    out = Path(out)
+    table = ResultTable.open(out, resume)
+    cells = expand(spec)
+    todo = [c for c in cells if c.key not in table.done]
+    skipped = len(cells) - len(todo)
+    say = (lambda text: print(text, file=stream, flush=True)) if stream else (lambda text: None)
+    say(f"sweep {spec.name}: {len(cells)} cells" + (f", {skipped} already done" if skipped else ""))
+
+    started = time.perf_counter()
+    ran, failed, infeasible, dashboard = 0, 0, 0, ""
+    if todo:
+        client, cluster = _connect(scheduler, workers, threads_per_worker, dashboard_address)
+        try:
+            dashboard = client.dashboard_link or ""
+            where = scheduler or f"a local cluster of {workers} worker processes"
+            say(f"running on {where}; dashboard: {dashboard or '(none)'}")
+            progress = Progress(stream, len(todo))
+            ran, failed, infeasible = _run(client, todo, table, task, progress, save_interval)
+        finally:
+            try:
+                table.save()
+            finally:
+                client.close()
+                if cluster is not None:
+                    cluster.close()
+    files = table.save() if not todo else (out / PARQUET, out / CSV)
+    png = summary_png(table.rows, spec.swept, out / SUMMARY_PNG, spec.name)
+    return SweepResult(
+        out=out,
+        cells=len(cells),
+        skipped=skipped,
+        ran=ran,
+        failed=failed,
+        infeasible=infeasible,
+        seconds=time.perf_counter() - started,
+        dashboard=dashboard,
+        files=(*files, png),
+    )
+
+
+def _connect(scheduler: str | None, workers: int, threads: int, dashboard_address: str):
+    from distributed import Client, LocalCluster
+
+    if scheduler is None:
+        cluster = LocalCluster(
+            n_workers=workers,
+            threads_per_worker=threads,
+            processes=True,
+            host="127.0.0.1",
+            dashboard_address=dashboard_address,
+            silence_logs=logging.ERROR,
+        )
+        return Client(cluster), cluster
+    try:
+        return Client(scheduler, timeout="20s"), None
+    except (OSError, ValueError, TypeError) as exc:
+        raise InputError(
+            f"cannot reach the Dask scheduler {scheduler!r}: {exc}", field="--scheduler"
+        ) from None
+
+
+def _run(client, todo: list[Cell], table, task, progress: Progress, save_interval: float):
+    from distributed import as_completed
+
+    token = uuid.uuid4().hex[:8]  # keys unique across sweeps sent to one long-lived scheduler
+    pending = iter(todo)
+    futures: dict = {}
+
+    def submit(n: int) -> list:
+        new = []
+        for cell in itertools.islice(pending, n):
+            future = client.submit(task, cell, key=f"sweep-{token}-{cell.index}-{cell.key}")
+            futures[future] = cell
+            new.append(future)
+        return new
+
+    flow = as_completed(submit(IN_FLIGHT))
+    done = failed = infeasible = 0
+    last_save = time.perf_counter()
+    for future in flow:
+        for new in submit(1):  # one in for each one out: the scheduler holds IN_FLIGHT at most
+            flow.add(new)
+        cell = futures.pop(future)
+        try:
+            rows = future.result()
+        except Exception as exc:  # the task itself could not run (e.g. its worker kept dying)
+            rows = [_error_row(cell, exc)]
+        future.release()
+        if table.add(rows):
+            done += 1
+            status = rows[0].get("status")
+            failed += status == "error"
+            infeasible += status == "infeasible"
+        progress.update(done, failed)
+        if time.perf_counter() - last_save >= save_interval:
+            table.save()
+            last_save = time.perf_counter()
+    progress.update(done, failed, final=True)
+    return done, failed, infeasible
+
+
+def _error_row(cell: Cell, exc: BaseException) -> dict:
+    row = cell_inputs(cell)
+    row.update(status="error", error=f"{type(exc).__name__}: {exc}".splitlines()[0])
+    return finish_row(row, time.perf_counter())

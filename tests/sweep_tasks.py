@@ -1,0 +1,30 @@
+"""Task functions for the sweep's cluster tests: the real cell task, wrapped to leave a trace
+on disk (the workers are other processes) or to kill its own worker process once.
+
+They are pickled by value (cloudpickle) so a worker needs nothing of the tests on its path.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+from pathlib import Path
+
+from gcs_planner.sweep import Cell, run_cell
+
+
+def logged(cell: Cell, *, log: str) -> list[dict]:
+    """run_cell, then one line with the cell's key appended to ``log`` (once it has finished)."""
+    rows = run_cell(cell)
+    with open(log, "a", encoding="utf-8") as f:
+        f.write(cell.key + "\n")
+    return rows
+
+
+def killing_once(cell: Cell, *, victim: int, marker: str, log: str) -> list[dict]:
+    """Cell ``victim`` kills the worker process running it the first time (the marker file says
+    it has); every other run, and that cell's second run, is the real task."""
+    if cell.index == victim and not Path(marker).exists():
+        Path(marker).write_text(str(os.getpid()), encoding="utf-8")
+        os.kill(os.getpid(), signal.SIGKILL)
+    return logged(cell, log=log)

@@ -1,0 +1,177 @@
+"""The sweep's spec, cells and task, without a cluster: what a spec means, how a bad one is
+reported, and what one cell's rows say."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import pytest
+
+from gcs_planner.cli import main
+from gcs_planner.sweep import expand, read_spec, run_cell
+from gcs_planner.sweep.spec import GeneratedSource
+from gcs_planner.vehicle import turn_radius_from
+
+ROOT = Path(__file__).resolve().parents[1]
+EXAMPLE_SPEC = ROOT / "missions" / "sweep-example.toml"
+EXAMPLE_SCENARIO = ROOT / "missions" / "example" / "scenario.toml"
+
+
+def write_spec(tmp_path: Path, text: str, name: str = "spec.toml") -> Path:
+    path = tmp_path / name
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def test_example_spec_expands_scenarios_times_grid() -> None:
+    spec = read_spec(EXAMPLE_SPEC)
+    cells = expand(spec)
+    # the example scenario and four generated ones, x 3 deltas x 2 radii
+    assert len(spec.scenarios) == 5 and len(spec.value_sets) == 6 and len(cells) == 30
+    assert spec.swept == ("delta", "turn_radius")
+    assert len({c.key for c in cells}) == 30
+    assert spec.scenarios[0].describe() == {"file": str(EXAMPLE_SCENARIO)}
+    assert [s.seed for s in spec.scenarios[1:]] == [1, 2, 3, 4]
+    assert spec.dry_run_runs == 100
+
+
+def test_cases_are_crossed_with_the_grid(tmp_path: Path) -> None:
+    spec = read_spec(
+        write_spec(
+            tmp_path,
+            f"""
+[[scenarios]]
+file = "{EXAMPLE_SCENARIO}"
+[grid]
+turn_radius = [0, 200]
+objectives = [["length", "corrections"], "length,corrections,probability"]
+[[cases]]
+leg_model = "cs3d"
+[[cases]]
+delta = 0.0011
+""",
+        )
+    )
+    values = [dict(c.values) for c in expand(spec)]
+    assert len(values) == 2 * 2 * 2
+    assert {"leg_model": "cs3d", "turn_radius": 0.0, "objectives": ("length", "corrections")} in (
+        values
+    )
+    assert {
+        "delta": 0.0011,
+        "turn_radius": 200.0,
+        "objectives": ("length", "corrections", "probability"),
+    } in values
+    assert spec.swept == ("leg_model", "turn_radius", "objectives", "delta")
+
+
+def test_cell_key_does_not_depend_on_the_order_of_cells(tmp_path: Path) -> None:
+    a = write_spec(
+        tmp_path,
+        f'[[scenarios]]\nfile = "{EXAMPLE_SCENARIO}"\n[grid]\ndelta = [1e-3, 2e-3]\n',
+        "a.toml",
+    )
+    b = write_spec(
+        tmp_path,
+        f'[[scenarios]]\nfile = "{EXAMPLE_SCENARIO}"\n[grid]\ndelta = [2e-3, 1e-3]\n',
+        "b.toml",
+    )
+    ka = {dict(c.values)["delta"]: c.key for c in expand(read_spec(a))}
+    kb = {dict(c.values)["delta"]: c.key for c in expand(read_spec(b))}
+    assert ka == kb
+
+
+BAD_SPECS = [
+    # (spec text, what the one line must say)
+    ('[[scenarios]]\nfile = "nope.toml"\n', "row 2, field 'scenarios[1].file'"),
+    (
+        f'[[scenarios]]\nfile = "{EXAMPLE_SCENARIO}"\n\n[grid]\ndelta = [0.001, "x"]\n',
+        "row 5, field 'grid.delta': must be a finite number",
+    ),
+    (
+        f'[[scenarios]]\nfile = "{EXAMPLE_SCENARIO}"\n[grid]\nalpah1 = [1]\n',
+        "row 4, field 'grid.alpah1': unknown key",
+    ),
+    (
+        f'[[scenarios]]\nfile = "{EXAMPLE_SCENARIO}"\n[grid]\np_success = [1.5]\n',
+        "field 'grid.p_success': p_success must lie in [0, 1]",
+    ),
+    (
+        f'[[scenarios]]\nfile = "{EXAMPLE_SCENARIO}"\n[[scenarios]]\ngenerate = "random"\n'
+        "corrections = 10\nseeds = [1, -2]\n",
+        "row 6, field 'scenarios[2].seeds'",
+    ),
+    (
+        f'[[scenarios]]\nfile = "{EXAMPLE_SCENARIO}"\n[grid]\nleg_model = ["plane"]\n',
+        "field 'grid.leg_model': unknown leg model 'plane'",
+    ),
+    (
+        f'[[scenarios]]\nfile = "{EXAMPLE_SCENARIO}"\n[plan]\nobjectives = ["length", "time"]\n',
+        "row 4, field 'plan.objectives': unknown objective 'time'",
+    ),
+    (
+        f'[[scenarios]]\nfile = "{EXAMPLE_SCENARIO}"\n[dry_run]\nruns = 0\n',
+        "row 4, field 'dry_run.runs'",
+    ),
+    ("name = 'x'\n", "field 'scenarios': no [[scenarios]]"),
+    ("[[scenarios]\n", "row 1: TOML syntax error"),
+]
+
+
+@pytest.mark.parametrize(("text", "said"), BAD_SPECS)
+def test_bad_spec_is_one_line_with_file_row_field_and_exit_2(
+    tmp_path: Path, capsys: pytest.CaptureFixture, text: str, said: str
+) -> None:
+    spec = write_spec(tmp_path, text)
+    code = main(["sweep", str(spec), "--out", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert err.count("\n") == 1 and "Traceback" not in err
+    assert err.startswith(f"gcs-planner: error: {spec}, ")
+    assert said in err
+    assert not (tmp_path / "out").exists()
+
+
+def test_without_dask_sweep_says_how_to_install_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # A None entry in sys.modules is how Python marks a module as not importable.
+    monkeypatch.setitem(sys.modules, "distributed", None)
+    code = main(["sweep", str(EXAMPLE_SPEC), "--out", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1
+    assert "sweep needs distributed" in err and "pip install 'gcs-planner[sweep]'" in err
+
+
+def test_a_cell_whose_scenario_cannot_be_read_is_an_error_row(tmp_path: Path) -> None:
+    points = tmp_path / "points.csv"
+    points.write_text("id,x,y,z,kind,unreliable\n0,0,0,0,A,0\n1,5,5,oops,V,0\n2,9,9,9,B,0\n")
+    scenario = tmp_path / "bad.toml"
+    scenario.write_text(
+        'points = "points.csv"\n[parameters]\nalpha1 = 25\nalpha2 = 15\nbeta1 = 20\n'
+        "beta2 = 25\ntheta = 30\ndelta = 0.001\n"
+    )
+    spec = read_spec(write_spec(tmp_path, '[[scenarios]]\nfile = "bad.toml"\n'))
+    (rows,) = [run_cell(c) for c in expand(spec)]
+    assert len(rows) == 1
+    assert rows[0]["status"] == "error"
+    assert "InputError" in rows[0]["error"] and "row 3" in rows[0]["error"]
+
+
+def test_generated_cell_applies_bank_angle_and_leg_model(tmp_path: Path) -> None:
+    spec = read_spec(
+        write_spec(
+            tmp_path,
+            '[[scenarios]]\ngenerate = "random"\ncorrections = 20\nseeds = [3]\n'
+            "box = [40000, 20000, 2000]\n[grid]\ncruise_airspeed = 30\nmax_bank_angle = 40\n"
+            'leg_model = "cs3d"\n[plan]\nobjectives = ["length", "corrections"]\n',
+        )
+    )
+    (cell,) = expand(spec)
+    assert isinstance(cell.source, GeneratedSource)
+    rows = run_cell(cell)
+    assert rows and all(r["status"] == "ok" for r in rows)
+    assert rows[0]["turn_radius"] == pytest.approx(turn_radius_from(30.0, 40.0))
+    assert rows[0]["leg_model"] == "cs3d" and rows[0]["cruise_airspeed"] == 30.0
+    assert sum(r["chosen"] for r in rows) == 1

@@ -1,0 +1,356 @@
+"""The sweep on a real dask.distributed cluster (worker processes on 127.0.0.1, no mocks): the
+same rows as planning each cell alone, a failing cell recorded while the rest finish, --resume
+running no finished cell twice, a killed worker's cells run again with nothing lost, and the
+command line on its own local cluster and on a separately started scheduler.
+
+No timing is asserted; every wait is for an event, with a generous deadline.
+"""
+
+from __future__ import annotations
+
+import functools
+import os
+import signal
+import subprocess
+import sys
+import time
+from collections import Counter
+from pathlib import Path
+
+import cloudpickle
+import pytest
+import sweep_tasks
+from distributed import LocalCluster
+
+from gcs_planner.core.planner import plan
+from gcs_planner.scenario.generate import DATASET1, random_scenario
+from gcs_planner.scenario.readers import load_scenario
+from gcs_planner.sweep import expand, read_results, read_spec, run_sweep, runner
+from gcs_planner.sweep.table import PARQUET, ResultTable
+
+cloudpickle.register_pickle_by_value(sweep_tasks)
+
+ROOT = Path(__file__).resolve().parents[1]
+EXAMPLE_SCENARIO = ROOT / "missions" / "example" / "scenario.toml"
+BIN = Path(sys.executable).parent
+DEADLINE_S = 300.0
+SMALL_BOX = "[40000, 20000, 2000]"
+
+
+@pytest.fixture(scope="module")
+def cluster():
+    with LocalCluster(
+        n_workers=2,
+        threads_per_worker=1,
+        processes=True,
+        host="127.0.0.1",
+        dashboard_address="127.0.0.1:0",
+    ) as c:
+        yield c
+
+
+def write_spec(tmp_path: Path, text: str, name: str = "spec.toml") -> Path:
+    path = tmp_path / name
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def small_spec(tmp_path: Path, seeds: int = 3, deltas: str = "[0.001, 0.0011]") -> Path:
+    return write_spec(
+        tmp_path,
+        f"""
+[[scenarios]]
+file = "{EXAMPLE_SCENARIO}"
+[[scenarios]]
+generate = "random"
+corrections = 24
+seeds = {{ first = 1, count = {seeds} }}
+box = {SMALL_BOX}
+[grid]
+delta = {deltas}
+[plan]
+objectives = ["length", "corrections"]
+""",
+    )
+
+
+def by_cell(rows: list[dict]) -> dict[str, list[dict]]:
+    out: dict[str, list[dict]] = {}
+    for r in rows:
+        out.setdefault(r["cell_key"], []).append(r)
+    return out
+
+
+def logged_keys(log: Path) -> Counter:
+    return Counter(log.read_text().split()) if log.exists() else Counter()
+
+
+def test_sweep_gives_the_rows_of_planning_each_cell_alone(tmp_path: Path, cluster) -> None:
+    spec_path = write_spec(
+        tmp_path,
+        f"""
+[[scenarios]]
+file = "{EXAMPLE_SCENARIO}"
+[[scenarios]]
+generate = "random"
+corrections = 30
+seeds = [5, 6]
+box = {SMALL_BOX}
+[grid]
+turn_radius = [0, 200]
+objectives = [["length", "corrections"], ["length", "corrections", "probability"]]
+""",
+    )
+    result = run_sweep(spec_path, tmp_path / "out", scheduler=cluster.scheduler_address)
+    assert (result.cells, result.ran, result.failed) == (12, 12, 0)
+    rows = read_results(tmp_path / "out")
+    cells = by_cell(rows)
+    assert len(cells) == 12
+    for cell in expand(read_spec(spec_path)):
+        values = dict(cell.values)
+        # Planned here, independently of the sweep's task: read or generate, override, plan.
+        if cell.index < 4:
+            scenario = load_scenario(EXAMPLE_SCENARIO, {"turn_radius": values["turn_radius"]})
+        else:
+            seed = 5 if cell.index < 8 else 6
+            scenario = random_scenario(
+                30, seed, params=DATASET1, box=(40000.0, 20000.0, 2000.0)
+            ).with_params(turn_radius=values["turn_radius"])
+        alone = plan(scenario, objectives=values["objectives"])
+        got = sorted(cells[cell.key], key=lambda r: r["route"])
+        assert [r["route_ids"] for r in got] == [" ".join(r.ids()) for r in alone.routes]
+        assert [r["length"] for r in got] == pytest.approx([r.length for r in alone.routes])
+        assert [r["corrections"] for r in got] == [r.corrections for r in alone.routes]
+        assert [r["probability"] for r in got] == pytest.approx(
+            [r.probability for r in alone.routes]
+        )
+        assert [r["gap"] for r in got] == pytest.approx(list(alone.gaps()), abs=1e-6)
+        assert [r["chosen"] for r in got] == [i == alone.chosen for i in range(len(got))]
+        assert all(r["proven"] == alone.optimal and r["status"] == "ok" for r in got)
+        assert all(r["objectives"] == ",".join(values["objectives"]) for r in got)
+    assert (tmp_path / "out" / "results.csv").read_text().count("\n") == len(rows) + 1
+    assert (tmp_path / "out" / "summary.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_a_failing_cell_is_recorded_and_the_others_finish(tmp_path: Path, cluster) -> None:
+    (tmp_path / "points.csv").write_text(
+        "id,x,y,z,kind,unreliable\n0,0,0,0,A,0\n1,5,5,5,V,7\n2,9,9,9,B,0\n"
+    )
+    (tmp_path / "bad.toml").write_text(
+        'points = "points.csv"\n[parameters]\nalpha1 = 25\nalpha2 = 15\nbeta1 = 20\n'
+        "beta2 = 25\ntheta = 30\ndelta = 0.001\n"
+    )
+    spec_path = write_spec(
+        tmp_path,
+        f"""
+[[scenarios]]
+generate = "random"
+corrections = 24
+seeds = [1, 2]
+box = {SMALL_BOX}
+[[scenarios]]
+file = "bad.toml"
+[[scenarios]]
+file = "{EXAMPLE_SCENARIO}"
+[grid]
+turn_radius = [0, 200]
+""",
+    )
+    result = run_sweep(spec_path, tmp_path / "out", scheduler=cluster.scheduler_address)
+    assert (result.ran, result.failed) == (8, 2)
+    cells = by_cell(read_results(tmp_path / "out"))
+    assert len(cells) == 8
+    failed = [rows for rows in cells.values() if rows[0]["status"] == "error"]
+    assert len(failed) == 2
+    for rows in failed:
+        assert len(rows) == 1 and rows[0]["source"] == str(tmp_path / "bad.toml")
+        assert "row 3" in rows[0]["error"] and "unreliable" in rows[0]["error"]
+        assert rows[0]["length"] is None
+    ok = [rows for rows in cells.values() if rows[0]["status"] == "ok"]
+    assert len(ok) == 6 and all(r["length"] > 0 for rows in ok for r in rows)
+
+
+def test_resume_runs_no_finished_cell_twice(tmp_path: Path, cluster) -> None:
+    log = tmp_path / "ran.log"
+    task = functools.partial(sweep_tasks.logged, log=str(log))
+    out = tmp_path / "out"
+    # The first sweep finishes half of the cells (as an interrupted one would have) ...
+    first = run_sweep(
+        small_spec(tmp_path, deltas="[0.001]"), out, scheduler=cluster.scheduler_address, task=task
+    )
+    assert first.ran == 4
+    before = {(r["cell_key"], r["route"]): r for r in read_results(out)}
+    # ... without --resume a second sweep into the same folder is refused ...
+    with pytest.raises(Exception, match="pass --resume"):
+        run_sweep(small_spec(tmp_path), out, scheduler=cluster.scheduler_address, task=task)
+    # ... and with it only the other half runs.
+    second = run_sweep(
+        small_spec(tmp_path), out, scheduler=cluster.scheduler_address, task=task, resume=True
+    )
+    assert (second.cells, second.skipped, second.ran) == (8, 4, 4)
+    ran = logged_keys(log)
+    assert len(ran) == 8 and set(ran.values()) == {1}
+    after = {(r["cell_key"], r["route"]): r for r in read_results(out)}
+    assert {k[0] for k in after} == set(ran)
+    for key, row in before.items():
+        assert after[key] == row  # the earlier rows are kept as they were, not re-planned
+    # A third resume has nothing left to do and submits nothing.
+    third = run_sweep(small_spec(tmp_path), out, task=task, resume=True)
+    assert (third.skipped, third.ran) == (8, 0)
+    assert logged_keys(log) == ran
+
+
+def test_a_killed_worker_s_cells_are_run_again_and_nothing_is_lost(tmp_path: Path, cluster) -> None:
+    log, marker = tmp_path / "ran.log", tmp_path / "killed"
+    task = functools.partial(sweep_tasks.killing_once, victim=2, marker=str(marker), log=str(log))
+    spec_path = small_spec(tmp_path, seeds=4)
+    result = run_sweep(spec_path, tmp_path / "out", scheduler=cluster.scheduler_address, task=task)
+    assert marker.exists()  # the victim did kill its worker
+    killed_pid = int(marker.read_text())
+    assert (result.ran, result.failed) == (10, 0)
+    rows = read_results(tmp_path / "out")
+    cells = by_cell(rows)
+    assert len(cells) == 10 and all(r["status"] == "ok" for r in rows)
+    # Every cell finished; one whose result was still held by the killed worker was computed
+    # again (Dask recomputes lost results), but the table has each cell and route once.
+    assert set(logged_keys(log)) == set(cells)
+    assert all(n == 1 for n in Counter((r["cell_key"], r["route"]) for r in rows).values())
+    victim = next(c for c in expand(read_spec(spec_path)) if c.index == 2)
+    redone = cells[victim.key]
+    assert all(int(r["worker"].rsplit(":", 1)[1]) != killed_pid for r in redone)
+    alone = sweep_tasks.run_cell(victim)
+    assert [r["length"] for r in redone] == pytest.approx([r["length"] for r in alone])
+    assert [r["route_ids"] for r in redone] == [r["route_ids"] for r in alone]
+
+
+def test_more_cells_than_the_in_flight_window_all_finish(
+    tmp_path: Path, cluster, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # The window is a tuning constant; a small one makes this sweep refill it many times.
+    monkeypatch.setattr(runner, "IN_FLIGHT", 3)
+    log = tmp_path / "ran.log"
+    task = functools.partial(sweep_tasks.logged, log=str(log))
+    result = run_sweep(
+        small_spec(tmp_path, seeds=5),
+        tmp_path / "out",
+        scheduler=cluster.scheduler_address,
+        task=task,
+    )
+    assert (result.cells, result.ran) == (12, 12)
+    assert len(by_cell(read_results(tmp_path / "out"))) == 12
+    assert set(logged_keys(log).values()) == {1} and len(logged_keys(log)) == 12
+
+
+def wait_for(condition, what: str, proc: subprocess.Popen | None = None) -> None:
+    deadline = time.monotonic() + DEADLINE_S
+    while not condition():
+        if proc is not None and proc.poll() is not None:
+            raise AssertionError(f"process ended (code {proc.returncode}) before {what}")
+        if time.monotonic() > deadline:
+            raise AssertionError(f"gave up waiting for {what}")
+        time.sleep(0.05)
+
+
+def cli(*args: str) -> list[str]:
+    return [str(BIN / "gcs-planner"), "sweep", *args]
+
+
+def test_cli_interrupted_sweep_resumes_where_it_stopped(tmp_path: Path) -> None:
+    spec_path = small_spec(tmp_path, seeds=39, deltas="[0.001]")  # 40 cells
+    out = tmp_path / "out"
+    proc = subprocess.Popen(
+        cli(str(spec_path), "--out", str(out)),
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        wait_for(lambda: (out / PARQUET).exists(), "the first save of results", proc)
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=DEADLINE_S)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 130, err
+    assert "interrupted" in err and "Traceback" not in err
+    first = read_results(out)
+    done_first = {r["cell_key"] for r in first}
+    assert 0 < len(done_first) < 40
+
+    again = subprocess.run(
+        cli(str(spec_path), "--out", str(out), "--resume"),
+        capture_output=True,
+        text=True,
+        timeout=DEADLINE_S,
+    )
+    assert again.returncode == 0, again.stderr
+    assert f"{len(done_first)} already done" in again.stdout
+    assert f"{40 - len(done_first)} cells run" in again.stdout
+    rows = read_results(out)
+    keys = by_cell(rows)
+    assert len(keys) == 40 and all(r["status"] == "ok" for r in rows)
+    kept = {(r["cell_key"], r["route"]): r for r in first}
+    for r in rows:
+        if r["cell_key"] in done_first:
+            assert r == kept[(r["cell_key"], r["route"])]
+    assert len(ResultTable.open(out, resume=True).rows) == len(rows)
+
+
+def test_cli_on_a_separately_started_scheduler_and_workers(tmp_path: Path) -> None:
+    scheduler_file = tmp_path / "scheduler.json"
+    procs = [
+        subprocess.Popen(
+            [str(BIN / "dask"), "scheduler", "--host", "127.0.0.1", "--port", "0",
+             "--no-dashboard", "--scheduler-file", str(scheduler_file)],
+            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+        )
+    ]  # fmt: skip
+    try:
+        wait_for(scheduler_file.exists, "the scheduler file", procs[0])
+        wait_for(lambda: "address" in scheduler_file.read_text(), "the scheduler's address")
+        import json
+
+        address = json.loads(scheduler_file.read_text())["address"]
+        assert address.startswith("tcp://127.0.0.1:")
+        procs.append(
+            subprocess.Popen(
+                [str(BIN / "dask"), "worker", address, "--nworkers", "2", "--nthreads", "1",
+                 "--host", "127.0.0.1", "--no-dashboard"],
+                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+            )
+        )  # fmt: skip
+        done = subprocess.run(
+            cli(str(small_spec(tmp_path)), "--out", str(tmp_path / "out"), "--scheduler", address),
+            capture_output=True,
+            text=True,
+            timeout=DEADLINE_S,
+        )
+        assert done.returncode == 0, done.stderr
+        assert f"running on {address}" in done.stdout
+        assert "8 cells run (0 failed, 0 infeasible)" in done.stdout
+        rows = read_results(tmp_path / "out")
+        assert len(by_cell(rows)) == 8 and all(r["status"] == "ok" for r in rows)
+        # the workers were the separately started ones, not this test's or the command's
+        pids = {int(r["worker"].rsplit(":", 1)[1]) for r in rows}
+        assert os.getpid() not in pids and done.returncode == 0
+        # and the scheduler is still there for the next sweep
+        assert procs[0].poll() is None
+    finally:
+        for p in reversed(procs):
+            p.terminate()
+        for p in reversed(procs):
+            try:
+                p.wait(timeout=60)
+            except subprocess.TimeoutExpired:
+                p.kill()
+
+
+def test_cli_bad_scheduler_address_is_one_line(tmp_path: Path) -> None:
+    done = subprocess.run(
+        cli(str(small_spec(tmp_path)), "--out", str(tmp_path / "out"), "--scheduler", "nope:::"),
+        capture_output=True,
+        text=True,
+        timeout=DEADLINE_S,
+    )
+    assert done.returncode == 2
+    assert done.stderr.count("\n") == 1 and "field '--scheduler'" in done.stderr
