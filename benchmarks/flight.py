@@ -65,7 +65,7 @@ def run_flight(specs: list[str], runs: int) -> list[FlightRow]:
                 plan_to_dict(result),
                 route_index=longest,
                 firmware=flavour,
-                capture_radius=DRY_RUN_ACCEPTANCE_RADIUS_M,
+                acceptance_radius=DRY_RUN_ACCEPTANCE_RADIUS_M,
             )
             home = flavour == "ardupilot"
             ap = AutopilotParams(

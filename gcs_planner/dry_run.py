@@ -237,7 +237,7 @@ def dry_run(
         request_timeout = min(VEHICLE_REQUEST_TIMEOUT_S, timeout * (retries + 1) / 4)
     route = plan.route
     plan_dict = plan_to_dict(plan)
-    mission = build_mission(plan_dict, firmware=flavour, capture_radius=acceptance_radius)
+    mission = build_mission(plan_dict, firmware=flavour, acceptance_radius=acceptance_radius)
     loiter = mission.loiter_param[1] if mission.loiter_param else None
     faults = FaultRates(drop=loss) if loss > 0 else None
     port = free_udp_port()

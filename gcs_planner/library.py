@@ -101,7 +101,7 @@ def write_mission(
     """Write a route of ``plan`` (the chosen one by default) as the file ``path`` names by its
     suffix: ``.plan`` (QGroundControl), ``.waypoints`` (Mission Planner), ``.geojson``, ``.kml``
     or ``.csv``. ``mission_options`` are the exporter's (``firmware``, ``altitude_frame``,
-    ``capture_radius``, ``cruise_speed``, ``at_end``, ``origin``).
+    ``acceptance_radius``, ``cruise_speed``, ``at_end``, ``origin``).
 
     A route less likely to arrive than the plan's ``min_probability`` raises
     :class:`~gcs_planner.policy.RiskyRouteError` unless ``allow_risky``; any route below the

@@ -82,7 +82,10 @@ MAX_CHORD_ERROR_M = 2.0
 # * the ACCEPTANCE radius is the autopilot's: within it a waypoint counts as reached and the
 #   autopilot moves on to the next item (MAV_CMD_NAV_WAYPOINT param2).
 DEFAULT_CAPTURE_RADIUS_M = 5.0
-DEFAULT_ACCEPTANCE_RADIUS_M = 50.0
+# 1 m: a fixed wing then counts a waypoint reached when it crosses the line through it square to
+# its track (ArduPlane's finish line), so it overflies the landmark; a 50 m radius lets ArduPlane
+# turn for the next item early and pass a correction point by more than the capture radius.
+DEFAULT_ACCEPTANCE_RADIUS_M = 1.0
 
 
 def turn_radius_from(airspeed: float, bank_deg: float) -> float:

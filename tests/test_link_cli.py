@@ -40,7 +40,7 @@ def _plan_file(tmp_path: Path, firmware: str) -> Path:
         cruise_speed=25.0,
         turn_radius=200.0,
         loiter_param=None,
-        capture_radius=50.0,
+        acceptance_radius=50.0,
         origin=Origin(30.5, 123.5, 0.0),
         origin_is_default=False,
     )

@@ -69,7 +69,7 @@ def test_mavsdk_imports_the_projects_plan_uploads_to_mock_vehicle_and_downloads_
         cruise_speed=25.0,
         turn_radius=200.0,
         loiter_param=("NAV_LOITER_RAD", 200.0),
-        capture_radius=50.0,
+        acceptance_radius=50.0,
         origin=Origin(30.5, 123.5, 0.0),
         origin_is_default=False,
     )

@@ -20,7 +20,7 @@ from gcs_planner.core.bnb import flown_route
 from gcs_planner.errors import InputError
 from gcs_planner.geometry.dubins import cs_leg
 from gcs_planner.mission.builder import (
-    DEFAULT_CAPTURE_RADIUS,
+    DEFAULT_ACCEPTANCE_RADIUS,
     DEFAULT_CRUISE_SPEED,
     Mission,
     arc_step,
@@ -162,7 +162,7 @@ def test_ardupilot_mission_layout():
     for pid in route[1:]:
         it = m.items[m.seq_of(pid)]
         assert it.command == MAV_CMD_NAV_WAYPOINT
-        assert it.param2 == DEFAULT_CAPTURE_RADIUS and it.param3 == 0.0
+        assert it.param2 == DEFAULT_ACCEPTANCE_RADIUS and it.param3 == 0.0
         assert it.param2 == int(it.param2)
     assert m.items[-1].command == MAV_CMD_NAV_LOITER_UNLIM
     assert m.loiter_param == ("WP_LOITER_RAD", 200.0)
@@ -350,8 +350,8 @@ def test_origin_resolution():
         ({"firmware": "inav"}, "firmware"),
         ({"altitude_frame": "terrain"}, "altitude-frame"),
         ({"at_end": "crash"}, "at-end"),
-        ({"capture_radius": 12.5}, "capture-radius"),
-        ({"capture_radius": 0}, "capture-radius"),
+        ({"acceptance_radius": 12.5}, "acceptance-radius"),
+        ({"acceptance_radius": 0}, "acceptance-radius"),
         ({"cruise_speed": -3}, "cruise-speed"),
         ({"cruise_speed": float("nan")}, "cruise-speed"),
         ({"route_index": 3}, "--route-index"),

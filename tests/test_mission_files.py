@@ -245,7 +245,7 @@ def test_write_all_leaves_the_folder_alone_on_bad_input(tmp_path):
     out.mkdir()
     (out / "mission.plan").write_text("old")
     with pytest.raises(InputError):
-        write_all(make_plan(), out, capture_radius=2.5)
+        write_all(make_plan(), out, acceptance_radius=2.5)
     with pytest.raises(InputError):
         write_all({"format": "nope"}, out)
     assert [f.name for f in out.iterdir()] == ["mission.plan"]
@@ -283,7 +283,7 @@ def test_export_command_options(plan_file, tmp_path):
             "--origin", "10,20,5"]  # fmt: skip
     assert main(args) == 0
     expected = build_mission(
-        make_plan(), firmware="px4", altitude_frame="relative", capture_radius=30,
+        make_plan(), firmware="px4", altitude_frame="relative", acceptance_radius=30,
         cruise_speed=31, at_end="rtl", route_index=1, origin=Origin(10, 20, 5),
     )  # fmt: skip
     back = read_waypoints(out, firmware="px4")

@@ -9,7 +9,7 @@ from pathlib import Path
 from gcs_planner.errors import InputError
 from gcs_planner.mission.builder import (
     ALTITUDE_FRAMES,
-    DEFAULT_CAPTURE_RADIUS,
+    DEFAULT_ACCEPTANCE_RADIUS,
     DEFAULT_CRUISE_SPEED,
     END_ACTIONS,
     FIRMWARES,
@@ -38,9 +38,9 @@ def add_mission_arguments(p: argparse.ArgumentParser) -> None:
         "--capture-radius",
         dest="acceptance_radius",
         type=float,
-        default=DEFAULT_CAPTURE_RADIUS,
+        default=DEFAULT_ACCEPTANCE_RADIUS,
         help="waypoint acceptance radius of the correction waypoints, whole metres "
-        f"(default {DEFAULT_CAPTURE_RADIUS}; --capture-radius is a deprecated alias)",
+        f"(default {DEFAULT_ACCEPTANCE_RADIUS}; --capture-radius is a deprecated alias)",
     )
     g.add_argument(
         "--cruise-speed",
@@ -57,7 +57,7 @@ def mission_options(args: argparse.Namespace, source: str = "") -> dict:
         "route_index": args.route_index,
         "firmware": args.firmware,
         "altitude_frame": args.altitude_frame,
-        "capture_radius": args.acceptance_radius,
+        "acceptance_radius": args.acceptance_radius,
         "cruise_speed": args.cruise_speed,
         "at_end": args.at_end,
         "origin": None if args.origin is None else parse_origin(args.origin),

@@ -70,7 +70,7 @@ from gcs_planner.vehicle import (
 # The waypoint acceptance radius (param2 of each correction waypoint): within it the autopilot
 # counts the waypoint reached. 50 m is a quarter of the 200 m turning radius: loose enough that a
 # fixed wing in wind does not miss the point and circle back.
-DEFAULT_CAPTURE_RADIUS = int(DEFAULT_ACCEPTANCE_RADIUS_M)
+DEFAULT_ACCEPTANCE_RADIUS = int(DEFAULT_ACCEPTANCE_RADIUS_M)
 DEFAULT_CRUISE_SPEED = DEFAULT_CRUISE_AIRSPEED
 # QGroundControl's default hover speed; meaningless for a fixed wing but the .plan carries it.
 HOVER_SPEED = 5.0
@@ -97,7 +97,7 @@ class Mission:
     # (parameter name, value) the link sets on upload; None when the plan has no turning radius
     # (setting a loiter radius of 0 would break the autopilot's loiters).
     loiter_param: tuple[str, float] | None
-    capture_radius: float  # m, param2 of every correction waypoint
+    acceptance_radius: float  # m, param2 of every correction waypoint (the autopilot's radius)
     origin: Origin
     origin_is_default: bool
     altitude_frame: str = "amsl"
@@ -313,7 +313,7 @@ def build_mission(
     route_index: int | None = None,
     firmware: str = "ardupilot",
     altitude_frame: str = "amsl",
-    capture_radius: float = DEFAULT_CAPTURE_RADIUS,
+    acceptance_radius: float = DEFAULT_ACCEPTANCE_RADIUS,
     cruise_speed: float = DEFAULT_CRUISE_SPEED,
     at_end: str = "loiter",
     origin: Origin | None = None,
@@ -326,7 +326,7 @@ def build_mission(
     error messages.
     """
     speed = _check_options(firmware, altitude_frame, at_end, cruise_speed)
-    capture = _whole_metres(capture_radius, "capture-radius")
+    capture = _whole_metres(acceptance_radius, "acceptance-radius")
     k, entry = route_entry(plan, route_index, source)
     legs = route_legs(entry, source)
     ids = [str(p) for p in entry["route"]]
@@ -434,7 +434,7 @@ def build_mission(
         cruise_speed=speed,
         turn_radius=radius,
         loiter_param=(LOITER_RADIUS_PARAM[firmware][0], radius) if radius > 0 else None,
-        capture_radius=float(capture),
+        acceptance_radius=float(capture),
         origin=org,
         origin_is_default=org_default,
         altitude_frame=altitude_frame,
