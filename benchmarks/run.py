@@ -109,7 +109,7 @@ def parse(argv: list[str] | None) -> tuple[Config, bool]:
             command=f"{COMMAND} --quick",
             upload_items=100,
             sweep_scenarios=4,
-            sweep_corrections=150,
+            sweep_corrections=40,
         )
     else:
         cfg = Config(

@@ -175,3 +175,18 @@ def test_generated_cell_applies_bank_angle_and_leg_model(tmp_path: Path) -> None
     assert rows[0]["turn_radius"] == pytest.approx(turn_radius_from(30.0, 40.0))
     assert rows[0]["leg_model"] == "cs3d" and rows[0]["cruise_airspeed"] == 30.0
     assert sum(r["chosen"] for r in rows) == 1
+
+
+def test_out_that_is_a_file_is_bad_input(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    out = tmp_path / "out"
+    out.write_text("not a folder")
+    code = main(["sweep", str(EXAMPLE_SPEC), "--out", str(out)])
+    err = capsys.readouterr().err
+    assert (
+        code == 2 and err == f"gcs-planner: error: {out}: is a file, not a folder for the results\n"
+    )
+
+
+def test_workers_below_one_is_bad_input(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    code = main(["sweep", str(EXAMPLE_SPEC), "--out", str(tmp_path / "o"), "--workers", "0"])
+    assert code == 2 and "field '--workers'" in capsys.readouterr().err
