@@ -1,6 +1,7 @@
 """The benchmark suite: the project's exact search against NSGA-II, a MILP and a plain label
 search; scaling with the number of points; turns and uncertain corrections; the paper's routes;
-mission upload over loopback; sweeps on Dask against a serial loop.
+mission upload over loopback; sweeps on Dask against a serial loop; the mock vehicle flying the
+longest front route.
 
     python -m benchmarks                       # the full run (tens of minutes)
     python -m benchmarks --quick               # smoke run in seconds (CI)
@@ -19,7 +20,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from benchmarks import methods, paper, profiling, scaling, turns, upload
+from benchmarks import flight, flyable, methods, paper, profiling, scaling, startup, turns, upload
 from benchmarks import sweep as sweep_bench
 from benchmarks.cases import DATA, DATASETS, valid_spec
 from benchmarks.report import machine
@@ -46,7 +47,7 @@ class Config:
     sweep_corrections: int = sweep_bench.CORRECTIONS
 
 
-def parse(argv: list[str] | None) -> tuple[Config, bool]:
+def parse(argv: list[str] | None) -> tuple[Config, bool, bool]:
     ap = argparse.ArgumentParser(
         prog=COMMAND,
         description="Benchmarks of the exact search against NSGA-II, a MILP and a plain search.",
@@ -84,6 +85,11 @@ def parse(argv: list[str] | None) -> tuple[Config, bool]:
         "--profile",
         action="store_true",
         help="only profile straight_front (dataset 1, 5,000 points) and print it",
+    )
+    ap.add_argument(
+        "--startup",
+        action="store_true",
+        help="only time the command line's start (section 6) and print it",
     )
     ap.add_argument("--out", type=Path, default=DEFAULT_OUT)
     args = ap.parse_args(argv)
@@ -124,7 +130,7 @@ def parse(argv: list[str] | None) -> tuple[Config, bool]:
             out=args.out,
             command=" ".join([COMMAND, *(argv if argv is not None else sys.argv[1:])]),
         )
-    return cfg, args.profile
+    return cfg, args.profile, args.startup
 
 
 def run(cfg: Config) -> str:
@@ -171,10 +177,14 @@ def run(cfg: Config) -> str:
     print("3. turns and uncertain corrections ...", flush=True)
     trows = turns.run_turns(cfg.scenarios, cfg.runs)
     sections.append(
-        f"## 3. Turns (R = {turns.TURN_RADIUS:g} m) and uncertain corrections\n\n"
-        "`plan(scenario, objectives=...)` in this process, median of "
-        f"{cfg.runs} runs. Largest gap: the largest distance between a front route's length "
-        "and its proven lower bound.\n\n" + turns.render(trows)
+        f"## 3. Every mode: straight legs and turns (R = {turns.TURN_RADIUS:g} m), two and "
+        "three objectives, heading at A free or given\n\n"
+        "`plan(scenario, objectives=...)` in this process with the default budget, median of "
+        f'{cfg.runs} runs. Proof: "proven" (the exact front), or the largest gap between a '
+        "front route's length and its proven lower bound, how many routes are settled (their "
+        '"optimal" flag holds: no open partial route may still add a route with no more '
+        "corrections or a higher probability) and the length below which the front is "
+        "complete.\n\n" + turns.render(trows)
     )
     print(sections[-1], flush=True)
 
@@ -195,20 +205,50 @@ def run(cfg: Config) -> str:
     sections.append(
         "## 5. Mission upload over loopback\n\n"
         f"The project's client uploads a {items:,}-item mission to the mock vehicle over UDP "
-        "127.0.0.1 and reads it back to verify it (`sim.vehicle.benchmark_upload`), no faults; "
+        "127.0.0.1 and reads it back to verify it (`benchmarks.upload.benchmark_upload`), no "
+        "faults; "
         f"medians of {cfg.runs} runs.\n\n" + upload.render(upload.run_upload(items, cfg.runs))
     )
     print(sections[-1], flush=True)
 
-    print("6. sweeps on Dask ...", flush=True)
+    print("6. flyable routes ...", flush=True)
+    frows = flyable.run_flyable(cfg.scenarios, 1)
+    sections.append(
+        "## 6. Flyable routes: airplane legs under climb limits\n\n"
+        "`plan(scenario, objectives=...)`, one run each: straight legs, the tilted-plane cs3d "
+        f"leg and airplane legs (R = {flyable.TURN_RADIUS:g} m; horizontal turns, a constant "
+        "flight-path angle within the limits, helices where a leg is too steep). The shortest "
+        "route of each front against the straight-leg front's, the shortest route certain to "
+        "arrive, the steepest leg of any front route and the helix turns the front flies. "
+        "Proof: 'proven' is an exhausted search; otherwise the largest gap between a front "
+        "route and its proven lower bound (default label budget).\n\n" + flyable.render(frows)
+    )
+    print(sections[-1], flush=True)
+
+    print("7. sweeps on Dask ...", flush=True)
     n, k = cfg.sweep_scenarios, cfg.sweep_corrections
     timings, ratios = sweep_bench.run_benchmark(n, k, rounds=2 if n < 10 else 8)
     sections.append(
-        "## 6. Sweeps on Dask against a serial loop\n\n"
+        "## 7. Sweeps on Dask against a serial loop\n\n"
         "The same cells (`gcs_planner.sweep.run_cell`) in a loop in one process, on the local "
         "cluster `gcs-planner sweep` starts (2 worker processes, 1 thread each), and on a "
         "`dask scheduler` with `dask worker` processes started separately (`benchmarks/sweep.py`)."
         "\n\n" + sweep_bench.render(timings, ratios, n, k, 200.0)
+    )
+    print(sections[-1], flush=True)
+
+    print("8. start-up ...", flush=True)
+    sections.append(startup_section(cfg.runs))
+    print(sections[-1], flush=True)
+
+    print("9. flight ...", flush=True)
+    sections.append(
+        "## 9. The mock vehicle flies the longest front route\n\n"
+        "Front (length, corrections), R = 200 m, exported with the dry run's 1 m acceptance "
+        "radius; `sim.replay.replay` (flight model and autopilot, then the INS along the flown "
+        "track) against the chord replay it replaced (items joined by straight segments), "
+        f"medians of {cfg.runs} runs in this process.\n\n"
+        + flight.render(flight.run_flight(cfg.scenarios, cfg.runs))
     )
     print(sections[-1], flush=True)
 
@@ -222,10 +262,24 @@ def run(cfg: Config) -> str:
     return "\n\n".join([head, *sections]) + "\n"
 
 
+def startup_section(runs: int) -> str:
+    return (
+        "## 8. Start-up: the command line as whole processes\n\n"
+        "Each row a fresh process (`python -m gcs_planner`, what the installed script runs), "
+        f"medians of {runs} interleaved rounds; the floor is a bare "
+        "`python -c 'import numpy, scipy.spatial'` measured in the same rounds. The last column "
+        "is what start-up, reading the workbook and writing the JSON add to the floor and the "
+        "search.\n\n" + startup.render(startup.run_startup(runs))
+    )
+
+
 def main(argv: list[str] | None = None) -> None:
-    cfg, profile_only = parse(argv)
+    cfg, profile_only, startup_only = parse(argv)
     if profile_only:
         print(profiling.profile())
+        return
+    if startup_only:
+        print(startup_section(cfg.runs))
         return
     needed = {spec for spec in [*cfg.scenarios, *cfg.paper_scenarios] if spec in DATASETS}
     missing = [str(DATA / f"{spec}.xlsx") for spec in sorted(needed)]

@@ -1,3 +1,92 @@
-"""gcs_planner: exact INS-constrained route planning, MAVLink mission export, mock vehicle."""
+"""gcs_planner: exact INS-constrained route planning, MAVLink mission export, mock vehicle.
+
+The library's face, in the field's words::
+
+    from gcs_planner import load_scenario, plan, choose, write_mission
+
+    scenario = load_scenario("missions/example/scenario.toml", turn_radius=200)
+    result = plan(scenario)               # the Pareto front and a route chosen from it
+    shortest = choose(result, "shortest", min_probability=0.9)
+    write_mission(shortest, "out/shortest.plan")
+
+* :func:`load_scenario` reads a scenario file, keyword arguments overriding its values;
+* :func:`plan` computes the exact Pareto front (``Plan.front``) and chooses one route
+  (``Plan.route``, index ``Plan.chosen``) among those at least 0.99 likely to arrive
+  (:data:`DEFAULT_MIN_PROBABILITY`);
+* :func:`choose` picks another route of the same front;
+* :func:`write_mission` writes a route as a .plan, .waypoints, .geojson, .kml or .csv file.
+
+Names are imported on first use, so ``import gcs_planner`` (and the command line's start) stays
+light: numpy, scipy and the rest load only when a name that needs them is touched.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
 
 __version__ = "0.1.0"
+
+# public name -> module that defines it
+_WHERE = {
+    "load_scenario": "gcs_planner.library",
+    "choose": "gcs_planner.library",
+    "write_mission": "gcs_planner.library",
+    "plan": "gcs_planner.core.planner",
+    "Plan": "gcs_planner.core.planner",
+    "OBJECTIVES": "gcs_planner.core.planner",
+    "Route": "gcs_planner.core.route",
+    "Scenario": "gcs_planner.scenario.model",
+    "Parameters": "gcs_planner.scenario.model",
+    "Origin": "gcs_planner.scenario.model",
+    "Kind": "gcs_planner.scenario.model",
+    "VehicleProfile": "gcs_planner.vehicle",
+    "DEFAULT_MIN_PROBABILITY": "gcs_planner.policy",
+    "RiskyRouteError": "gcs_planner.policy",
+    "RiskyRouteWarning": "gcs_planner.policy",
+    "GcsPlannerError": "gcs_planner.errors",
+    "InputError": "gcs_planner.errors",
+    "InfeasibleError": "gcs_planner.errors",
+}
+__all__ = [
+    "DEFAULT_MIN_PROBABILITY",
+    "GcsPlannerError",
+    "InfeasibleError",
+    "InputError",
+    "Kind",
+    "OBJECTIVES",
+    "Origin",
+    "Parameters",
+    "Plan",
+    "RiskyRouteError",
+    "RiskyRouteWarning",
+    "Route",
+    "Scenario",
+    "VehicleProfile",
+    "choose",
+    "load_scenario",
+    "plan",
+    "write_mission",
+]
+
+if TYPE_CHECKING:
+    from gcs_planner.core.planner import OBJECTIVES, Plan, plan
+    from gcs_planner.core.route import Route
+    from gcs_planner.errors import GcsPlannerError, InfeasibleError, InputError
+    from gcs_planner.library import choose, load_scenario, write_mission
+    from gcs_planner.policy import DEFAULT_MIN_PROBABILITY, RiskyRouteError, RiskyRouteWarning
+    from gcs_planner.scenario.model import Kind, Origin, Parameters, Scenario
+    from gcs_planner.vehicle import VehicleProfile
+
+
+def __getattr__(name: str) -> Any:
+    module = _WHERE.get(name)
+    if module is None:
+        raise AttributeError(f"module 'gcs_planner' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value  # once imported, a plain attribute
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted([*globals(), *_WHERE])

@@ -6,23 +6,38 @@ the mission it *stored* against its own landmark database -> report.
 
 The vehicle is given nothing of the planner's: only a scenario the caller loaded on its own (the
 CLI reads the file a second time), as a real aircraft would carry its correction map. The report
-then compares what the vehicle flew with what the plan promised: the flown length within the
-replay's stated tolerance (sim/replay.py: chord shortfall on densified arcs plus the degE7
-quantisation of every waypoint), the corrections in the planned order, and with ``runs`` the
-Monte Carlo success rate against the plan's exact probability.
+then compares what the vehicle flew with what the plan promised: the stored mission's length
+within the exporter's stated tolerance (sim/replay.py: chord shortfall on densified arcs plus the
+degE7 quantisation of every waypoint), the FLOWN track (sim/guidance.py: the autopilot in mode
+AUTO with the scenario's vehicle profile, whatever leg model planned the route) against the
+mission's path (largest deviation, flown against planned length), each planned correction made,
+failed or missed with its 3D miss distance, and with ``runs`` the Monte Carlo success rate
+against the plan's exact probability (the path is flown once, the draws at unreliable points
+repeated).
+
+The mission is exported with a small waypoint ACCEPTANCE radius (``acceptance_radius``, 1 m:
+param2 of the waypoints for ArduPlane, the vehicle's NAV_ACC_RAD for PX4, which ignores param2
+on a fixed wing) so that the autopilot flies up to each point and passes its finish line rather
+than turning up to 50 m early and missing the landmark's 5 m CAPTURE radius.
 """
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import asdict, dataclass
 
+import numpy as np
+from scipy.spatial import cKDTree
+
 from gcs_planner.core.planner import Plan
 from gcs_planner.errors import LinkError
-from gcs_planner.link.connection import open_link
+from gcs_planner.link.connection import mavlink, open_link
 from gcs_planner.link.mission_client import MissionClient
+from gcs_planner.link.params import set_parameter
 from gcs_planner.link.protocol import DEFAULT_RETRIES, DEFAULT_TIMEOUT_S
 from gcs_planner.mission.builder import build_mission
+from gcs_planner.mission.geo_exports import trajectory_local
 from gcs_planner.plan_json import plan_to_dict
 from gcs_planner.scenario.model import Scenario
 from sim import replay as replay_mod
@@ -34,6 +49,15 @@ from sim.vehicle import FLAVOURS, MockVehicle, free_udp_port
 EXIT_LOST = 5
 # ArduPilot's wait before it asks again for a mission item it has not received.
 VEHICLE_REQUEST_TIMEOUT_S = 1.0
+# The waypoint acceptance radius the dry run exports with (see module docstring).
+DRY_RUN_ACCEPTANCE_RADIUS_M = 1
+# PX4's acceptance radius parameter (fixed wing: param2 is not used).
+PX4_ACCEPTANCE_PARAM = "NAV_ACC_RAD"
+# The planned path's sampling for the deviation (the figure is within half of it).
+DEVIATION_STEP_M = 2.0
+# Loiters the exporter writes for the planner's helices (LOITER_TURNS, LOITER_TO_ALT); the last
+# item (the end action) is not one of them.
+LOITER_COMMANDS = frozenset({18, 31})
 
 
 @dataclass(frozen=True)
@@ -50,10 +74,13 @@ class DryRunRow:
     h_limit: float
     v_margin: float
     h_margin: float
-    outcome: str  # "ok", "failed" (unreliable point, residual kept) or "lost" (over a limit)
+    # "ok", "failed" (unreliable point, residual kept), "lost" (over a limit) or "missed" (the
+    # flight did not pass within the capture radius: no correction)
+    outcome: str
     on_route: bool  # False: a landmark the path passed within the capture radius of by chance
     planned_v: float | None  # the plan's errors on arrival at this point, when it is on the route
     planned_h: float | None
+    miss: float = 0.0  # 3D closest approach of the flight to the landmark, metres
 
 
 @dataclass(frozen=True)
@@ -86,6 +113,15 @@ class DryRunReport:
     h_at_b: float
     theta: float
     planned_probability: float
+    flown_to_b: float = 0.0  # the flown track's length to its closest approach to B
+    flight_seconds: float = 0.0
+    flight_ended: str = ""
+    max_deviation: float = 0.0  # largest 3D distance of the flown track from the mission's path
+    max_deviation_at: float = 0.0  # flown from A, metres
+    acceptance_radius: float = DRY_RUN_ACCEPTANCE_RADIUS_M
+    capture_radius: float = 0.0
+    flight_notes: tuple[str, ...] = ()
+    helices: int = 0  # loiter items of the mission (the planner's helices)
     runs: int = 0
     success_rate: float | None = None
     success_ci: tuple[float, float] | None = None
@@ -96,7 +132,11 @@ class DryRunReport:
         return self.mission_length - self.planned_length
 
     @property
-    def length_within_tolerance(self) -> bool:
+    def length_within_tolerance(self) -> bool | None:
+        """The stored mission's chords against the planned length; None when the mission has
+        helices (loiters), which its chords cannot measure (the flight does)."""
+        if self.helices:
+            return None
         return abs(self.length_difference) <= self.length_tolerance
 
     @property
@@ -105,6 +145,14 @@ class DryRunReport:
             return None
         low, high = self.success_ci
         return low <= self.planned_probability <= high
+
+    @property
+    def flown_difference(self) -> float:
+        return self.flown_to_b - self.planned_length
+
+    @property
+    def missed(self) -> tuple[DryRunRow, ...]:
+        return tuple(r for r in self.rows if r.outcome == "missed")
 
     @property
     def ok(self) -> bool:
@@ -116,6 +164,12 @@ class DryRunReport:
         out["length_difference"] = self.length_difference
         out["length_within_tolerance"] = self.length_within_tolerance
         out["ok"] = self.ok
+        # A missed landmark has no errors on arrival: null, not NaN (JSON has no NaN).
+        out["rows"] = [
+            {k: (None if isinstance(v, float) and math.isnan(v) else v) for k, v in row.items()}
+            for row in out["rows"]
+        ]
+        out["flown_difference"] = self.flown_difference
         if self.runs > 0:
             out["success_ci"] = list(self.success_ci or ())
             out["probability_within_ci"] = self.probability_within_ci
@@ -146,6 +200,8 @@ def dry_run(
     request_timeout: float | None = None,
     attempts: int = 3,
     connect_timeout: float = 10.0,
+    acceptance_radius: int = DRY_RUN_ACCEPTANCE_RADIUS_M,
+    track: list | None = None,
 ) -> DryRunReport:
     """Fly ``plan``'s chosen route on a mock vehicle whose landmark database is ``landmarks``.
 
@@ -164,6 +220,10 @@ def dry_run(
     since PX4-Autopilot#9547.) Only a read-back equal to the upload counts as verified; a
     refusal (MAV_MISSION_RESULT) is not retried. A failed upload is not raised: the report says
     ``verified`` False and why, and the vehicle still replays whatever it stored.
+
+    ``acceptance_radius``: the waypoint acceptance radius exported and set on the vehicle (see
+    the module docstring). ``track``: a list that receives the replay (sim/replay.ReplayReport)
+    for a caller that writes the flown track.
     """
     if flavour not in FLAVOURS:
         raise ValueError(f"flavour must be one of {FLAVOURS}, got {flavour!r}")
@@ -176,7 +236,8 @@ def dry_run(
     if request_timeout is None:
         request_timeout = min(VEHICLE_REQUEST_TIMEOUT_S, timeout * (retries + 1) / 4)
     route = plan.route
-    mission = build_mission(plan_to_dict(plan), firmware=flavour)
+    plan_dict = plan_to_dict(plan)
+    mission = build_mission(plan_dict, firmware=flavour, capture_radius=acceptance_radius)
     loiter = mission.loiter_param[1] if mission.loiter_param else None
     faults = FaultRates(drop=loss) if loss > 0 else None
     port = free_udp_port()
@@ -201,6 +262,16 @@ def dry_run(
             for _ in range(attempts):
                 try:
                     client.upload_verified(mission.items, loiter_radius=loiter)
+                    if flavour == "px4":
+                        set_parameter(
+                            link,
+                            client._target(),
+                            PX4_ACCEPTANCE_PARAM,
+                            float(acceptance_radius),
+                            mavlink.MAV_PARAM_TYPE_REAL32,
+                            timeout=timeout,
+                            retries=retries,
+                        )
                 except LinkError as exc:
                     errors.append(str(exc))
                     if str(exc).startswith("upload refused"):
@@ -218,8 +289,15 @@ def dry_run(
             inj.counts.dropped for inj in (vehicle.faults_out, vehicle.faults_in) if inj is not None
         )
 
+    if track is not None:
+        track.append(replayed)
     planned = {s.id: s for s in route.stops[1:-1]}
-    rows = tuple(_row(c, planned) for c in replayed.run.corrections)
+    misses = {e.id: e.miss for e in replayed.encounters}
+    rows = [_row(c, planned, misses.get(c.id, 0.0)) for c in replayed.run.corrections]
+    end = replayed.flown_length
+    rows += [_missed_row(m, planned) for m in replayed.missed if m.distance <= end]
+    rows.sort(key=lambda r: r.distance)
+    dev, dev_at = max_deviation(replayed, trajectory_local(plan_dict, step=DEVIATION_STEP_M))
     arcs = sum(s.leg.arc for s in route.stops if s.leg is not None)
     mc = replayed.monte_carlo
     return DryRunReport(
@@ -238,14 +316,14 @@ def dry_run(
         seed=seed,
         arrived=replayed.arrived,
         lost_reason=replayed.run.lost_reason,
-        why=_why(replayed),
+        why=_why(replayed, [r for r in rows if r.outcome == "missed"]),
         flown_length=replayed.flown_length,
         mission_length=replayed.mission_length,
         planned_length=route.length,
         arc_length=arcs,
         waypoints=replayed.waypoints,
         length_tolerance=length_tolerance(arcs, replayed.waypoints),
-        rows=rows,
+        rows=tuple(rows),
         # The landmarks the path meets do not depend on the draw, only their outcomes do.
         corrections_as_planned=[e.id for e in replayed.encounters] == list(planned),
         v_at_b=replayed.run.v_at_end,
@@ -256,10 +334,52 @@ def dry_run(
         success_rate=None if mc is None else mc.success_rate,
         success_ci=None if mc is None else (mc.ci_low, mc.ci_high),
         confidence=None if mc is None else mc.confidence,
+        flown_to_b=replayed.flown.length if replayed.flown is not None else 0.0,
+        flight_seconds=replayed.flight_time_s,
+        flight_ended=replayed.flight.ended if replayed.flight is not None else "",
+        max_deviation=dev,
+        max_deviation_at=dev_at,
+        acceptance_radius=float(acceptance_radius),
+        capture_radius=capture_radius,
+        flight_notes=replayed.flight.notes if replayed.flight is not None else (),
+        helices=sum(it.command in LOITER_COMMANDS for it in mission.items[:-1]),
     )
 
 
-def _row(c: replay_mod.CorrectionRow, planned: dict) -> DryRunRow:
+def max_deviation(report: replay_mod.ReplayReport, planned: np.ndarray) -> tuple[float, float]:
+    """(largest 3D distance of the flown track to B from the ``planned`` path, where: flown from
+    A). The planned path is a polyline sampled at most ``DEVIATION_STEP_M`` apart, so the figure
+    is within half that of the exact one."""
+    if report.flown is None or len(planned) == 0:
+        return 0.0, 0.0
+    dist, _ = cKDTree(planned).query(report.flown.points)
+    k = int(np.argmax(dist))
+    return float(dist[k]), float(report.flown.cumulative[k])
+
+
+def _missed_row(m: replay_mod.Missed, planned: dict) -> DryRunRow:
+    stop = planned.get(m.id)
+    nan = float("nan")
+    return DryRunRow(
+        point=m.id,
+        kind=m.kind,
+        unreliable=False,
+        distance=m.distance,
+        v_before=nan,
+        h_before=nan,
+        v_limit=nan,
+        h_limit=nan,
+        v_margin=nan,
+        h_margin=nan,
+        outcome="missed",
+        on_route=stop is not None,
+        planned_v=None if stop is None else stop.v_arrival,
+        planned_h=None if stop is None else stop.h_arrival,
+        miss=m.miss,
+    )
+
+
+def _row(c: replay_mod.CorrectionRow, planned: dict, miss: float = 0.0) -> DryRunRow:
     if c.succeeded is None:
         outcome = "lost"
     else:
@@ -280,14 +400,29 @@ def _row(c: replay_mod.CorrectionRow, planned: dict) -> DryRunRow:
         on_route=stop is not None,
         planned_v=None if stop is None else stop.v_arrival,
         planned_h=None if stop is None else stop.h_arrival,
+        miss=miss,
     )
 
 
-def _why(report: replay_mod.ReplayReport) -> str:
-    """Where the vehicle was lost and which limit broke, with the numbers ("" if it arrived)."""
+def _why(report: replay_mod.ReplayReport, missed: list[DryRunRow] | None = None) -> str:
+    """Where the vehicle was lost and which limit broke, with the numbers, and the corrections
+    the flight missed on the way ("" if it arrived)."""
     run = report.run
     if run.arrived:
         return ""
+    reason = _lost_reason(report)
+    if missed:
+        passes = ", ".join(
+            f"{r.kind} point {r.point} (passed {r.miss:.1f} m away, {r.distance:,.0f} m from A)"
+            for r in missed
+        )
+        reason += f"; the flight missed {passes}: outside the {report.capture_radius:g} m capture"
+        reason += " radius"
+    return reason
+
+
+def _lost_reason(report: replay_mod.ReplayReport) -> str:
+    run = report.run
     if run.corrections and not run.corrections[-1].within_limits:
         c = run.corrections[-1]
         broken = []

@@ -10,24 +10,22 @@ import math
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from gcs_planner.core.planner import Plan
 from gcs_planner.core.route import Route
 from gcs_planner.errors import InputError
-from gcs_planner.geometry.trajectory import leg_to_dict, route_trajectory
+from gcs_planner.geometry.trajectory import leg_to_dict, scenario_trajectory
 from gcs_planner.scenario.model import Kind, Scenario
 
 FORMAT = "gcs-planner-plan"
 VERSION = 1
 
 
-def route_to_dict(scenario: Scenario, route: Route, lower_bound: float) -> dict[str, Any]:
-    trajectory = route_trajectory(
-        scenario.xyz[list(route.points)],
-        route.turn_radius,
-        None if scenario.heading_at_a is None else np.asarray(scenario.heading_at_a),
-    )
+def route_to_dict(
+    scenario: Scenario, route: Route, lower_bound: float, settled: bool = True
+) -> dict[str, Any]:
+    """One front route. ``settled``: no open partial route may still lead to a front route with
+    no more corrections or a higher probability (see ``core.proof``); "optimal" needs it."""
+    trajectory = scenario_trajectory(scenario, route.points)
     legs = []
     for prev, stop, geo in zip(route.stops[:-1], route.stops[1:], trajectory.legs):
         legs.append(
@@ -40,6 +38,8 @@ def route_to_dict(scenario: Scenario, route: Route, lower_bound: float) -> dict[
                 "arc": stop.leg.arc,
                 "straight": stop.leg.straight,
                 "turn_angle_deg": math.degrees(stop.leg.turn_angle),
+                "path_angle_deg": stop.leg.path_angle,
+                "helix_turns": stop.leg.helix_turns,
                 "cumulative": stop.cumulative,
                 "v_error": stop.v_arrival,
                 "h_error": stop.h_arrival,
@@ -56,7 +56,7 @@ def route_to_dict(scenario: Scenario, route: Route, lower_bound: float) -> dict[
         "length": route.length,
         "corrections": route.corrections,
         "probability": route.probability,
-        "optimal": gap <= 1e-6,
+        "optimal": settled and gap <= 1e-6,
         "gap": gap,
         "lower_bound": lower_bound,
         "route": route.ids(),
@@ -83,11 +83,23 @@ def plan_to_dict(plan: Plan) -> dict[str, Any]:
             "heading_at_a": None if s.heading_at_a is None else list(s.heading_at_a),
         },
         "parameters": s.params.to_dict(),
+        "vehicle": {
+            "leg_model": s.vehicle.leg_model,
+            "cruise_airspeed": s.vehicle.cruise_airspeed,
+            "bank_angle_deg": s.vehicle.bank_angle,
+            "radius_source": s.vehicle.radius_source,
+            "description": s.vehicle.describe(),
+        },
+        "warnings": list(plan.warnings),
         "objectives": list(plan.objectives),
-        "front": [route_to_dict(s, r, lb) for r, lb in zip(plan.routes, plan.lower_bounds)],
+        "front": [
+            route_to_dict(s, r, lb, ok)
+            for r, lb, ok in zip(plan.routes, plan.lower_bounds, plan.proven())
+        ],
         "chosen": plan.chosen,
         "choice": plan.choice,
         "min_probability": plan.min_probability,
+        "threshold_met": plan.threshold_met,
         "shortest_certain": plan.shortest_certain,
         "most_reliable": plan.most_reliable,
         "optimality": {"optimal": plan.optimal, "statement": plan.statement},

@@ -4,22 +4,23 @@ Inputs are what the vehicle has, never the planner's objects: the MAVLink items 
 own landmark database (a scenario loaded on its own: the correction points, A where it stands,
 B where it must arrive, and the error model's parameters).
 
-Flight model. The vehicle starts at A and flies straight segments from each navigation item's
-position to the next (MAV_CMD_NAV_WAYPOINT, loiters, takeoff, land). The planner's turns are
-already in the mission as arcs densified into waypoints at most 16 degrees apart, so flying the
-chords is flying the turns with the turning radius to within the chord error: a chord under an
-arc of angle a is shorter than the arc by the factor sin(a/2)/(a/2), at most 0.33 % for 16
-degrees. Hence the tolerance, stated and tested: |flown - planned| <= 0.0033 * (arc length) plus
-2 cm per waypoint for the degE7 quantisation of latitude/longitude; with straight legs the flown
-length is the planned one to those 2 cm per waypoint.
+Flight. The vehicle flies its stored mission in mode AUTO as its autopilot would
+(sim/guidance.py: ArduPlane or PX4 waypoint logic, L1 guidance, loiters) with the aircraft of
+sim/aircraft.py: the scenario's vehicle profile (cruise airspeed, turning radius, climb and
+descent limits), whatever leg model planned the route. The flown track is what the INS sees.
+The mission's own path (straight chords from item to item, ``decode_path``) is kept as the
+nominal path the report compares the flight with: a chord under an arc of angle a is shorter
+than the arc by the factor sin(a/2)/(a/2), at most 0.33 % for the exporter's 16 degree steps,
+plus 2 cm per waypoint for the degE7 quantisation of latitude/longitude.
 
-Error model (MODEL.md). Every metre flown adds delta to both errors. Whenever the path passes
-within ``capture_radius`` of a correction point of the database that has not been used yet, the
+Error model (MODEL.md). Every metre flown adds delta to both errors. Whenever the flown track
+passes within ``capture_radius`` (3D: the landmark's CAPTURE radius, not the autopilot's waypoint
+ACCEPTANCE radius) of a correction point of the database that has not been used yet, the
 vehicle arrives there: the limits of that kind must hold (else the vehicle is lost), then the
 point corrects its component; an unreliable point fails with probability 1 - p, and the
-component becomes min(component, r). At the end of the mission the vehicle must be within
-``capture_radius`` of B with both errors <= theta. Errors are kept in metres flown since the last
-reset, as the planner keeps them, and compared with ``Parameters.limits_m``.
+component becomes min(component, r). The vehicle must pass within ``capture_radius`` of B with
+both errors <= theta; the replay ends at its closest approach to B. Errors are kept in metres
+flown since the last reset, as the planner keeps them, and compared with ``Parameters.limits_m``.
 
 The path and the corrections it meets do not depend on chance, only the outcomes at unreliable
 points do; so a Monte Carlo over N replays draws N outcome vectors over the same encounters.
@@ -29,15 +30,18 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
+from functools import cached_property
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from gcs_planner.confidence import wilson_interval
 from gcs_planner.mission.georef import DEFAULT_ORIGIN, LocalFrame
 from gcs_planner.mission.items import MissionItem
 from gcs_planner.scenario.model import Kind, Parameters, Scenario
-from gcs_planner.vehicle import DEFAULT_CAPTURE_RADIUS_M, DEFAULT_CRUISE_AIRSPEED
+from gcs_planner.vehicle import DEFAULT_CAPTURE_RADIUS_M, DEFAULT_CRUISE_AIRSPEED, VehicleProfile
+from sim import guidance
 
 # MAV_CMD values whose x/y/z are a position the vehicle flies to.
 NAV_POSITION_COMMANDS = frozenset({16, 17, 18, 19, 21, 22, 31})
@@ -63,7 +67,7 @@ class FlightPath:
     seqs: tuple[int, ...]
     speeds: tuple[float, ...]  # cruise speed on the segment ending at point i (0 for the start)
 
-    @property
+    @cached_property
     def cumulative(self) -> np.ndarray:
         seg = np.linalg.norm(np.diff(self.points, axis=0), axis=1)
         return np.concatenate([[0.0], np.cumsum(seg)])
@@ -83,6 +87,16 @@ class FlightPath:
         t = 0.0 if span <= 0 else (distance - cum[k]) / span
         return self.points[k] + t * (self.points[k + 1] - self.points[k])
 
+    def until(self, distance: float) -> FlightPath:
+        """The path up to ``distance`` flown, its last point interpolated."""
+        cum = self.cumulative
+        k = int(np.searchsorted(cum, distance, side="right"))
+        if k >= len(cum):
+            return self
+        end = self.position_at(distance)
+        points = np.vstack([self.points[:k], end[None, :]])
+        return FlightPath(points, self.seqs[: k + 1], self.speeds[: k + 1])
+
 
 @dataclass(frozen=True)
 class Encounter:
@@ -95,6 +109,19 @@ class Encounter:
     distance: float  # flown from A to the closest approach
     miss: float  # closest approach, metres
     seq: int  # the mission item nearest to it
+
+
+@dataclass(frozen=True)
+class Missed:
+    """A landmark the mission flies to (a waypoint on it) that the flight did not pass within
+    the capture radius of: no correction there."""
+
+    landmark: int
+    id: str
+    kind: str
+    seq: int  # the mission item on it
+    distance: float  # flown from A to the closest approach
+    miss: float  # 3D closest approach, metres
 
 
 @dataclass(frozen=True)
@@ -155,6 +182,12 @@ class ReplayReport:
     theta: float
     monte_carlo: MonteCarloSummary | None = None
     encounters: tuple[Encounter, ...] = field(default=(), repr=False)
+    # The flight as flown (the whole of it), the mission's nominal path, and the flown track up
+    # to the closest approach to B: what the INS replay used.
+    flight: guidance.Flight | None = field(default=None, repr=False)
+    nominal: FlightPath | None = field(default=None, repr=False)
+    flown: FlightPath | None = field(default=None, repr=False)
+    missed: tuple[Missed, ...] = ()
 
     @property
     def arrived(self) -> bool:
@@ -179,7 +212,9 @@ class ReplayReport:
             "h_at_end": self.run.h_at_end,
             "theta": self.theta,
             "capture_radius": self.capture_radius,
+            "flight_ended": self.flight.ended if self.flight is not None else "",
             "corrections": [asdict(c) for c in self.run.corrections],
+            "missed": [asdict(m) for m in self.missed],
         }
         if self.monte_carlo is not None:
             out["monte_carlo"] = asdict(self.monte_carlo)
@@ -242,45 +277,95 @@ def decode_path(
     return FlightPath(np.vstack(points), tuple(seqs), tuple(speeds))
 
 
+def _segment_distances(
+    path: FlightPath, point: np.ndarray, segs: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """(miss, t) of ``point`` to the path's segments ``segs`` (index of their first point)."""
+    p = path.points[segs]
+    d = path.points[segs + 1] - p
+    len2 = np.einsum("ij,ij->i", d, d)
+    rel = point - p
+    t = np.where(len2 > 0, np.einsum("ij,ij->i", rel, d) / np.where(len2 > 0, len2, 1.0), 0.0)
+    t = np.clip(t, 0.0, 1.0)
+    return np.linalg.norm(rel - t[:, None] * d, axis=1), t
+
+
+def _first_pass(
+    path: FlightPath, point: np.ndarray, segs: np.ndarray, radius: float
+) -> tuple[float, float] | None:
+    """(distance flown, miss) at the closest approach of the first pass within ``radius`` of
+    ``point`` over the candidate segments ``segs`` (sorted), or None."""
+    miss, t = _segment_distances(path, point, segs)
+    inside = np.flatnonzero(miss <= radius)
+    if inside.size == 0:
+        return None
+    first = inside[0]
+    # The pass: consecutive segments from the first one inside.
+    run = first
+    while run + 1 < len(segs) and segs[run + 1] == segs[run] + 1 and miss[run + 1] <= radius:
+        run += 1
+    j = first + int(np.argmin(miss[first : run + 1]))
+    k = int(segs[j])
+    cum = path.cumulative
+    return float(cum[k] + t[j] * (cum[k + 1] - cum[k])), float(miss[j])
+
+
+def closest_approach(path: FlightPath, point: np.ndarray, radius: float) -> tuple[float, float]:
+    """(distance flown, 3D miss) where the path first passes within ``radius`` of ``point``,
+    at the closest approach of that pass; else at its closest approach overall."""
+    point = np.asarray(point, float)
+    if len(path.points) < 2:
+        return 0.0, float(np.linalg.norm(path.points[0] - point))
+    segs = np.arange(len(path.points) - 1)
+    hit = _first_pass(path, point, segs, radius)
+    if hit is not None:
+        return hit
+    miss, t = _segment_distances(path, point, segs)
+    j = int(np.argmin(miss))
+    cum = path.cumulative
+    return float(cum[j] + t[j] * (cum[j + 1] - cum[j])), float(miss[j])
+
+
 def find_encounters(
     path: FlightPath, scenario: Scenario, capture_radius: float = DEFAULT_CAPTURE_RADIUS_M
 ) -> list[Encounter]:
-    """Correction points the path passes within ``capture_radius`` of, in flight order, each
-    at its first closest approach (a landmark is used at most once)."""
+    """Correction points the path passes within ``capture_radius`` (3D) of, in flight order,
+    each at the closest approach of its first pass (a landmark is used at most once)."""
     mask = (scenario.kind == Kind.V) | (scenario.kind == Kind.H)
     idx = np.flatnonzero(mask)
-    marks = scenario.xyz[idx]
-    used = np.zeros(len(idx), dtype=bool)
-    cum = path.cumulative
+    if len(path.points) < 2 or idx.size == 0:
+        return []
+    seg_len = np.linalg.norm(np.diff(path.points, axis=0), axis=1)
+    # A landmark within the radius of a segment is within radius + half its length of one of
+    # the segment's ends.
+    tree = cKDTree(path.points)
+    reach = capture_radius + float(seg_len.max()) / 2 + 1e-6
+    near = tree.query_ball_point(scenario.xyz[idx], r=reach)
+    last = len(path.points) - 2
     out: list[Encounter] = []
-    for k in range(len(path.points) - 1):
-        p, q = path.points[k], path.points[k + 1]
-        d = q - p
-        seg_len2 = float(d @ d)
-        lo = np.minimum(p, q) - capture_radius
-        hi = np.maximum(p, q) + capture_radius
-        near = np.flatnonzero(~used & np.all((marks >= lo) & (marks <= hi), axis=1))
-        if near.size == 0:
+    for j, pts in enumerate(near):
+        if not pts:
             continue
-        rel = marks[near] - p
-        t = np.zeros(near.size) if seg_len2 == 0 else np.clip(rel @ d / seg_len2, 0.0, 1.0)
-        miss = np.linalg.norm(rel - t[:, None] * d, axis=1)
-        hit = miss <= capture_radius
-        for j in np.flatnonzero(hit)[np.argsort(t[hit], kind="stable")]:
-            li = int(idx[near[j]])
-            used[near[j]] = True
-            seq = path.seqs[k + 1] if t[j] > 0.5 else path.seqs[k]
-            out.append(
-                Encounter(
-                    li,
-                    scenario.ids[li],
-                    Kind(int(scenario.kind[li])),
-                    bool(scenario.unreliable[li]),
-                    float(cum[k] + t[j] * math.sqrt(seg_len2)),
-                    float(miss[j]),
-                    int(seq),
-                )
+        pts_arr = np.asarray(pts)
+        segs = np.unique(np.clip(np.concatenate([pts_arr - 1, pts_arr]), 0, last))
+        li = int(idx[j])
+        hit = _first_pass(path, scenario.xyz[li], segs, capture_radius)
+        if hit is None:
+            continue
+        distance, miss = hit
+        k = min(int(np.searchsorted(path.cumulative, distance, side="right")), len(path.seqs) - 1)
+        out.append(
+            Encounter(
+                li,
+                scenario.ids[li],
+                Kind(int(scenario.kind[li])),
+                bool(scenario.unreliable[li]),
+                distance,
+                miss,
+                int(path.seqs[k]),
             )
+        )
+    out.sort(key=lambda e: e.distance)
     return out
 
 
@@ -354,7 +439,10 @@ def _fly(
     within = v <= theta_m and h <= theta_m
     reason = ""
     if not reached:
-        reason = f"the mission ends {miss_b:.1f} m from B (capture radius {capture_radius:g} m)"
+        reason = (
+            f"the flight passes {miss_b:.1f} m from B at its closest (3D), outside the capture "
+            f"radius {capture_radius:g} m"
+        )
     elif not within:
         reason = "lost at B: an error over theta on arrival"
     return ReplayRun(
@@ -410,6 +498,40 @@ def monte_carlo(
     return MonteCarloSummary(runs, successes, successes / runs, low, high, confidence)
 
 
+def find_missed(
+    nominal: FlightPath,
+    flown: FlightPath,
+    encounters: Sequence[Encounter],
+    scenario: Scenario,
+    capture_radius: float = DEFAULT_CAPTURE_RADIUS_M,
+) -> list[Missed]:
+    """Correction landmarks the mission has a waypoint on (within ``capture_radius``) that the
+    flown track did not pass within ``capture_radius`` of, in mission order."""
+    mask = (scenario.kind == Kind.V) | (scenario.kind == Kind.H)
+    idx = np.flatnonzero(mask)
+    if idx.size == 0 or len(nominal.points) < 2:
+        return []
+    tree = cKDTree(scenario.xyz[idx])
+    met = {e.landmark for e in encounters}
+    out: list[Missed] = []
+    seen: set[int] = set()
+    for p, seq in zip(nominal.points[1:], nominal.seqs[1:], strict=True):
+        for j in tree.query_ball_point(p, r=capture_radius):
+            li = int(idx[j])
+            if li in met or li in seen:
+                continue
+            seen.add(li)
+            distance, miss = closest_approach(flown, scenario.xyz[li], capture_radius)
+            kind = Kind(int(scenario.kind[li])).name
+            out.append(Missed(li, scenario.ids[li], kind, int(seq), distance, miss))
+    return out
+
+
+def flown_path(flight: guidance.Flight) -> FlightPath:
+    """The flown track as a path (one point per step of the flight model)."""
+    return FlightPath(flight.xyz, tuple(int(c) for c in flight.current), tuple(flight.airspeed))
+
+
 def replay(
     items: Sequence[MissionItem],
     scenario: Scenario,
@@ -419,29 +541,62 @@ def replay(
     runs: int = 0,
     home_at_seq0: bool = False,
     capture_radius: float = DEFAULT_CAPTURE_RADIUS_M,
-    cruise_speed: float = DEFAULT_CRUISE_SPEED,
+    cruise_speed: float | None = None,
     home_alt: float | None = None,
     confidence: float = 0.99,
+    flavour: str | None = None,
+    profile: VehicleProfile | None = None,
+    autopilot: guidance.AutopilotParams | None = None,
+    dt: float = guidance.DEFAULT_STEP_S,
 ) -> ReplayReport:
-    """Replay the stored ``items`` against the landmark database ``scenario``.
+    """Fly the stored ``items`` and replay the INS against the landmark database ``scenario``.
 
-    ``params`` default to the scenario's. One replay is drawn with ``seed``; with ``runs`` > 0
-    a Monte Carlo of that many replays (seeded from ``seed`` too) gives the success rate.
+    ``params`` default to the scenario's, ``profile`` (the aircraft) to ``scenario.vehicle``,
+    with ``cruise_speed`` (the autopilot's cruise parameter) for its airspeed when given.
+    ``flavour`` defaults to ArduPilot when ``home_at_seq0`` else PX4. One replay is drawn with
+    ``seed``; with ``runs`` > 0 a Monte Carlo of that many replays (seeded from ``seed`` too)
+    draws the outcomes at unreliable points over the same flight.
     """
     params = params or scenario.params
-    path = decode_path(
+    profile = profile or scenario.vehicle
+    if cruise_speed is not None and cruise_speed > 0:
+        profile = replace(profile, cruise_airspeed=float(cruise_speed))
+    flavour = flavour or ("ardupilot" if home_at_seq0 else "px4")
+    frame = scenario_frame(scenario)
+    nominal = decode_path(
         items,
         scenario,
         home_at_seq0=home_at_seq0,
         home_alt=home_alt,
-        cruise_speed=cruise_speed,
+        cruise_speed=profile.cruise_airspeed,
         capture_radius=capture_radius,
+        frame=frame,
     )
+    a = np.asarray(scenario.xyz[scenario.start], float)
+    course = None
+    if scenario.heading_at_a is not None:
+        hx, hy, _ = scenario.heading_at_a
+        if math.hypot(hx, hy) > 0:
+            course = math.atan2(hy, hx)
+    flight = guidance.fly(
+        items,
+        frame,
+        (float(a[0]), float(a[1]), float(a[2])),
+        profile,
+        flavour=flavour,
+        params=autopilot or guidance.AutopilotParams(flavour, loiter_radius=profile.turn_radius),
+        home_at_seq0=home_at_seq0,
+        home_alt=home_alt,
+        course=course,
+        dt=dt,
+    )
+    track = flown_path(flight)
+    b_distance, _ = closest_approach(track, scenario.xyz[scenario.end], capture_radius)
+    path = track.until(b_distance)
     encounters = find_encounters(path, scenario, capture_radius)
     run = _fly(path, encounters, scenario, params, np.random.default_rng(seed), capture_radius)
-    seg = np.diff(path.cumulative)
-    speeds = np.asarray(path.speeds[1:], float)
-    flight_time = float(np.sum(seg / np.where(speeds > 0, speeds, cruise_speed)))
+    missed = find_missed(nominal, path, encounters, scenario, capture_radius)
+    k = min(int(np.searchsorted(track.cumulative, b_distance, side="right")), len(flight.t) - 1)
     mc = None
     if runs > 0:
         mc = monte_carlo(
@@ -449,11 +604,15 @@ def replay(
         )
     return ReplayReport(
         run=run,
-        mission_length=path.length,
-        waypoints=len(path.points) - 1,
-        flight_time_s=flight_time,
+        mission_length=nominal.length,
+        waypoints=len(nominal.points) - 1,
+        flight_time_s=float(flight.t[k]),
         capture_radius=capture_radius,
         theta=params.theta,
         monte_carlo=mc,
         encounters=tuple(encounters),
+        flight=flight,
+        nominal=nominal,
+        flown=path,
+        missed=tuple(missed),
     )

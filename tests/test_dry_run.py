@@ -103,14 +103,32 @@ def check_consistent(d: dict, rc: int, route_len: int | None = None) -> None:
         assert ROW_KEYS <= row.keys()
         assert row["on_route"] and row["point"] in d["route"]
         assert row["v_margin"] == pytest.approx(row["v_limit"] - row["v_before"])
+    # The aircraft flies the mission near its path: it overshoots a little after each turn.
+    assert d["max_deviation"] <= MAX_DEVIATION_M
+    assert all(r["outcome"] != "missed" for r in d["rows"])
     if d["arrived"]:
-        assert d["flown_length"] == pytest.approx(d["mission_length"])
+        assert abs(d["flown_length"] - d["mission_length"]) <= flight_tolerance(d)
         assert [r["point"] for r in d["rows"]] == d["route"][1:-1]
         assert d["why"] == ""
         assert max(d["v_at_b"], d["h_at_b"]) <= d["theta"]
     else:
         assert d["flown_length"] < d["mission_length"]
         assert d["rows"][-1]["outcome"] == "lost" and d["why"]
+
+
+# The flown length against the mission's, and the largest distance of the flight from the
+# mission's path, on routes whose legs the aircraft can fly: L1 guidance overshoots the densified
+# arcs of a sharp turn flown at the bank limit (measured: at most 0.03 % and 28 m), then
+# converges on the straight before the next point.
+FLIGHT_TOLERANCE = 1e-4
+ARC_OVERSHOOT = 0.2  # of the arcs' length
+MAX_DEVIATION_M = 50.0
+
+
+def flight_tolerance(d: dict) -> float:
+    """How far the flown length may be from the mission's (L1 lag on arcs flown at the turning
+    radius widens them: measured up to 16 % of a 400 m arc)."""
+    return FLIGHT_TOLERANCE * d["mission_length"] + ARC_OVERSHOOT * d["arc_length"]
 
 
 @pytest.mark.parametrize("firmware", ["ardupilot", "px4"])
@@ -296,4 +314,5 @@ def test_contest_workbook_arriving_draw_flies_the_plan(dataset_paths, dataset, f
     assert all(r.outcome in ("ok", "failed") for r in report.rows)
     assert all(min(r.v_margin, r.h_margin) >= 0 for r in report.rows)
     assert report.length_within_tolerance
-    assert abs(report.flown_length - result.route.length) <= report.length_tolerance
+    d = report.to_dict()
+    assert abs(report.flown_length - result.route.length) <= flight_tolerance(d)

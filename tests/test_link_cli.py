@@ -144,6 +144,7 @@ def test_mock_vehicle_flies_with_telemetry_after_upload():
 
     from gcs_planner.link.connection import open_link
     from gcs_planner.link.mission_client import MissionClient
+    from gcs_planner.link.params import set_parameter
     from gcs_planner.mission.georef import LocalFrame
     from gcs_planner.mission.items import MissionItem
     from gcs_planner.scenario.generate import DATASET1
@@ -170,6 +171,9 @@ def test_mock_vehicle_flies_with_telemetry_after_upload():
             client = MissionClient(link)
             client.connect(5.0)
             client.upload_verified(items)
+            # PX4 counts a fixed-wing waypoint reached within NAV_ACC_RAD (10 m by default) and
+            # the mission ends at B: to overfly B within the 5 m capture radius it must be less.
+            set_parameter(link, client._target(), "NAV_ACC_RAD", 1.0)
             report = vehicle.fly(seed=0, time_scale=None, position_messages=20)
             seen: dict[str, list] = {}
             deadline = time.monotonic() + 1.0
@@ -185,11 +189,14 @@ def test_mock_vehicle_flies_with_telemetry_after_upload():
     fixes = [m.text for m in seen["STATUSTEXT"]]
     assert sum("fix" in t for t in fixes) == 3
     assert 1 <= len(seen["GLOBAL_POSITION_INT"]) <= 25  # rate-limited, not one per metre
+    assert seen["ATTITUDE"] and seen["VFR_HUD"]
+    armed = [m for m in seen["HEARTBEAT"] if m.base_mode & 128]
+    assert armed and all(m.custom_mode == (4 << 16) | (4 << 24) for m in armed)  # AUTO MISSION
 
 
 @pytest.mark.parametrize("flavour", ["ardupilot", "px4"])
 def test_benchmark_function_runs(flavour):
-    from sim.vehicle import benchmark_upload
+    from benchmarks.upload import benchmark_upload
 
     result = benchmark_upload(200, flavour)
     assert result["items"] == 200 and result["seconds"] > 0

@@ -204,7 +204,7 @@ def test_verification_catches_a_vehicle_that_changes_items(monkeypatch):
     """A vehicle that stores something else than it was sent must make upload_verified fail."""
     items = make_items(10)
     with session("px4") as (vehicle, client):
-        original = vehicle._commit
+        original = vehicle.missions.commit
 
         def corrupt(stored):
             stored = list(stored)
@@ -213,8 +213,79 @@ def test_verification_catches_a_vehicle_that_changes_items(monkeypatch):
                 stored[3] = MissionItem(**{**f, "x": f["x"] + 50})
             original(stored[:-1])
 
-        monkeypatch.setattr(vehicle, "_commit", corrupt)
+        monkeypatch.setattr(vehicle.missions, "commit", corrupt)
         with pytest.raises(LinkError, match="differs") as info:
             client.upload_verified(items)
         assert "item 3: x" in str(info.value)
         assert "holds 9 items, 10 were uploaded" in str(info.value)
+
+
+@pytest.mark.parametrize("same_ids", [True, False])
+def test_two_uploads_at_once_never_leave_a_mixed_mission(same_ids):
+    """Two `upload` processes at once (two links; the same ids 255/190 or not): each reports
+    success or a LinkError, and the vehicle holds one mission as sent, never rows of both."""
+    import threading
+
+    old, a, b = make_items(5), make_items(30), make_items(25)
+    b = [MissionItem(i, 0, 16, x=it.x + 5_000, y=it.y, z=321.0) for i, it in enumerate(b)]
+    port = free_udp_port()
+    with MockVehicle(f"udpin:127.0.0.1:{port}", flavour="px4") as vehicle:
+        setup = open_link(f"udpout:127.0.0.1:{port}")
+        MissionClient(setup).upload(old)
+        setup.close()
+        for _ in range(3):
+            outcomes: dict[str, object] = {}
+
+            def run(name, items, system, outcomes=outcomes):
+                link = open_link(f"udpout:127.0.0.1:{port}", source_system=system)
+                try:
+                    client = MissionClient(link, timeout=0.5, retries=3)
+                    client.connect(timeout=10.0)
+                    client.upload_verified(items)
+                    outcomes[name] = "verified"
+                except LinkError as exc:
+                    outcomes[name] = exc
+                except Exception as exc:  # anything else is a bug the test must show
+                    outcomes[name] = repr(exc)
+                finally:
+                    link.close()
+
+            threads = [
+                threading.Thread(target=run, args=("a", a, 255)),
+                threading.Thread(target=run, args=("b", b, 255 if same_ids else 254)),
+            ]
+            for t in threads:
+                t.start()
+            for t in threads:
+                t.join(timeout=120)
+            assert all(v == "verified" or isinstance(v, LinkError) for v in outcomes.values())
+            held = vehicle.mission
+            assert any(stored_equals(vehicle, m) for m in (old, a, b)), [it.x for it in held]
+            for name, items in (("a", a), ("b", b)):
+                if outcomes[name] == "verified" and not stored_equals(vehicle, items):
+                    # verified, then replaced by the other one's later upload: it must be whole
+                    other = b if name == "a" else a
+                    assert stored_equals(vehicle, other)
+
+
+@pytest.mark.parametrize("flavour", ["ardupilot", "px4"])
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_a_30_item_mission_at_30_percent_loss_is_never_reported_failed(flavour, seed):
+    """Issue 14: at 20-30 % loss, uploads the vehicle held were reported failed (exit 4)."""
+    loss = FaultRates(drop=0.3)
+    items = make_items(30)
+    with session(flavour, faults_out=loss, faults_in=loss, fault_seed=seed) as (vehicle, client):
+        client.upload_verified(items)
+        assert stored_equals(vehicle, items)
+
+
+def test_a_read_back_that_fails_is_not_called_a_different_mission(monkeypatch):
+    items = make_items(6)
+    with session("px4", client_kw=dict(timeout=0.2, retries=1)) as (vehicle, client):
+        monkeypatch.setattr(vehicle.missions, "on_request_list", lambda msg, peer: None)
+        with pytest.raises(LinkError) as info:
+            client.upload_verified(items)
+        text = str(info.value)
+        assert "acknowledged the whole upload" in text and "could not be read back" in text
+        assert "differs" not in text
+        assert stored_equals(vehicle, items)

@@ -16,10 +16,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from gcs_planner import plan_json
-from gcs_planner.core.route import Leg, evaluate_route
+from gcs_planner.core.bnb import flown_route
 from gcs_planner.errors import InputError
 from gcs_planner.geometry.dubins import cs_leg
-from gcs_planner.geometry.trajectory import route_trajectory
 from gcs_planner.mission.builder import (
     DEFAULT_CAPTURE_RADIUS,
     DEFAULT_CRUISE_SPEED,
@@ -28,7 +27,7 @@ from gcs_planner.mission.builder import (
     arc_waypoints,
     build_mission,
 )
-from gcs_planner.mission.georef import DEFAULT_ORIGIN
+from gcs_planner.mission.georef import DEFAULT_ORIGIN, LocalFrame
 from gcs_planner.mission.items import (
     MAV_CMD_DO_CHANGE_SPEED,
     MAV_CMD_NAV_LAND,
@@ -73,6 +72,21 @@ def tiny_scenario(origin: Origin | None = ORIGIN, turn_radius: float = 200.0) ->
     )
 
 
+def steep_scenario(firmware_limits: tuple[float, float] = (4.0, 5.0)) -> Scenario:
+    """The tiny scenario with climbs that a fixed wing limited to 4/5 degrees flies on helices."""
+    s = tiny_scenario()
+    xyz = s.xyz.copy()
+    xyz[:, 2] = [0.0, 3_500.0, 200.0, 4_000.0, 600.0, 4_400.0, 5_000.0]
+    climb, descent = firmware_limits
+    params = s.params.__class__(
+        **{**s.params.to_dict(), "max_climb_angle": climb, "max_descent_angle": descent}
+    )
+    return Scenario(
+        ids=s.ids, xyz=xyz, kind=s.kind, unreliable=s.unreliable, params=params,
+        name="steep", source="hand-made", origin=s.origin,
+    )  # fmt: skip
+
+
 def make_plan(
     scenario: Scenario | None = None,
     routes: tuple[list[int], ...] = ROUTES,
@@ -82,12 +96,9 @@ def make_plan(
     """A plan dict as `gcs-planner plan` writes it, for the given routes (front order as
     given)."""
     s = scenario if scenario is not None else tiny_scenario()
-    radius = s.params.turn_radius
     front = []
     for points in routes:
-        traj = route_trajectory(s.xyz[points], radius)
-        legs = [Leg(leg.length, leg.arc_length, leg.arc_angle) for leg in traj.legs]
-        route = evaluate_route(s, points, legs, turn_radius=radius)
+        route = flown_route(s, tuple(points))
         p = 0.8 ** sum(bool(s.unreliable[i]) for i in points)
         route = route.with_probabilities(p, [1.0] * len(points))
         front.append(plan_json.route_to_dict(s, route, route.length))
@@ -244,7 +255,10 @@ def test_arcs_are_densified_within_16_degrees_and_2_m_of_the_planned_arc():
             x = dist * math.sin(math.radians(fwd_az))
             y = dist * math.cos(math.radians(fwd_az))
             z = it.z - frame_origin.alt
-            assert abs(np.linalg.norm(np.array([x, y, z]) - c) - radius) < 0.05
+            off = np.array([x, y, z]) - c
+            if g["model"] == "airplane":  # a horizontal circle, climbing at the leg's angle
+                off[2] = 0.0
+            assert abs(np.linalg.norm(off) - radius) < 0.05
             assert it.param2 >= 1 and it.param2 == int(it.param2)
 
 
@@ -370,3 +384,41 @@ def test_bad_plans_are_input_errors(mutate):
     mutate(plan)
     with pytest.raises(InputError):
         build_mission(plan, source="plan.json")
+
+
+@pytest.mark.parametrize("firmware", ["ardupilot", "px4"])
+def test_helices_become_loiters_at_the_turning_radius_where_the_plan_climbs(firmware):
+    """Each helix of an airplane leg is one loiter on its turning circle: centre R from the
+    correction point it starts at, radius R signed by the turn's sense, altitude the one the plan
+    reaches at the end of the helix; ArduPilot counts the turns, PX4 loiters to the altitude."""
+    s = steep_scenario()
+    plan = make_plan(s, routes=([0, 1, 2, 3, 4, 6],), probability=False)
+    m = build_mission(plan, firmware=firmware)
+    entry = plan["front"][0]
+    helix_legs = [leg for leg in entry["legs"] if leg["helix_turns"] > 0]
+    assert helix_legs, "the steep scenario must need helices"
+    loiters = [it for it in m.items if it.command in (18, 31)]
+    assert len(loiters) == len(helix_legs)
+    frame = LocalFrame(ORIGIN)
+    for leg, item in zip(helix_legs, loiters):
+        geo = leg["geometry"]
+        assert item.command == (18 if firmware == "ardupilot" else 31)
+        radius_param = item.param3 if firmware == "ardupilot" else item.param2
+        assert abs(radius_param) == pytest.approx(200.0)
+        # positive = clockwise (MAVLink): the opposite of our counter-clockwise sense
+        assert math.copysign(1, radius_param) == -geo["arc"]["sense"]
+        if firmware == "ardupilot":
+            assert item.param1 == leg["helix_turns"]
+        assert item.param4 == 1  # leave on the tangent, towards the next item
+        x, y, z = frame.to_local(item.lat, item.lon, item.z)
+        start = np.array(geo["start"])
+        assert math.hypot(x - start[0], y - start[1]) == pytest.approx(200.0, abs=0.01)
+        flat = geo["helix_length"] * math.cos(math.radians(leg["path_angle_deg"]))
+        climb = flat * math.tan(math.radians(leg["path_angle_deg"]))
+        assert z == pytest.approx(start[2] + climb, abs=0.01)
+    # every leg of the route is within the climb limits
+    assert all(-5.0 - 1e-9 <= leg["path_angle_deg"] <= 4.0 + 1e-9 for leg in entry["legs"])
+    # the correction points are still waypoints exactly on the landmarks
+    for pid, seq in m.point_seqs:
+        x, y, z = frame.to_local(m.items[seq].lat, m.items[seq].lon, m.items[seq].z)
+        assert np.allclose([x, y, z], s.xyz[s.index_of(pid)], atol=0.01)

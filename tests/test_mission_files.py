@@ -232,6 +232,7 @@ def test_write_all_writes_every_file(tmp_path):
             "route.csv",
             "route.png",
             "front.png",
+            "error_budget.png",
         ]  # fmt: skip
     )
     assert all(p.stat().st_size > 0 for p in paths)
@@ -257,8 +258,9 @@ def test_write_all_leaves_the_folder_alone_on_bad_input(tmp_path):
 
 @pytest.fixture
 def plan_file(tmp_path):
+    """A plan whose chosen route (P 0.8) was chosen with --min-probability 0."""
     path = tmp_path / "plan.json"
-    path.write_text(json.dumps(make_plan()))
+    path.write_text(json.dumps({**make_plan(), "min_probability": 0.0}))
     return path
 
 
@@ -267,7 +269,10 @@ def test_export_command_writes_each_format(plan_file, tmp_path, fmt, capsys):
     out = tmp_path / f"x.{fmt}"
     assert main(["export", str(plan_file), "--format", fmt, "--out", str(out)]) == 0
     assert out.stat().st_size > 0
-    assert "warning" not in capsys.readouterr().err  # the plan has an origin
+    err = capsys.readouterr().err
+    assert "origin" not in err  # the plan has one
+    # The chosen route arrives with P 0.8: exported (the plan asked for no more), with a warning.
+    assert "warning: route 0 arrives with probability 0.8000" in err
 
 
 def test_export_command_options(plan_file, tmp_path):
@@ -288,7 +293,8 @@ def test_export_command_options(plan_file, tmp_path):
 def test_export_warns_about_the_default_origin(tmp_path, capsys):
     path = tmp_path / "plan.json"
     path.write_text(json.dumps(make_plan(tiny_scenario(origin=None))))
-    assert main(["export", str(path), "--format", "kml", "--out", str(tmp_path / "r.kml")]) == 0
+    out = str(tmp_path / "r.kml")
+    assert main(["export", str(path), "--format", "kml", "--out", out, "--allow-risky"]) == 0
     assert "default origin" in capsys.readouterr().err
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import copy
 import io
 
 import matplotlib.image as mpimg
@@ -11,7 +12,13 @@ import pytest
 from test_mission_builder import make_plan
 
 from gcs_planner.errors import InputError
-from gcs_planner.mission.pictures import front_png, route_png
+from gcs_planner.mission.pictures import (
+    error_budget_png,
+    front_png,
+    route_png,
+    sawtooth,
+    side_profile,
+)
 
 
 def decode(png: bytes) -> np.ndarray:
@@ -54,3 +61,76 @@ def test_front_picture_marks_the_chosen_route():
 def test_bad_route_index():
     with pytest.raises(InputError):
         route_png(make_plan(), 7)
+
+
+# --- the error budget, the side view, the front with one and with fifty routes ---------------
+
+
+def test_error_budget_picture():
+    plan = make_plan()
+    before = plt.get_fignums()
+    img = decode(error_budget_png(plan))
+    assert plt.get_fignums() == before
+    h, w = img.shape[:2]
+    assert 1200 <= w <= 2200 and 800 <= h <= 1400 and w > h
+    rgb = img[..., :3].reshape(-1, 3)
+    red = np.sum((rgb[:, 0] > 0.75) & (rgb[:, 1] < 0.3) & (rgb[:, 2] < 0.3))  # the limits
+    assert red > 200
+    assert not np.array_equal(img, decode(error_budget_png(plan, 2)))
+
+
+@pytest.mark.parametrize("component, resets", [("v", "V"), ("h", "H")])
+@pytest.mark.parametrize("k", [0, 1, 2])
+def test_sawtooth_grows_at_delta_and_drops_at_the_correcting_points(k, component, resets):
+    plan = make_plan()
+    entry = plan["front"][k]
+    delta = plan["parameters"]["delta"]
+    x, y = sawtooth(entry, component, resets)
+    legs = entry["legs"]
+    # x, y: the start of each leg, its end (the arrival), then the start of the next ...
+    starts, peaks, afters = y[0::2], y[1::2], y[2::2]
+    # The peaks are the arrival errors the plan states, at the distances it states.
+    assert peaks == pytest.approx([leg[f"{component}_error"] for leg in legs])
+    assert x[1::2] == pytest.approx([leg["cumulative"] for leg in legs])
+    # Along each leg the error grows by delta per metre flown.
+    runs = x[1::2] - x[0::2][: len(legs)]
+    assert peaks - starts[: len(legs)] == pytest.approx(delta * runs, rel=1e-6, abs=1e-9)
+    # After a point of the resetting kind the error is 0, after any other it is unchanged.
+    for leg, peak, after in zip(legs, peaks, afters, strict=False):
+        assert after == (0.0 if leg["kind"] == resets else pytest.approx(peak))
+
+
+def test_side_view_follows_the_flown_path():
+    plan = make_plan()
+    for k, entry in enumerate(plan["front"]):
+        along, z = side_profile(plan, k)
+        assert np.all(np.diff(along) >= 0)
+        # Arcs sampled as chords are a hair shorter than flown; never longer.
+        assert along[-1] == pytest.approx(entry["length"], rel=1e-5)
+        assert along[-1] <= entry["length"] + 1e-6
+        first, last = entry["legs"][0]["geometry"]["start"], entry["legs"][-1]["geometry"]["end"]
+        assert z[0] == pytest.approx(first[2]) and z[-1] == pytest.approx(last[2])
+
+
+def many_routes(plan: dict, n: int, seed: int = 0) -> dict:
+    """The plan with ``n`` front entries of varied length, corrections and probability."""
+    rng = np.random.default_rng(seed)
+    front = []
+    for _ in range(n):
+        entry = copy.deepcopy(plan["front"][0])
+        entry["corrections"] = int(rng.integers(3, 20))
+        entry["length"] = float(rng.uniform(50_000, 60_000))
+        entry["probability"] = float(0.8 ** rng.integers(0, 6))
+        front.append(entry)
+    return {**plan, "front": front, "chosen": n // 2, "min_probability": 0.99}
+
+
+@pytest.mark.parametrize("n", [1, 50])
+def test_front_picture_reads_with_one_and_with_fifty_routes(n):
+    plan = many_routes(make_plan(), n)
+    img = decode(front_png(plan))
+    h, w = img.shape[:2]
+    assert 600 <= w <= 1600 and 400 <= h <= 1200
+    other = decode(front_png({**plan, "chosen": 0 if n == 1 else n - 1}))
+    if n > 1:  # the chosen ring moves with the choice
+        assert not np.array_equal(img, other)

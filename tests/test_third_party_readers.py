@@ -18,7 +18,7 @@ from mavsdk import ComponentType, Configuration, Mavsdk
 from mavsdk.plugins.mission_raw import MissionRaw
 from pymavlink import mavwp
 from pymavlink.dialects.v20 import common as mavlink2
-from test_mission_builder import make_plan
+from test_mission_builder import make_plan, steep_scenario
 
 from gcs_planner.mission.builder import build_mission
 from gcs_planner.mission.items import MAV_FRAME_MISSION
@@ -35,6 +35,8 @@ OPTIONS = [
     for fr in ("amsl", "relative")
     for end in ("loiter", "rtl", "land")
 ]
+# The plain tiny plan, and one whose climbs need helices (loiter items in the mission).
+PLANS = {"flat": lambda: make_plan(), "helices": lambda: make_plan(steep_scenario())}
 
 
 @pytest.fixture(scope="module")
@@ -73,9 +75,11 @@ def assert_same(theirs, ours) -> None:
         assert t.z == pytest.approx(o.z, rel=1e-6, abs=1e-3)
 
 
+@pytest.mark.parametrize("plan", PLANS)
 @pytest.mark.parametrize("opts", OPTIONS, ids=lambda o: "-".join(o.values()))
-def test_mavsdk_imports_every_plan(tmp_path, mission_raw, opts):
-    m = build_mission(make_plan(), **opts)
+def test_mavsdk_imports_every_plan(tmp_path, mission_raw, opts, plan):
+    m = build_mission(PLANS[plan](), **opts)
+    assert any(it.command in (18, 31) for it in m.items) == (plan == "helices")
     path = write_plan(m, tmp_path / "mission.plan")
     data = mission_raw[m.firmware].import_qgroundcontrol_mission(str(path))
     items = data.mission_items
@@ -94,9 +98,11 @@ def test_mavsdk_imports_every_plan(tmp_path, mission_raw, opts):
     assert data.geofence_items == [] and data.rally_items == []
 
 
+@pytest.mark.parametrize("plan", PLANS)
 @pytest.mark.parametrize("opts", OPTIONS, ids=lambda o: "-".join(o.values()))
-def test_mavsdk_imports_every_waypoints_file(tmp_path, mission_raw, opts):
-    m = build_mission(make_plan(), **opts)
+def test_mavsdk_imports_every_waypoints_file(tmp_path, mission_raw, opts, plan):
+    m = build_mission(PLANS[plan](), **opts)
+    assert any(it.command in (18, 31) for it in m.items) == (plan == "helices")
     path = write_waypoints(m, tmp_path / "mission.waypoints")
     items = mission_raw[m.firmware].import_mission_planner_mission(str(path)).mission_items
     rows = len(path.read_text().splitlines()) - 1
@@ -113,9 +119,11 @@ def test_mavsdk_imports_every_waypoints_file(tmp_path, mission_raw, opts):
     assert [it.seq for it in items] == list(range(len(items)))
 
 
+@pytest.mark.parametrize("plan", PLANS)
 @pytest.mark.parametrize("opts", OPTIONS, ids=lambda o: "-".join(o.values()))
-def test_pymavlink_loads_every_waypoints_file(tmp_path, opts):
-    m = build_mission(make_plan(), **opts)
+def test_pymavlink_loads_every_waypoints_file(tmp_path, opts, plan):
+    m = build_mission(PLANS[plan](), **opts)
+    assert any(it.command in (18, 31) for it in m.items) == (plan == "helices")
     path = write_waypoints(m, tmp_path / "mission.waypoints")
     loader = mavwp.MAVWPLoader()
     count = loader.load(str(path))

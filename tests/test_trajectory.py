@@ -165,7 +165,11 @@ def test_leg_dict_round_trip(p, u, q, r):
         "arc_length",
         "straight_length",
         "length",
+        "path_angle_deg",
+        "model",
+        "helix_turns",
     }
+    assert d["helix_turns"] == 0 and d["model"] == ("cs3d" if r > 0 else "straight")
     if leg.centre is None:
         assert d["arc"] is None
     else:

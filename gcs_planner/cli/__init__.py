@@ -3,6 +3,10 @@
 Each subcommand is a module in this package with ``add_parser(subparsers)`` (which sets
 ``func``); errors the user can act on are :class:`~gcs_planner.errors.GcsPlannerError` and
 become one line on stderr and the error's exit code, never a traceback.
+
+Only the module of the command being run is imported: the link's modules pull in pymavlink and
+the planner's numpy and scipy, and a user who asks for ``--help`` or plans a scenario should not
+wait for the others. The other commands appear in ``--help`` by their one-line summary.
 """
 
 from __future__ import annotations
@@ -17,22 +21,50 @@ from gcs_planner.errors import GcsPlannerError
 
 # Subcommand modules, in the order `--help` lists them.
 COMMANDS = ("plan", "export", "upload", "download", "mock_vehicle", "dry_run", "sweep")
+# What `--help` says of a command whose module is not imported. A command missing here is
+# imported whenever the parser is built (slower start, nothing else lost).
+SUMMARIES = {
+    "plan": "plan a scenario: the exact Pareto front and one chosen route",
+    "export": "convert a plan JSON to a mission file, a map file or a picture",
+    "upload": "upload a mission to a vehicle, read it back and compare",
+    "download": "download the vehicle's mission to a file",
+    "mock_vehicle": "run a simulated fixed-wing autopilot for a ground station to talk to",
+    "dry_run": "plan, upload to a mock vehicle over loopback, read back, replay and report",
+    "sweep": "plan many scenarios x parameter values as tasks on Dask (local or a cluster)",
+}
 
 
-def build_parser() -> argparse.ArgumentParser:
+def command_name(module: str) -> str:
+    return module.replace("_", "-")
+
+
+def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
+    """The parser; with ``argv``, only the command it names is built in full (None: all)."""
     parser = argparse.ArgumentParser(
         prog="gcs-planner",
         description="Mission planner for INS-only maritime fixed-wing UAVs.",
     )
     parser.add_argument("--version", action="version", version=f"gcs-planner {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
-    for name in COMMANDS:
-        importlib.import_module(f"gcs_planner.cli.{name}").add_parser(sub)
+    wanted = None if argv is None else _command_in(argv)
+    for module in COMMANDS:
+        if argv is None or module == wanted or module not in SUMMARIES:
+            importlib.import_module(f"gcs_planner.cli.{module}").add_parser(sub)
+        else:
+            sub.add_parser(command_name(module), help=SUMMARIES[module])
     return parser
 
 
+def _command_in(argv: Sequence[str]) -> str | None:
+    """The module of the first argument that names a command (None when there is none)."""
+    by_name = {command_name(m): m for m in COMMANDS}
+    return next((by_name[a] for a in argv if a in by_name), None)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = build_parser()
+    if argv is None:
+        argv = sys.argv[1:]
+    parser = build_parser(argv)
     args = parser.parse_args(argv)
     try:
         return int(args.func(args) or 0)

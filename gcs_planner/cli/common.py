@@ -5,16 +5,20 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 from typing import TYPE_CHECKING
 
-from gcs_planner.core.choose import CHOICES
+from gcs_planner.core.budget import DEFAULT_MAX_LABELS, terminal_progress
 from gcs_planner.errors import InputError
-from gcs_planner.mission.georef import parse_origin
-from gcs_planner.scenario.model import Scenario
+from gcs_planner.policy import DEFAULT_MIN_PROBABILITY
 from gcs_planner.vehicle import LEG_MODELS
 
 if TYPE_CHECKING:
     from gcs_planner.core.planner import Plan
+    from gcs_planner.scenario.model import Scenario
+
+# The route choices (gcs_planner.core.choose.CHOICES, not imported: it pulls numpy in).
+CHOICES = ("compromise", "shortest", "fewest", "most-reliable")
 
 # flag -> Parameters field
 PARAMETER_FLAGS = {
@@ -40,7 +44,11 @@ VEHICLE_FLAGS = {
 
 def add_scenario_arguments(parser: argparse.ArgumentParser, positional: bool = True) -> None:
     if positional:
-        parser.add_argument("scenario", help="scenario file: .toml, .csv or contest .xlsx")
+        parser.add_argument(
+            "scenario",
+            help="scenario file: .toml, points .csv (x,y,z or lat,lon,alt), .geojson or "
+            "contest .xlsx",
+        )
     group = parser.add_argument_group("scenario parameters (override the scenario file)")
     for name, help_text in PARAMETER_FLAGS.items():
         group.add_argument(f"--{name.replace('_', '-')}", dest=name, type=float, help=help_text)
@@ -69,6 +77,7 @@ def _vector(text: str) -> tuple[float, float, float]:
 
 
 def load_scenario_from_args(args: argparse.Namespace, path: str | None = None) -> Scenario:
+    from gcs_planner.mission.georef import parse_origin
     from gcs_planner.scenario.readers import load_scenario
 
     overrides: dict = {
@@ -91,7 +100,12 @@ def add_plan_arguments(parser: argparse.ArgumentParser) -> None:
         help="comma-separated subset of length,corrections,probability (default: "
         "length,corrections, plus probability when the scenario has unreliable points)",
     )
-    parser.add_argument("--choose", default="compromise", choices=CHOICES, help="route choice")
+    parser.add_argument(
+        "--choose",
+        default="compromise",
+        choices=CHOICES,
+        help="route choice among the routes that reach --min-probability (default compromise)",
+    )
     parser.add_argument(
         "--weights", help="weights of the objectives for a weighted compromise, e.g. 1,0.5"
     )
@@ -101,16 +115,62 @@ def add_plan_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--min-probability",
         type=float,
-        default=0.0,
+        default=DEFAULT_MIN_PROBABILITY,
         metavar="P",
-        help="choose only among front routes that arrive with probability >= P (default 0)",
+        help="choose only among front routes that arrive with probability >= P (default "
+        f"{DEFAULT_MIN_PROBABILITY:g}; 0 for the plain compromise); when none does, the most "
+        "reliable route is chosen, and it is exported only with --allow-risky",
     )
+    budget = parser.add_argument_group(
+        "search budget (turns and the probability objective: a branch and bound that proves "
+        "its front by exhausting its queue; when the budget ends it first, each route's gap is "
+        "reported)"
+    )
+    budget.add_argument(
+        "--time-limit",
+        type=_seconds,
+        metavar="SECONDS",
+        help="stop the search after this many seconds (default: no limit)",
+    )
+    budget.add_argument(
+        "--max-labels",
+        type=_labels,
+        metavar="N",
+        help=f"partial routes each search may expand (default {DEFAULT_MAX_LABELS:,}; "
+        "0: no limit, then --time-limit bounds the search)",
+    )
+    budget.add_argument(
+        "--progress",
+        action="store_true",
+        help="show the search's progress on stderr (default: only when stderr is a terminal)",
+    )
+
+
+def _seconds(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected seconds, got {text!r}") from None
+    if not (math.isfinite(value) and value >= 0):
+        raise argparse.ArgumentTypeError(f"expected seconds >= 0, got {text!r}")
+    return value
+
+
+def _labels(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected labels >= 0, got {text!r}")
+    return value
 
 
 def plan_from_args(args: argparse.Namespace, scenario: Scenario) -> Plan:
     """Plan ``scenario`` with the flags of :func:`add_plan_arguments`; bad flags are InputError."""
     from gcs_planner.core.planner import OBJECTIVES, plan
 
+    objectives = None
     if args.objectives:
         objectives = tuple(o.strip() for o in args.objectives.split(",") if o.strip())
         unknown = [o for o in objectives if o not in OBJECTIVES]
@@ -120,25 +180,21 @@ def plan_from_args(args: argparse.Namespace, scenario: Scenario) -> Plan:
                 f"choose from {', '.join(OBJECTIVES)}",
                 field="--objectives",
             )
-    else:
-        objectives = ("length", "corrections")
-        if scenario.unreliable.any():
-            objectives += ("probability",)
     weights = None
     if args.weights:
         try:
             weights = [float(w) for w in args.weights.split(",")]
         except ValueError:
             raise InputError(f"not numbers: {args.weights!r}", field="--weights") from None
-    if args.choose == "most-reliable" and "probability" not in objectives:
-        objectives += ("probability",)
     if not 0.0 <= args.min_probability <= 1.0:
         raise InputError(
             f"{args.min_probability:g} is not a probability (0 to 1)", field="--min-probability"
         )
-    if args.min_probability > 0 and "probability" not in objectives:
-        # The routes that satisfy it may all lie off the (length, corrections) front.
-        objectives += ("probability",)
+    max_labels = getattr(args, "max_labels", None)
+    if max_labels is None:
+        max_labels = DEFAULT_MAX_LABELS
+    show = getattr(args, "progress", False) or sys.stderr.isatty()
+    progress = terminal_progress(sys.stderr) if show else None
     try:
         return plan(
             scenario,
@@ -147,6 +203,12 @@ def plan_from_args(args: argparse.Namespace, scenario: Scenario) -> Plan:
             weights=weights,
             max_corrections=args.max_corrections,
             min_probability=args.min_probability,
+            max_labels=max_labels or None,
+            time_limit=getattr(args, "time_limit", None),
+            progress=progress,
         )
     except ValueError as exc:
         raise InputError(str(exc)) from None
+    finally:
+        if progress is not None:
+            progress.finish()

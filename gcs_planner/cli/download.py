@@ -7,7 +7,7 @@ import json
 from dataclasses import asdict
 from pathlib import Path
 
-from gcs_planner.atomic import write_atomic
+from gcs_planner.atomic import check_output_file, write_atomic
 from gcs_planner.cli.upload import add_link_arguments, connect_client
 from gcs_planner.errors import InputError
 from gcs_planner.mission.items import MissionItem
@@ -28,6 +28,7 @@ def run(args: argparse.Namespace) -> int:
     suffix = out.suffix.lower()
     if suffix not in (".waypoints", ".json"):
         raise InputError("expected a .waypoints or .json output file", file=str(out), field="--out")
+    check_output_file(out)
     client = connect_client(args)
     try:
         items = client.download()

@@ -13,10 +13,19 @@ from gcs_planner.cli.common import (
     load_scenario_from_args,
     plan_from_args,
 )
-from gcs_planner.dry_run import EXIT_LOST, DryRunReport, dry_run
+from gcs_planner.dry_run import (
+    DEVIATION_STEP_M,
+    DRY_RUN_ACCEPTANCE_RADIUS_M,
+    EXIT_LOST,
+    DryRunReport,
+    dry_run,
+)
+from gcs_planner.dry_run_track import write_track
 from gcs_planner.errors import InputError, LinkError
 from gcs_planner.link.mission_client import FIRMWARES
 from gcs_planner.link.protocol import DEFAULT_TIMEOUT_S
+from gcs_planner.mission.geo_exports import trajectory_local
+from gcs_planner.plan_json import plan_to_dict
 from sim.replay import CHORD_SHORTFALL, QUANTISATION_M
 
 EPILOG = f"""exit codes: 0 the mission verified and the replay arrived; 2 bad input; 3 no feasible
@@ -54,6 +63,18 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         metavar="SECONDS",
         help=f"ground station's wait per message (default {DEFAULT_TIMEOUT_S:g})",
     )
+    g.add_argument(
+        "--acceptance-radius",
+        default=str(DRY_RUN_ACCEPTANCE_RADIUS_M),
+        metavar="M",
+        help="waypoint ACCEPTANCE radius exported and set on the vehicle, whole metres 1..255 "
+        f"(default {DRY_RUN_ACCEPTANCE_RADIUS_M}: the autopilot flies up to each point)",
+    )
+    g.add_argument(
+        "--track-out",
+        metavar="PATH",
+        help="write the flown track beside the mission's path (.geojson or .kml)",
+    )
     g.add_argument("--json", action="store_true", help="print one JSON object, nothing else")
     p.set_defaults(func=run)
 
@@ -75,10 +96,15 @@ def run(args: argparse.Namespace) -> int:
     loss = _number(args.loss, "--loss", float, 0.0, 1.0)
     seed = int(_number(args.seed, "--seed", int, 0))
     timeout = _number(args.timeout, "--timeout", float, 1e-3)
+    acceptance = int(_number(args.acceptance_radius, "--acceptance-radius", int, 1, 256))
+    track_out = args.track_out
+    if track_out is not None and not track_out.lower().endswith((".geojson", ".json", ".kml")):
+        raise InputError("must end in .geojson, .json or .kml", field="--track-out")
     scenario = load_scenario_from_args(args)
     result = plan_from_args(args, scenario)
     # The vehicle's landmark database comes from the file again, not from the planner.
     landmarks = load_scenario_from_args(args)
+    flown: list = []
     report = dry_run(
         result,
         landmarks,
@@ -87,7 +113,16 @@ def run(args: argparse.Namespace) -> int:
         loss=loss,
         seed=seed,
         timeout=timeout,
+        acceptance_radius=acceptance,
+        track=flown,
     )
+    if track_out is not None and flown:
+        try:
+            planned = trajectory_local(plan_to_dict(result), step=DEVIATION_STEP_M)
+            write_track(track_out, flown[0], landmarks, result.route.ids(), planned)
+        except OSError as exc:
+            message = f"cannot write {track_out}: {exc.strerror}"
+            raise InputError(message, field="--track-out") from None
     if args.json:
         sys.stdout.write(json.dumps(report.to_dict(), indent=2) + "\n")
     else:
@@ -120,12 +155,29 @@ def render(r: DryRunReport) -> str:
         out.append(f"  attempt {n} failed: {error}")
     out += ["", _table(r), ""]
     within = "within" if r.length_within_tolerance else "OUTSIDE"
+    if r.length_within_tolerance is None:
+        within = f"not measured ({r.helices} helices: the chords skip them) against"
     out.append(
         f"length: the stored mission flies {r.mission_length:,.1f} m from A to B, planned "
         f"{r.planned_length:,.1f} m: difference {r.length_difference:+.2f} m, {within} the "
         f"tolerance {r.length_tolerance:.2f} m ({CHORD_SHORTFALL:.3%} of {r.arc_length:,.1f} m "
         f"of arcs + {QUANTISATION_M * 100:g} cm x {r.waypoints} waypoints)"
     )
+    out.append(
+        f"flight: {r.flavour} mode AUTO with the scenario's vehicle profile flies "
+        f"{r.flown_to_b:,.1f} m to B in {r.flight_seconds / 60:.1f} min, planned "
+        f"{r.planned_length:,.1f} m: difference {r.flown_difference:+.1f} m; largest deviation "
+        f"from the planned path {r.max_deviation:.1f} m (3D), {r.max_deviation_at:,.0f} m from "
+        f"A; acceptance radius {r.acceptance_radius:g} m, capture radius {r.capture_radius:g} m"
+    )
+    for note in r.flight_notes:
+        out.append(f"  note: {note}")
+    if r.missed:
+        out.append(
+            "missed: "
+            + ", ".join(f"{m.kind} {m.point} by {m.miss:.1f} m" for m in r.missed)
+            + f" (outside the {r.capture_radius:g} m capture radius: no correction)"
+        )
     if not r.arrived:
         out.append(f"flown {r.flown_length:,.1f} m before the vehicle was lost")
     if not r.corrections_as_planned:
@@ -161,6 +213,12 @@ def _table(r: DryRunReport) -> str:
     lines = [head]
     for row in r.rows:
         kind = row.kind + ("*" if row.unreliable else "")
+        if row.outcome == "missed":
+            lines.append(
+                f"{row.point:>6} {kind:>4} {row.distance:>10.1f} {'-':>7} {'-':>7} {'-':>8} "
+                f"{'-':>8} {'-':>9} {'-':>9}  MISSED by {row.miss:.1f} m (3D)"
+            )
+            continue
         pv = "-" if row.planned_v is None else f"{row.planned_v:.3f}"
         ph = "-" if row.planned_h is None else f"{row.planned_h:.3f}"
         outcome = row.outcome + ("" if row.on_route else " (not on route)")
@@ -169,7 +227,7 @@ def _table(r: DryRunReport) -> str:
             f"{row.h_before:>7.3f} {row.v_margin:>8.3f} {row.h_margin:>8.3f} {pv:>9} {ph:>9}"
             f"  {outcome}"
         )
-    if r.arrived or (r.rows and r.rows[-1].outcome != "lost"):
+    if r.arrived or not any(row.outcome == "lost" for row in r.rows):
         b = r.route[-1]
         lines.append(
             f"{b:>6} {'B':>4} {r.flown_length:>10.1f} {r.v_at_b:>7.3f} {r.h_at_b:>7.3f} "

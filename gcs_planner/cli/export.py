@@ -6,6 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from gcs_planner.errors import InputError
 from gcs_planner.mission.builder import (
     ALTITUDE_FRAMES,
     DEFAULT_CAPTURE_RADIUS,
@@ -15,6 +16,7 @@ from gcs_planner.mission.builder import (
 )
 from gcs_planner.mission.export import FORMATS, export
 from gcs_planner.mission.georef import DEFAULT_ORIGIN_WARNING, parse_origin
+from gcs_planner.policy import DEFAULT_MIN_PROBABILITY
 
 
 def add_mission_arguments(p: argparse.ArgumentParser) -> None:
@@ -29,12 +31,16 @@ def add_mission_arguments(p: argparse.ArgumentParser) -> None:
         help="amsl: MAV_FRAME_GLOBAL (default); relative: MAV_FRAME_GLOBAL_RELATIVE_ALT, "
         "above home at A",
     )
+    # The autopilot's waypoint ACCEPTANCE radius (param2), not the landmark's CAPTURE radius;
+    # --capture-radius is its old, misleading name, kept as a deprecated alias.
     g.add_argument(
+        "--acceptance-radius",
         "--capture-radius",
+        dest="acceptance_radius",
         type=float,
         default=DEFAULT_CAPTURE_RADIUS,
-        help="acceptance radius of the correction waypoints, whole metres "
-        f"(default {DEFAULT_CAPTURE_RADIUS})",
+        help="waypoint acceptance radius of the correction waypoints, whole metres "
+        f"(default {DEFAULT_CAPTURE_RADIUS}; --capture-radius is a deprecated alias)",
     )
     g.add_argument(
         "--cruise-speed",
@@ -51,7 +57,7 @@ def mission_options(args: argparse.Namespace, source: str = "") -> dict:
         "route_index": args.route_index,
         "firmware": args.firmware,
         "altitude_frame": args.altitude_frame,
-        "capture_radius": args.capture_radius,
+        "capture_radius": args.acceptance_radius,
         "cruise_speed": args.cruise_speed,
         "at_end": args.at_end,
         "origin": None if args.origin is None else parse_origin(args.origin),
@@ -71,14 +77,56 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--format", required=True, choices=tuple(FORMATS), dest="fmt")
     p.add_argument("--out", required=True, type=Path, help="file to write")
     add_mission_arguments(p)
+    add_risk_arguments(p)
     p.set_defaults(func=run)
 
 
+def add_risk_arguments(p: argparse.ArgumentParser) -> None:
+    """--min-probability and --allow-risky: a route less likely to arrive than the plan asked
+    for is exported only when the user says so."""
+    g = p.add_argument_group("risk")
+    g.add_argument(
+        "--min-probability",
+        type=float,
+        metavar="P",
+        help="refuse a route less likely than P to arrive (default: the plan's own, "
+        f"{DEFAULT_MIN_PROBABILITY:g} unless it was planned with another)",
+    )
+    g.add_argument(
+        "--allow-risky",
+        action="store_true",
+        help="export the route even below --min-probability (a warning names its probability)",
+    )
+
+
+def risk_check(args: argparse.Namespace, plan: dict) -> str | None:
+    """The warning to print for the route being exported, or RiskyRouteError (see policy)."""
+    from gcs_planner.policy import check_exportable
+
+    k = plan["chosen"] if args.route_index is None else args.route_index
+    if not isinstance(k, int) or not 0 <= k < len(plan["front"]):
+        return None  # the exporter names the bad index
+    floor = args.min_probability
+    if floor is None:
+        floor = plan.get("min_probability", DEFAULT_MIN_PROBABILITY)
+    if not isinstance(floor, (int, float)) or not 0.0 <= floor <= 1.0:
+        raise InputError(f"{floor!r} is not a probability (0 to 1)", field="--min-probability")
+    probability = plan["front"][k].get("probability", 1.0)
+    if not isinstance(probability, (int, float)):
+        raise InputError(f"front[{k}].probability is not a number", field="probability")
+    return check_exportable(float(probability), k, float(floor), args.allow_risky)
+
+
 def run(args: argparse.Namespace) -> int:
+    from gcs_planner.atomic import check_output_file
     from gcs_planner.plan_json import load_plan
 
+    check_output_file(args.out)
     plan = load_plan(args.plan)
+    warning = risk_check(args, plan)
     path, mission = export(plan, args.fmt, args.out, **mission_options(args, str(args.plan)))
+    if warning:
+        print(f"gcs-planner: warning: {warning}", file=sys.stderr)
     if mission.origin_is_default:
         print(f"gcs-planner: warning: {DEFAULT_ORIGIN_WARNING}", file=sys.stderr)
     print(f"wrote {path} (route {mission.route_index}, {len(mission.items)} mission items)")

@@ -9,6 +9,8 @@ import signal
 import sys
 
 from gcs_planner.cli.common import add_scenario_arguments, load_scenario_from_args
+from gcs_planner.cli.upload import id_in
+from gcs_planner.link.connection import check_connection
 from gcs_planner.link.signing import key_from_passphrase
 from sim.faults import FaultRates
 from sim.replay import DEFAULT_CAPTURE_RADIUS_M
@@ -25,7 +27,18 @@ def _rate(text: str) -> float:
     return value
 
 
+def _speedup(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}") from None
+    if not (value >= 0 and value < float("inf")):
+        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}")
+    return value
+
+
 def run(args: argparse.Namespace) -> int:
+    check_connection(args.connect)  # a typo is named before the scenario is read
     scenario = load_scenario_from_args(args, args.scenario)
     faults = FaultRates(
         drop=args.drop, duplicate=args.duplicate, delay=args.delay, reorder=args.reorder
@@ -35,6 +48,7 @@ def run(args: argparse.Namespace) -> int:
         scenario=scenario,
         flavour=args.flavour,
         system_id=args.system_id,
+        component_id=args.component_id,
         capacity=args.capacity,
         faults_out=faults if args.faults_on in ("out", "both") else None,
         faults_in=faults if args.faults_on in ("in", "both") else None,
@@ -42,6 +56,7 @@ def run(args: argparse.Namespace) -> int:
         signing_key=key_from_passphrase(args.signing_key) if args.signing_key else None,
         capture_radius=args.capture_radius,
         baud=args.baud,
+        speedup=args.speedup or None,
     )
     print(
         f"mock vehicle ({args.flavour}, system {args.system_id}) on {args.connect} with "
@@ -78,7 +93,17 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--scenario", required=True, help="scenario file: .toml, .csv or .xlsx")
     add_scenario_arguments(p, positional=False)
     p.add_argument("--flavour", choices=FLAVOURS, default="ardupilot")
-    p.add_argument("--system-id", type=int, default=1)
+    p.add_argument(
+        "--system-id", "--source-system", dest="system_id", type=id_in(1, 255), default=1
+    )
+    p.add_argument(
+        "--component-id",
+        "--source-component",
+        dest="component_id",
+        type=id_in(1, 255),
+        default=1,
+        help="autopilot component id (default 1, MAV_COMP_ID_AUTOPILOT1)",
+    )
     p.add_argument("--capacity", type=int, default=5000, help="most items it stores")
     p.add_argument("--baud", type=int, default=57600)
     p.add_argument("--signing-key", metavar="PASSPHRASE", help="sign and require signatures")
@@ -86,7 +111,16 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "--capture-radius",
         type=float,
         default=DEFAULT_CAPTURE_RADIUS_M,
-        help=f"landmark capture radius in metres (default {DEFAULT_CAPTURE_RADIUS_M:g})",
+        help="landmark CAPTURE radius (3D, metres) within which a correction works "
+        f"(default {DEFAULT_CAPTURE_RADIUS_M:g})",
+    )
+    p.add_argument(
+        "--speedup",
+        type=_speedup,
+        default=100.0,
+        metavar="N",
+        help="a flight started by MISSION_START plays N times faster than real time "
+        "(1: real time; 0: as fast as the link takes it; default 100)",
     )
     g = p.add_argument_group("fault injection (seeded)")
     for name in ("drop", "duplicate", "delay", "reorder"):

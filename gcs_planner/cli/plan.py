@@ -6,16 +6,20 @@ import argparse
 import math
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-from gcs_planner.atomic import write_atomic
+from gcs_planner.atomic import check_output_dir
 from gcs_planner.cli.common import (
     add_plan_arguments,
     add_scenario_arguments,
     load_scenario_from_args,
     plan_from_args,
 )
-from gcs_planner.core.planner import Plan
-from gcs_planner.core.route import Route
+from gcs_planner.cli.vehicle_from import add_vehicle_from_argument, apply_vehicle_from
+
+if TYPE_CHECKING:
+    from gcs_planner.core.planner import Plan
+    from gcs_planner.core.route import Route
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -26,28 +30,49 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     )
     add_scenario_arguments(p)
     add_plan_arguments(p)
+    add_vehicle_from_argument(p)
     p.add_argument("--json", action="store_true", help="print one JSON object, nothing else")
-    p.add_argument("--out", type=Path, help="folder for plan.json, route.csv and the mission files")
+    p.add_argument(
+        "--out",
+        type=Path,
+        help="folder for plan.json, the mission files, the route table and the pictures",
+    )
+    p.add_argument(
+        "--allow-risky",
+        action="store_true",
+        help="with --out, write the mission even when the chosen route is less likely to arrive "
+        "than --min-probability (a warning names its probability)",
+    )
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
+    from gcs_planner import plan_json
+    from gcs_planner.policy import check_exportable
+
+    if args.out:
+        check_output_dir(args.out)  # before the search, not after it
+    apply_vehicle_from(args)
     scenario = load_scenario_from_args(args)
     result = plan_from_args(args, scenario)
-
-    from gcs_planner import plan_json
-
     plan_dict = plan_json.plan_to_dict(result)
     text = plan_json.dumps_dict(plan_dict)
-    if args.out:
-        written = write_outputs(result, plan_dict, text, args.out)
     if args.json:
         sys.stdout.write(text)
     else:
         print(render(result))
-        if args.out:
-            print(f"\nwrote {', '.join(str(p) for p in written)}")
-    if args.out and scenario.origin is None:
+    if not args.out:
+        return 0
+    # Refused after the front is shown, so the user sees what else there is to choose from.
+    warning = check_exportable(
+        result.route.probability, result.chosen, result.min_probability, args.allow_risky
+    )
+    written = write_outputs(result, plan_dict, text, args.out)
+    if not args.json:
+        print(f"\nwrote {', '.join(str(p) for p in written)}")
+    if warning:
+        print(f"gcs-planner: warning: {warning}", file=sys.stderr)
+    if scenario.origin is None:
         from gcs_planner.mission.georef import DEFAULT_ORIGIN_WARNING
 
         print(f"gcs-planner: warning: {DEFAULT_ORIGIN_WARNING}", file=sys.stderr)
@@ -57,6 +82,7 @@ def run(args: argparse.Namespace) -> int:
 def write_outputs(result: Plan, plan_dict: dict, text: str, out: Path) -> list[Path]:
     """plan.json beside the mission files of the chosen route (default mission options; the
     `export` command takes the others)."""
+    from gcs_planner.atomic import write_atomic
     from gcs_planner.mission.export import write_all
 
     written = write_all(plan_dict, out)  # renders everything first: a bad plan writes nothing
@@ -71,6 +97,8 @@ COLUMNS = (
     ("leg m", "{:>10.1f}"),
     ("arc m", "{:>7.1f}"),
     ("turn °", "{:>6.1f}"),
+    ("path °", "{:>6.1f}"),
+    ("helix", "{:>5}"),
     ("total m", "{:>10.1f}"),
     ("v err", "{:>7.3f}"),
     ("h err", "{:>7.3f}"),
@@ -86,6 +114,8 @@ def table_rows(route: Route) -> list[list]:
         leg = s.leg.length if s.leg else 0.0
         arc = s.leg.arc if s.leg else 0.0
         turn = math.degrees(s.leg.turn_angle) if s.leg else 0.0
+        path = s.leg.path_angle if s.leg else 0.0
+        helix = s.leg.helix_turns if s.leg else 0
         vm = s.v_margin if math.isfinite(s.v_margin) else float("nan")
         hm = s.h_margin if math.isfinite(s.h_margin) else float("nan")
         kind = s.kind.name + ("*" if s.unreliable else "")
@@ -97,6 +127,8 @@ def table_rows(route: Route) -> list[list]:
                 leg,
                 arc,
                 turn,
+                path,
+                helix,
                 s.cumulative,
                 s.v_arrival,
                 s.h_arrival,
@@ -136,6 +168,8 @@ def render(result: Plan) -> str:
             if "probability" in result.objectives
             else ""
         ),
+        f"vehicle: {s.vehicle.describe()}",
+        *(f"warning: {w}" for w in result.warnings),
         f"optimality: {result.statement}",
         "",
         f"Pareto front ({len(result.routes)} route{'' if len(result.routes) == 1 else 's'}; "
@@ -146,14 +180,32 @@ def render(result: Plan) -> str:
             else ""
         )
         + "):",
-        f"  {'':1} {'length m':>11} {'corr':>4} {'P success':>9} {'gap m':>7}  route",
+        f"  {'':1} {'length m':>11} {'corr':>4} {'P arrive':>9} {'P lost':>7} {'gap m':>7}  route",
     ]
     certain, reliable = result.shortest_certain, result.most_reliable
+    proven = result.proven()
     for i, (r, gap) in enumerate(zip(result.routes, result.gaps())):
         mark = "*" if i == result.chosen else " "
         ids = " ".join(r.ids())
-        row = f"{r.length:>11.1f} {r.corrections:>4} {r.probability:>9.4f} {gap:>7.1f}"
+        # "?" after the gap: not settled, routes with fewer corrections or a higher
+        # probability may still be missing from the front (see core.proof).
+        unsure = " " if proven[i] else "?"
+        row = (
+            f"{r.length:>11.1f} {r.corrections:>4} {r.probability:>9.4f} "
+            f"{1 - r.probability:>7.4f} {gap:>7.1f}{unsure}"
+        )
         out.append(f"  {mark} {row}  {ids}")
+    if not result.threshold_met:
+        out.append(
+            f"  no route on this front arrives with P >= {result.min_probability:g}: the most "
+            f"reliable one is chosen (lost with probability {1 - result.route.probability:.4f}); "
+            "it is exported only with --allow-risky"
+            + (
+                ""
+                if "probability" in result.objectives
+                else "; --objectives length,corrections,probability may find likelier routes"
+            )
+        )
     if "probability" in result.objectives:
         out.append(
             "  shortest certain route: "
@@ -163,13 +215,15 @@ def render(result: Plan) -> str:
                 if certain is not None
                 else "none on this front"
             )
-            + f"; most reliable: P={result.routes[reliable].probability:.4f}, "
+            + f"; most reliable: P arrive {result.routes[reliable].probability:.4f} (lost "
+            f"{1 - result.routes[reliable].probability:.4f}), "
             f"{result.routes[reliable].length:,.1f} m"
         )
     out += [
         "",
         f"chosen route ({result.route.corrections} corrections, "
-        f"{result.route.length:,.1f} m; errors on arrival before correction, "
+        f"{result.route.length:,.1f} m, arrives with P {result.route.probability:.4f}, lost "
+        f"with P {1 - result.route.probability:.4f}; errors on arrival before correction, "
         "margins to the point's limits; * unreliable point):",
         render_table(result.route),
     ]

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 import sys
+from collections.abc import Callable
+from pathlib import Path
 
 from gcs_planner.errors import LinkError
 from gcs_planner.link.connection import open_link
@@ -32,6 +34,18 @@ def add_link_arguments(p: argparse.ArgumentParser) -> None:
     g.add_argument("--target-system", type=int, help="vehicle system id (default: first heard)")
     g.add_argument("--target-component", type=int, help="vehicle component id")
     g.add_argument(
+        "--source-system",
+        type=id_in(1, 255),
+        default=255,
+        help="our system id (default 255; give two ground stations different ids)",
+    )
+    g.add_argument(
+        "--source-component",
+        type=id_in(0, 255),
+        default=190,
+        help="our component id (default 190, MAV_COMP_ID_MISSIONPLANNER)",
+    )
+    g.add_argument(
         "--firmware", choices=FIRMWARES, help="autopilot firmware (default: from its heartbeat)"
     )
     g.add_argument("--timeout", type=float, default=1.5, help="seconds per wait (default 1.5)")
@@ -42,12 +56,33 @@ def add_link_arguments(p: argparse.ArgumentParser) -> None:
     g.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
+def id_in(low: int, high: int) -> Callable[[str], int]:
+    """An argparse type: an integer MAVLink id in ``low..high``."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"expected {low}..{high}, got {value}")
+        return value
+
+    return parse
+
+
 def connect_client(args: argparse.Namespace) -> MissionClient:
     """Open the link, wait for the vehicle, return a client (the caller closes ``client.link``)."""
     if args.timeout <= 0 or args.retries < 0:
         raise LinkError("--timeout must be > 0 and --retries >= 0")
     key = key_from_passphrase(args.signing_key) if args.signing_key else None
-    link = open_link(args.connect, baud=args.baud, signing_key=key)
+    link = open_link(
+        args.connect,
+        baud=args.baud,
+        signing_key=key,
+        source_system=args.source_system,
+        source_component=args.source_component,
+    )
     quiet = args.quiet
 
     def progress(label: str, total: int) -> Progress:
@@ -77,6 +112,17 @@ def run(args: argparse.Namespace) -> int:
         vehicle = client.vehicle
         assert vehicle is not None
         if (
+            Path(args.file).suffix.lower() in (".waypoints", ".json")
+            and args.firmware is None
+            and vehicle.firmware in FIRMWARES
+        ):
+            # A .waypoints file does not say which firmware it was written for (its row 0 is
+            # home either way), and a plan JSON is built into a mission here: both follow the
+            # vehicle's firmware.
+            mission = load_mission_file(
+                args.file, firmware=vehicle.firmware, route_index=args.route_index
+            )
+        if (
             mission.firmware is not None
             and vehicle.firmware in FIRMWARES
             and mission.firmware != vehicle.firmware
@@ -86,6 +132,12 @@ def run(args: argparse.Namespace) -> int:
                 f"{vehicle.firmware}: export it again with --firmware {vehicle.firmware}"
             )
         radius = args.loiter_radius if args.loiter_radius is not None else mission.loiter_radius
+        if args.keep_loiter_radius:
+            radius = None
+        if radius is not None:
+            # Before anything is uploaded: a vehicle without the parameter would otherwise be
+            # left holding a verified mission it will fly with tighter turns than planned.
+            client.check_loiter_parameter()
         report = client.upload_verified(mission.items, loiter_radius=radius)
     finally:
         client.link.close()
@@ -113,6 +165,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "--loiter-radius",
         type=float,
         help="set the vehicle's loiter radius to this (default: the plan's turning radius)",
+    )
+    p.add_argument(
+        "--keep-loiter-radius",
+        action="store_true",
+        help="leave the vehicle's loiter radius as it is (for vehicles without the parameter)",
     )
     p.set_defaults(func=run)
 

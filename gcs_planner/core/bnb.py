@@ -23,15 +23,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from gcs_planner.core.budget import DEFAULT_MAX_LABELS, Budget
 from gcs_planner.core.cost_to_go import cost_to_go
+from gcs_planner.core.prefilter import FanBound, covered_fan
 from gcs_planner.core.probability import propagate, success_probability
+from gcs_planner.core.proof import PROB_EPS, lower_bounds, settled
 from gcs_planner.core.reach import build_reach_graph
 from gcs_planner.core.route import Leg, Route, evaluate_route
-from gcs_planner.geometry.dubins import cs_lengths
+from gcs_planner.geometry.legs import FlownLeg, LegModel, path_angle_deg, scenario_leg_model
 from gcs_planner.geometry.trajectory import route_trajectory
 from gcs_planner.scenario.model import Kind, Scenario
 
-DEFAULT_MAX_LABELS = 5_000
+__all__ = ["DEFAULT_MAX_LABELS", "PROB_EPS", "BnbResult", "Found", "bnb_front", "flown_route"]
 
 
 @dataclass(frozen=True)
@@ -57,11 +60,10 @@ class BnbResult:
     # Straight legs: rounds of decremental state-space relaxation and the critical points.
     rounds: int = 1
     critical: tuple[int, ...] = ()
-
-
-# Probabilities reached along different routes are products taken in different orders: equal
-# values may differ in the last bits, and must still compare equal.
-PROB_EPS = 1e-12
+    # Per front point: whether it is proven to belong to the front *and* no open partial route
+    # can still lead to a front route with no more corrections (or, with the probability
+    # objective, at least its probability). See ``settled``.
+    proven: list[bool] | None = None
 
 
 def _least_length(front: Sequence[Found], corrections: int, probability: float) -> float:
@@ -127,9 +129,10 @@ def bnb_front(
     *,
     probability: bool,
     max_corrections: int | None = None,
-    max_labels: int = DEFAULT_MAX_LABELS,
+    max_labels: int | None = DEFAULT_MAX_LABELS,
     seeds: Sequence[Sequence[int]] = (),
     dominance: bool = True,
+    budget: Budget | None = None,
 ) -> BnbResult:
     """Exact Pareto front of (length, corrections[, probability]) with the scenario's turning
     radius, by best-first branch and bound. ``probability`` False treats every correction as
@@ -144,24 +147,31 @@ def bnb_front(
     ``search.straight_front``) makes it exact: points that front walks repeat become critical,
     and partial routes that visited different critical points are never compared. With turns
     the heading makes partial routes incomparable, and the search keeps whole simple routes.
+
+    ``budget`` (labels per search, seconds for the whole call, progress) overrides
+    ``max_labels``.
     """
     t0 = time.perf_counter()
+    if budget is None:
+        budget = Budget(max_labels)
     ctx = _Context(scenario, probability, max_corrections)
     if not dominance:
-        res = _search(ctx, None, max_labels, seeds)
-    elif ctx.R == 0:
-        res = _relaxed(ctx, max_labels, seeds)
+        res = _search(ctx, None, budget.share(stage="search"), seeds)
+    elif not ctx.model.carries_heading:
+        res = _relaxed(ctx, budget.share(stage="search"), seeds)
     else:
-        # With turns: first the exact front with straight legs. Every route flown with turns is
-        # the same route with straight legs made longer and less likely to arrive, so that
-        # front bounds each turned front point from below. Then dominance that ignores the
+        # With turns: first the exact front of the relaxation whose legs are the model's
+        # heading-free lower bounds (the chord for cs3d). Every route flown with turns is the
+        # same route with those legs made longer and less likely to arrive, so that front bounds
+        # each turned front point from below. Then dominance that ignores the
         # heading: no proof, but it finds good routes fast (the certain one, the most reliable
         # ones). Both seed the search over simple routes, whose exhaustion, or gaps, is what is
         # reported.
-        floor = _relaxed(ctx.straight(), max_labels, ())
-        guide = _relaxed(ctx, max_labels, [*seeds, *(f.points for f in floor.front)])
+        floor = _relaxed(ctx.relaxed(), budget.share(0.25, "heading-free floor"), ())
+        guide_budget = budget.share(0.25, "heading-free guide")
+        guide = _relaxed(ctx, guide_budget, [*seeds, *(f.points for f in floor.front)])
         simple = [f.points for f in guide.front if len(set(f.points)) == len(f.points)]
-        res = _search(ctx, None, max_labels, [*seeds, *simple])
+        res = _search(ctx, None, budget.share(stage="search"), [*seeds, *simple])
         res.labels += guide.labels + floor.labels
         if floor.optimal:
             res.lower_bounds = [
@@ -172,23 +182,23 @@ def bnb_front(
     return res
 
 
-def _relaxed(ctx: _Context, max_labels: int, seeds: Sequence[Sequence[int]]) -> BnbResult:
+def _relaxed(ctx: _Context, budget: Budget, seeds: Sequence[Sequence[int]]) -> BnbResult:
     """Dominance over walks, with decremental state-space relaxation until the front routes are
     simple (exact with straight legs)."""
     critical: frozenset[int] = frozenset()
     spent = rounds = 0
     while True:
         rounds += 1
-        res = _search(ctx, critical, max_labels - spent, seeds)
+        res = _search(ctx, critical, budget, seeds)
         res.rounds, res.critical = rounds, tuple(sorted(critical))
         spent += res.labels
         repeated = {p for f in res.front for p in f.points if f.points.count(p) > 1}
         if not repeated:
             break
-        if not res.exhausted or spent >= max_labels:
+        if not res.exhausted:
             # A budget ended a relaxed round: its walks are no routes, so fall back to the
             # search over simple routes, which is sound at any budget.
-            res = _search(ctx, None, max_labels, seeds)
+            res = _search(ctx, None, budget.share(stage=budget.stage), seeds)
             spent += res.labels
             break
         critical |= repeated
@@ -203,26 +213,25 @@ class _Context:
         self.scenario = scenario
         self.probability = probability
         self.params = scenario.params
-        self.R = self.params.turn_radius
+        self.model: LegModel = scenario_leg_model(scenario)
         self.graph = build_reach_graph(scenario)
         self.G = cost_to_go(scenario, self.graph)
         self.kmax = scenario.n - 2 if max_corrections is None else max_corrections
         self.kind_of = [Kind(int(c)) for c in scenario.kind]  # Enum() is slow in the loop
         self.unreliable = scenario.unreliable if probability else np.zeros(scenario.n, dtype=bool)
 
-    def straight(self) -> _Context:
-        """The same search with straight legs. The reach graph and the cost-to-go are made of
-        straight legs already: shared, not built again."""
+    def relaxed(self) -> _Context:
+        """The same search over the heading-free relaxation of the leg model (each leg as long
+        as its lower bound). The reach graph and the cost-to-go are made of those bounds
+        already: shared, not built again."""
         other = copy.copy(self)
-        other.scenario = self.scenario.with_params(turn_radius=0.0)
-        other.params = other.scenario.params
-        other.R = 0.0
+        other.model = self.model.relaxation()
         return other
 
     def seed(self, points: Sequence[int]) -> Found | None:
         """A known route as an incumbent, evaluated under this search's model."""
         points = tuple(int(i) for i in points)
-        route = flown_route(self.scenario, points)
+        route = flown_route(self.scenario, points, self.model)
         if not route.feasible:
             return None
         prob = 1.0
@@ -267,19 +276,21 @@ def _stochastically_dominates(d1: dict, d2: dict) -> bool:
 def _search(
     ctx: _Context,
     critical: frozenset[int] | None,
-    max_labels: int,
+    budget: Budget,
     seeds: Sequence[Sequence[int]],
 ) -> BnbResult:
     """One best-first search. ``critical`` None: whole simple routes, no dominance (turns, or
     the sound fallback). Otherwise walks that may not revisit a critical point, with dominance
     among partial routes at the same point that visited the same critical points."""
     t0 = time.perf_counter()
-    scenario, params, R, graph, G = ctx.scenario, ctx.params, ctx.R, ctx.graph, ctx.G
+    scenario, params, model, graph, G = ctx.scenario, ctx.params, ctx.model, ctx.graph, ctx.G
     kmax, kind_of, unreliable = ctx.kmax, ctx.kind_of, ctx.unreliable
     xyz = scenario.xyz
     start, end = graph.start, graph.end
     heading_a = None if scenario.heading_at_a is None else np.asarray(scenario.heading_at_a, float)
     relaxed = critical is not None
+    fan = FanBound(G, scenario.n)
+    is_v_point = scenario.kind == Kind.V
     # Per (point, critical points visited): the partial routes kept, as (L, k, states, mass).
     archive: dict[tuple[int, frozenset[int]], list[tuple[float, int, dict, float]]] = {}
 
@@ -315,22 +326,27 @@ def _search(
         # Routes found since this label was queued may now cover it.
         if inc.covers(L, k, to_go, mass):
             continue
-        labels += 1
-        if labels > max_labels:
+        if not budget.take():
             heapq.heappush(heap, entry)
             exhausted = False
             break
+        labels += 1
+        if budget.due():
+            budget.report(labels, len(heap), len(inc.found), f)
         lo, hi = graph.indptr[node], graph.indptr[node + 1]
         targets = graph.target[lo:hi].astype(np.int64)
         straight = graph.length[lo:hi]
-        if heading is None or R == 0:
-            flown = straight
-            headings = None
-        else:
-            flown, headings = cs_lengths(xyz[node], heading, xyz[targets], R)
+        if model.carries_heading:
+            flown, headings = model.lengths(xyz[node], heading, xyz[targets])
+        else:  # heading-free legs are as long as the graph's arcs
+            flown, headings = straight, None
         v_min = min(s[0] for s in states)
         h_min = min(s[1] for s in states)
         ok = (v_min + flown <= graph.lim_v[targets]) & (h_min + flown <= graph.lim_h[targets])
+        inner = np.flatnonzero(ok & (targets != end))
+        carried = np.where(is_v_point[targets[inner]], h_min, v_min) + flown[inner]
+        rows = fan.rows(targets[inner], carried)
+        ok[inner[covered_fan(L + flown[inner], k + 1, rows, inc.best(mass))]] = False
         for idx in np.flatnonzero(ok):
             j = int(targets[idx])
             if j in path and (not relaxed or j in critical):
@@ -367,12 +383,7 @@ def _search(
                 ):
                     continue
                 kept.append((nL, k + 1, new_states, new_mass))
-            if headings is not None:
-                new_heading = headings[idx]
-            elif R > 0:
-                new_heading = (xyz[j] - xyz[node]) / max(float(straight[idx]), 1e-300)
-            else:
-                new_heading = None
+            new_heading = None if headings is None else headings[idx]
             heapq.heappush(
                 heap,
                 (
@@ -390,27 +401,52 @@ def _search(
     found = sorted(inc.found, key=lambda g: (g.corrections, g.length))
     live = [e for e in heap if not inc.covers(e[2], e[4], e[8], sum(e[5].values()))]
     open_bound = min((e[0] for e in live), default=math.inf)
-    lower = []
-    for g in found:
-        # The least length an open label can still reach with <= g's corrections and at least
-        # g's probability: the proven lower bound of g's point of the front.
-        lb = g.length
-        for e in live:
-            L, k, to_go = e[2], e[4], e[8]
-            m = min(len(to_go), g.corrections - k + 1)
-            if m > 0 and sum(e[5].values()) >= g.probability - PROB_EPS:
-                lb = min(lb, L + float(np.min(to_go[:m])))
-        lower.append(lb)
+    open_routes = [(e[2], e[4], e[8], sum(e[5].values())) for e in live]
+    lower = lower_bounds(found, open_routes)
     complete = not live
+    proven = settled(
+        found,
+        open_routes,
+        inc.best,
+        kmax,
+        ctx.probability,
+    )
     return BnbResult(
-        found, lower, complete, labels, time.perf_counter() - t0, exhausted, len(live), open_bound
+        found,
+        lower,
+        complete,
+        labels,
+        time.perf_counter() - t0,
+        exhausted,
+        len(live),
+        open_bound,
+        proven=proven,
     )
 
 
-def flown_route(scenario: Scenario, points: tuple[int, ...]) -> Route:
-    """Re-evaluate a route with the scenario's turning radius, independently of the search."""
+def flown_route(
+    scenario: Scenario, points: tuple[int, ...], model: LegModel | None = None
+) -> Route:
+    """Re-evaluate a route under the scenario's leg model (or ``model``), independently of the
+    search: every leg flown again from the heading the previous one ended with."""
     R = scenario.params.turn_radius
+    if model is not None and model.name == "bound":
+        xyz = scenario.xyz[list(points)]
+        bounds = [float(model.lower_bounds(a, b[None, :])[0]) for a, b in zip(xyz, xyz[1:])]
+        return evaluate_route(scenario, points, [Leg(d) for d in bounds], turn_radius=R)
     heading = None if scenario.heading_at_a is None else np.asarray(scenario.heading_at_a, float)
-    traj = route_trajectory(scenario.xyz[list(points)], R, heading)
-    legs = [Leg(leg.length, leg.arc_length, leg.arc_angle) for leg in traj.legs]
+    model = scenario_leg_model(scenario) if model is None else model
+    traj = route_trajectory(scenario.xyz[list(points)], R, heading, model)
+    legs = [flown_leg(leg) for leg in traj.legs]
     return evaluate_route(scenario, points, legs, turn_radius=R)
+
+
+def flown_leg(leg: FlownLeg) -> Leg:
+    """The route table's view of a flown leg."""
+    return Leg(
+        leg.length,
+        leg.arc_length,
+        leg.arc_angle,
+        int(getattr(leg, "helix_turns", 0)),
+        path_angle_deg(leg),
+    )

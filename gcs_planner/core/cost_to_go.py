@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from gcs_planner.core.reach import ReachGraph
-from gcs_planner.core.search import not_dominated
+from gcs_planner.core.search import _summarise, not_dominated
 from gcs_planner.scenario.model import Kind, Scenario
 
 
@@ -89,6 +89,12 @@ def cost_to_go(scenario: Scenario, graph: ReachGraph) -> CostToGo:
     node, R, E = node[keep], R[keep], E[keep]
     arch_node, arch_R, arch_E = node.copy(), R.copy(), E.copy()
     arch_layer = np.zeros(len(node), dtype=np.int64)
+    # Per point, the kept label nearest B (largest E on a tie) and the one allowing the most
+    # error (nearest B on a tie): most candidates are dominated by one of the two, and testing
+    # that is one gather, where the full filter sorts every candidate. Both are kept labels,
+    # so whatever they drop the full filter would drop too: the labels kept are the same.
+    near_R, near_e, wide_R, wide_e = (np.full(n, np.inf) for _ in range(4))
+    _summarise(node, R, -E, near_R, near_e, wide_R, wide_e)
 
     # Reverse CSR over arcs between correction points.
     inner = (tgt != end) & (src != graph.start)
@@ -122,6 +128,10 @@ def cost_to_go(scenario: Scenario, graph: ReachGraph) -> CostToGo:
         newE = np.where(same, np.minimum(lim_other, E1) - d, lim_other - d)
         newR = R[lab] + d
         feasible &= newE >= 0
+        feasible &= ~(
+            ((near_R[j] <= newR) & (near_e[j] <= -newE))
+            | ((wide_R[j] <= newR) & (wide_e[j] <= -newE))
+        )
         j, newR, newE = j[feasible], newR[feasible], newE[feasible]
         empty = np.zeros((len(j), 0), np.uint64)
         keep = not_dominated(
@@ -135,6 +145,7 @@ def cost_to_go(scenario: Scenario, graph: ReachGraph) -> CostToGo:
             np.zeros((len(arch_node), 0), np.uint64),
         )
         node, R, E = j[keep], newR[keep], newE[keep]
+        _summarise(node, R, -E, near_R, near_e, wide_R, wide_e)
         arch_node = np.concatenate([arch_node, node])
         arch_R = np.concatenate([arch_R, R])
         arch_E = np.concatenate([arch_E, E])

@@ -11,11 +11,15 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 from gcs_planner.core.bnb import DEFAULT_MAX_LABELS, PROB_EPS, bnb_front, flown_route
+from gcs_planner.core.budget import Budget, ProgressCallback
 from gcs_planner.core.choose import choose as choose_route
 from gcs_planner.core.probability import success_probability
 from gcs_planner.core.route import Route, evaluate_route
 from gcs_planner.core.search import straight_front
+from gcs_planner.core.seeding import certain_front
 from gcs_planner.errors import InfeasibleError
+from gcs_planner.geometry.legs import scenario_leg_model
+from gcs_planner.policy import DEFAULT_MIN_PROBABILITY, choose_index, default_objectives
 from gcs_planner.scenario.model import Scenario
 
 OBJECTIVES = ("length", "corrections", "probability")
@@ -34,8 +38,26 @@ class Plan:
     statement: str
     lower_bounds: tuple[float, ...]  # per route: a proven lower bound on its front value
     stats: dict = field(default_factory=dict)
-    # The choice was made among the front routes at least this likely to arrive.
+    # The choice was made among the front routes at least this likely to arrive ...
     min_probability: float = 0.0
+    # ... unless none was: then the most reliable route is chosen and this is False.
+    threshold_met: bool = True
+    # What the user must know about flying these routes: an assumed unlimited climb and the
+    # steepest leg, or legs steeper than the aircraft's limits (planned with cs3d or straight).
+    warnings: tuple[str, ...] = ()
+    # Per route: proven on the front, and no route with no more corrections (nor, with the
+    # probability objective, at least its probability) left unexplored. Empty: every route is.
+    settled: tuple[bool, ...] = ()
+
+    def proven(self) -> tuple[bool, ...]:
+        """Per route, whether its "optimal" flag holds: settled and with no gap."""
+        flags = self.settled or (True,) * len(self.routes)
+        return tuple(s and gap <= 1e-6 for s, gap in zip(flags, self.gaps()))
+
+    @property
+    def front(self) -> tuple[Route, ...]:
+        """The Pareto front's routes (sorted by corrections, then length)."""
+        return self.routes
 
     @property
     def route(self) -> Route:
@@ -72,51 +94,50 @@ def plan(
     choice: str = "compromise",
     weights: Sequence[float] | None = None,
     max_corrections: int | None = None,
-    max_labels: int = DEFAULT_MAX_LABELS,
-    min_probability: float = 0.0,
+    max_labels: int | None = DEFAULT_MAX_LABELS,
+    min_probability: float = DEFAULT_MIN_PROBABILITY,
+    time_limit: float | None = None,
+    progress: ProgressCallback | None = None,
 ) -> Plan:
-    """Plan a scenario. Raises InfeasibleError (with the reason) when no route exists, or
-    none on the front arrives with at least ``min_probability`` (the route is chosen among
-    those that do; the front is reported whole)."""
+    """Plan a scenario. Raises InfeasibleError (with the reason) when no route exists.
+
+    ``objectives`` None: the policy's (:func:`gcs_planner.policy.default_objectives`). The route
+    is chosen among the front routes at least ``min_probability`` likely to arrive; when none
+    is, the most reliable one is chosen and ``threshold_met`` is False. The front is reported
+    whole either way.
+
+    The budget of the branch and bound (turns, probability): ``max_labels`` per search (None:
+    unlimited) and ``time_limit`` seconds in all (None: unlimited); ``progress`` is called
+    with a :class:`~gcs_planner.core.budget.Progress` about twice a second meanwhile. When the
+    budget ends the search, the plan says what is proven (``optimal`` False, per-route gaps)."""
     if not 0.0 <= min_probability <= 1.0:
         raise ValueError(f"min_probability must be within [0, 1], not {min_probability}")
-    if objectives is None:
-        objectives = ("length", "corrections")
-    objectives = tuple(objectives)
+    objectives = default_objectives(scenario, objectives, choice)
     for o in objectives:
         if o not in OBJECTIVES:
             raise ValueError(f"unknown objective {o!r}")
     use_probability = "probability" in objectives
-    radius = scenario.params.turn_radius
-    if use_probability or radius > 0:
-        result = _branch_and_bound(scenario, use_probability, max_corrections, max_labels)
+    if use_probability or scenario_leg_model(scenario).carries_heading:
+        budget = Budget(max_labels, time_limit, progress)
+        result = _branch_and_bound(scenario, use_probability, max_corrections, budget)
     else:
         result = _straight(scenario, max_corrections)
     routes, lower_bounds, optimal, statement, stats = result
+    settled = stats.pop("settled", None) or [True] * len(routes)
     if not routes:
         raise InfeasibleError(f"{scenario.name}: {statement}")
     order = sorted(range(len(routes)), key=lambda i: (routes[i].corrections, routes[i].length))
     routes = [routes[i] for i in order]
     lower_bounds = [lower_bounds[i] for i in order]
+    settled = [bool(settled[i]) for i in order]
     # Every route's probability is exact (re-evaluated), whichever objectives were searched.
-    eligible = [i for i, r in enumerate(routes) if r.probability >= min_probability - PROB_EPS]
-    if not eligible:
-        best = max(r.probability for r in routes)
-        raise InfeasibleError(
-            f"{scenario.name}: no route on the front arrives with probability >= "
-            f"{min_probability:g}; the most reliable one found arrives with {best:.4f} "
-            f"({statement})"
-        )
-    picked = [routes[i] for i in eligible]
-    chosen = eligible[
-        choose_route(
-            [r.length for r in picked],
-            [r.corrections for r in picked],
-            [r.probability for r in picked] if use_probability else None,
-            choice,
-            weights,
-        )
-    ]
+    chosen, threshold_met = choose_index(
+        routes,
+        choice=choice,
+        weights=weights,
+        min_probability=min_probability,
+        use_probability=use_probability,
+    )
     return Plan(
         scenario,
         tuple(routes),
@@ -128,7 +149,42 @@ def plan(
         tuple(lower_bounds),
         stats,
         min_probability,
+        threshold_met,
+        warnings=climb_warnings(scenario, routes),
+        settled=tuple(settled),
     )
+
+
+def climb_warnings(scenario: Scenario, routes: Sequence[Route]) -> tuple[str, ...]:
+    """Say what the plan assumed of the climb, and name every leg the aircraft cannot fly."""
+    v = scenario.vehicle
+    steep: list[tuple[float, int, str, str]] = []  # (|angle|, route, from, to)
+    over: list[str] = []
+    for k, route in enumerate(routes):
+        for prev, stop in zip(route.stops, route.stops[1:]):
+            angle = stop.leg.path_angle if stop.leg else 0.0
+            steep.append((abs(angle), k, prev.id, stop.id))
+            limit = v.max_climb_angle if angle > 0 else v.max_descent_angle
+            if abs(angle) > limit + 1e-6:
+                what = "climbs" if angle > 0 else "descends"
+                over.append(f"route {k} leg {prev.id}->{stop.id} {what} at {abs(angle):.1f} deg")
+    if not steep:
+        return ()
+    worst = max(steep)
+    if not v.climb_limited:
+        return (
+            "assumed unlimited climb and descent (90 deg, the contest's model): give "
+            "--max-climb-angle/--max-descent-angle or [vehicle] limits; steepest leg: "
+            f"route {worst[1]} {worst[2]}->{worst[3]} at {worst[0]:.1f} deg",
+        )
+    if over:
+        limits = f"climb {v.max_climb_angle:g} deg, descent {v.max_descent_angle:g} deg"
+        model = "straight" if v.turn_radius <= 0 else v.leg_model
+        return (
+            f"{len(over)} leg(s) are steeper than the aircraft's limits ({limits}); {model} "
+            "legs plan without them and the aircraft cannot fly these: " + "; ".join(over),
+        )
+    return ()
 
 
 def _straight(scenario: Scenario, max_corrections: int | None):
@@ -160,14 +216,22 @@ def _with_probability(scenario: Scenario, route: Route) -> Route:
 
 
 def _branch_and_bound(
-    scenario: Scenario, use_probability: bool, max_corrections: int | None, max_labels: int
+    scenario: Scenario, use_probability: bool, max_corrections: int | None, budget: Budget
 ):
+    # With the probability objective, the two-objective straight-leg front seeds the search
+    # (its fewest-corrections end first of all) and bounds each route from below.
+    certain = certain_front(scenario, max_corrections) if use_probability else None
     res = bnb_front(
         scenario,
         probability=use_probability,
         max_corrections=max_corrections,
-        max_labels=max_labels,
+        budget=budget,
+        seeds=certain.seeds if certain else (),
     )
+    if certain is not None:
+        res.lower_bounds = [
+            max(lb, certain.floor(g.corrections)) for g, lb in zip(res.front, res.lower_bounds)
+        ]
     stats = {
         "search_seconds": res.seconds,
         "labels": res.labels,
@@ -175,10 +239,8 @@ def _branch_and_bound(
         "relaxation_rounds": res.rounds,
         "critical_points": len(res.critical),
     }
-    radius = scenario.params.turn_radius
-    model = (
-        f"turning radius {radius:g} m (3D Dubins CS legs)" if radius > 0 else "straight legs"
-    ) + (", uncertain corrections" if use_probability else "")
+    model = scenario.vehicle.describe() + (", uncertain corrections" if use_probability else "")
+    heading_free = not scenario_leg_model(scenario).carries_heading
     if not res.front:
         if res.optimal:
             return [], [], True, f"no feasible route with {model} (exhaustive search)", stats
@@ -188,7 +250,8 @@ def _branch_and_bound(
             False,
             (
                 f"no feasible route found with {model} within the search budget of "
-                f"{max_labels} labels ({res.open_labels} partial routes left open)"
+                f"{budget.describe()} ({res.open_labels} partial routes left open), so "
+                f"infeasibility is not proven: {budget.advice()}"
             ),
             stats,
         )
@@ -199,19 +262,25 @@ def _branch_and_bound(
         how = (
             "dominance on length, corrections and error-state distribution, made exact over "
             "simple routes by decremental state-space relaxation"
-            if radius == 0
+            if heading_free
             else "over whole simple routes (headings make partial routes incomparable)"
         )
         statement = (
             f"exact: the Pareto front over all simple feasible routes with {model}, proven by "
-            f"exhaustive branch and bound ({res.labels} labels; bound: straight-leg cost-to-go "
+            f"exhaustive branch and bound ({res.labels} labels; bound: heading-free cost-to-go "
             f"per number of further corrections; {how})"
         )
     else:
+        unsettled = len(res.front) - sum(res.proven or ())
         statement = (
-            f"not proven within the budget of {max_labels} labels per search: each route's "
-            f"gap to its proven lower bound (from the open partial routes and the exact "
-            f"straight-leg front) is given; routes missing from this front are at least "
-            f"{res.open_bound:,.1f} m long"
+            f"not proven within the budget of {budget.describe()} ({budget.advice()}): each "
+            f"route's gap to its proven lower bound (from the open partial routes and the "
+            f"exact front of the heading-free relaxation) is given; routes missing from this "
+            f"front are at least "
+            f"{res.open_bound:,.1f} m long; {unsettled} of {len(res.front)} routes are not "
+            f"marked optimal because partial routes that may lead to front routes with no "
+            f"more corrections (or a higher probability) are still open"
         )
+    if res.proven is not None:
+        stats["settled"] = list(res.proven)
     return routes, res.lower_bounds, res.optimal, statement, stats

@@ -7,11 +7,14 @@ corrections, so only neighbours within that radius are arcs. The graph is stored
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 from scipy.spatial import cKDTree
 
+from gcs_planner.geometry.airplane import lower_bounds as climb_bounds
+from gcs_planner.geometry.legs import AirplaneLegs, CS3DLegs, StraightLegs, scenario_leg_model
 from gcs_planner.scenario.model import Kind, Scenario
 
 # From this many points on, the compiled kernels (numba) build the graph and run the search: below
@@ -62,7 +65,51 @@ def build_reach_graph(scenario: Scenario, compiled: bool | None = None) -> Reach
     otherwise. A leg from A counts from zero errors, the same test.
 
     ``compiled``: use the numba kernel (True), the KD-tree (False), or decide by size (None).
+
+    Arc lengths are the scenario leg model's heading-free lower bounds: the chord for straight
+    and cs3d legs; for airplane legs max(chord, |dz| / sin gamma), inf (no arc) where R = 0 and
+    the leg is too steep. Every bound built on the graph is then admissible for that model.
     """
+    graph = _chord_graph(scenario, compiled)
+    model = scenario_leg_model(scenario)
+    if isinstance(model, (StraightLegs, CS3DLegs)):
+        return graph
+    return _bounded(graph, scenario.xyz, model)
+
+
+def _bounded(graph: ReachGraph, xyz: np.ndarray, model: AirplaneLegs) -> ReachGraph:
+    """The chord graph with each arc's length raised to ``model``'s lower bound, arcs that can
+    then no longer arrive within their target's limits dropped. Bounds are never shorter than
+    chords, so the chord graph holds every arc that can remain."""
+    src = np.repeat(np.arange(graph.n), graph.degree())
+    dst = graph.target.astype(np.int64)
+    w = xyz[dst] - xyz[src]
+    bound = model.lower_bounds(np.zeros(3), w)
+    keep = bound <= np.minimum(graph.lim_v, graph.lim_h)[dst]
+    indptr = np.zeros(graph.n + 1, dtype=np.int64)
+    np.cumsum(np.bincount(src[keep], minlength=graph.n), out=indptr[1:])
+    # To B the bound must hold over walks, not one leg: with R = 0 a too-steep direct leg is
+    # infeasible (inf) though a detour is not, so use the finite bound, which is subadditive.
+    to_end = climb_bounds(
+        np.zeros(3),
+        xyz[graph.end][None, :] - xyz,
+        model.max_climb_angle,
+        model.max_descent_angle,
+        radius=math.inf,
+    )
+    return ReachGraph(
+        indptr,
+        graph.target[keep],
+        bound[keep],
+        graph.lim_v,
+        graph.lim_h,
+        to_end,
+        graph.start,
+        graph.end,
+    )
+
+
+def _chord_graph(scenario: Scenario, compiled: bool | None) -> ReachGraph:
     xyz = scenario.xyz
     lim_v, lim_h = arrival_limits_m(scenario)
     start, end = scenario.start, scenario.end

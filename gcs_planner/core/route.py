@@ -19,8 +19,10 @@ class Leg:
     """How a leg is flown. ``arc`` is the turn at the start of the leg (0 for straight legs)."""
 
     length: float
-    arc: float = 0.0
-    turn_angle: float = 0.0  # radians turned on the arc
+    arc: float = 0.0  # the turning part (arc, and helix where there is one), flown metres
+    turn_angle: float = 0.0  # radians turned on the arc (helix turns not counted)
+    helix_turns: int = 0  # whole turns flown to gain or lose height (airplane legs)
+    path_angle: float = 0.0  # flight-path angle in degrees, positive climbing (steepest on CS)
 
     @property
     def straight(self) -> float:

@@ -9,18 +9,29 @@ fails; it has no polyline.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
-from gcs_planner.geometry.dubins import COINCIDENT_M, CSLeg, cs_leg, straight_leg
+from gcs_planner.geometry.airplane import AirplaneLeg
+from gcs_planner.geometry.dubins import COINCIDENT_M, CSLeg, straight_leg
+from gcs_planner.geometry.legs import (
+    AirplaneLegs,
+    CS3DLegs,
+    FlownLeg,
+    LegModel,
+    StraightLegs,
+    path_angle_deg,
+    scenario_leg_model,
+)
 
 
 @dataclass(frozen=True, eq=False)
 class Trajectory:
     """The legs of a route, A first."""
 
-    legs: tuple[CSLeg, ...]
+    legs: tuple[FlownLeg, ...]
 
     @property
     def length(self) -> float:
@@ -46,20 +57,26 @@ class Trajectory:
 
 
 def route_trajectory(
-    xyz: np.ndarray, radius: float, heading_at_a: np.ndarray | None = None
+    xyz: np.ndarray,
+    radius: float,
+    heading_at_a: np.ndarray | None = None,
+    model: LegModel | None = None,
 ) -> Trajectory:
-    """The trajectory through the points ``xyz`` (m, 3), A..B, with turning radius ``radius``.
+    """The trajectory through the points ``xyz`` (m, 3), A..B, with turning radius ``radius``
+    flown as ``model``'s legs (default: the cs3d leg of earlier releases, straight for R = 0).
 
-    With ``heading_at_a`` None the heading at A is free and the first leg is the straight chord
-    (heading at A = direction to the first target). Otherwise the first leg is a CS leg from it.
+    With ``heading_at_a`` None the heading at A is free and the first leg is straight (heading at
+    A = direction to the first target). Otherwise the first leg turns from it.
     """
     pts = np.asarray(xyz, dtype=float)
     if pts.ndim != 2 or pts.shape[1] != 3 or pts.shape[0] < 2:
         raise ValueError(f"a route needs at least two 3D points (m, 3), got shape {pts.shape}")
-    if heading_at_a is None:
+    if model is None:
+        model = CS3DLegs(radius) if radius > 0 else StraightLegs()
+    if heading_at_a is None and not isinstance(model, AirplaneLegs):
         first = straight_leg(pts[0], pts[1], _first_direction(pts), radius)
     else:
-        first = cs_leg(pts[0], heading_at_a, pts[1], radius)
+        first = model.leg(pts[0], heading_at_a, pts[1])
     legs = [first]
     for k in range(1, pts.shape[0] - 1):
         prev = legs[-1]
@@ -67,8 +84,17 @@ def route_trajectory(
             heading = prev.heading_in
         else:
             heading = prev.heading_out
-        legs.append(cs_leg(pts[k], heading, pts[k + 1], radius))
+        legs.append(model.leg(pts[k], heading, pts[k + 1]))
     return Trajectory(legs=tuple(legs))
+
+
+def scenario_trajectory(scenario, points: Sequence[int]) -> Trajectory:  # noqa: ANN001
+    """The flown trajectory of a route of ``scenario`` under its own leg model."""
+    heading = None if scenario.heading_at_a is None else np.asarray(scenario.heading_at_a, float)
+    model = scenario_leg_model(scenario)
+    return route_trajectory(
+        scenario.xyz[list(points)], scenario.params.turn_radius, heading, model
+    )
 
 
 def _first_direction(pts: np.ndarray) -> np.ndarray:
@@ -117,6 +143,22 @@ def leg_to_dict(leg: CSLeg) -> dict:
         "arc_length": float(leg.arc_length),
         "straight_length": float(leg.straight_length),
         "length": float(leg.length),
+        "path_angle_deg": path_angle_deg(leg),
+        **_airplane_fields(leg),
+    }
+
+
+def _airplane_fields(leg: FlownLeg) -> dict:
+    if not isinstance(leg, AirplaneLeg):
+        return {"model": "cs3d" if leg.radius > 0 else "straight", "helix_turns": 0}
+    return {
+        "model": "airplane",
+        "helix_turns": int(leg.helix_turns),
+        "helix_length": float(leg.helix_length),
+        # horizontal normal towards the turn: the side of the helix even on a straight leg
+        "turn_normal": None if leg.normal is None else _vec(leg.normal),
+        "climb_limit_deg": float(leg.climb_limit_deg),
+        "descent_limit_deg": float(leg.descent_limit_deg),
     }
 
 
@@ -144,11 +186,13 @@ def _read_float(d: dict, key: str) -> float:
     return x
 
 
-def leg_from_dict(d: dict) -> CSLeg:
+def leg_from_dict(d: dict) -> FlownLeg:
     """The leg written by ``leg_to_dict``. Raises ``ValueError`` naming a missing or bad field
     (the caller knows the file and turns it into an InputError)."""
     if not isinstance(d, dict):
         raise ValueError("leg: expected an object")
+    if d.get("model") == "airplane":
+        return _airplane_from_dict(d)
     arc = d.get("arc")
     if arc is not None and not isinstance(arc, dict):
         raise ValueError("leg: field 'arc' must be an object or null")
@@ -164,3 +208,31 @@ def leg_from_dict(d: dict) -> CSLeg:
         heading_out=_read_vec(d, "heading_out"),
         reachable=True,
     )
+
+
+def _airplane_from_dict(d: dict) -> AirplaneLeg:
+    turns = d.get("helix_turns", 0)
+    if isinstance(turns, bool) or not isinstance(turns, int) or not 0 <= turns <= 10_000:
+        raise ValueError("leg: field 'helix_turns' must be a whole number in 0..10000")
+    arc = d.get("arc")
+    if arc is not None and not isinstance(arc, dict):
+        raise ValueError("leg: field 'arc' must be an object or null")
+    normal = d.get("turn_normal")
+    leg = AirplaneLeg(
+        start=_read_vec(d, "start"),
+        heading_in=_read_vec(d, "heading_in"),
+        end=_read_vec(d, "end"),
+        radius=_read_float(d, "radius"),
+        normal=None if normal is None else _read_vec(d, "turn_normal"),
+        arc_angle=0.0 if arc is None else _read_float(arc, "angle"),
+        helix_turns=turns,
+        heading_out=_read_vec(d, "heading_out"),
+        reachable=True,
+        climb_limit_deg=_read_float(d, "climb_limit_deg"),
+        descent_limit_deg=_read_float(d, "descent_limit_deg"),
+    )
+    if (turns > 0 or leg.arc_angle > 0) and leg.normal is None:
+        raise ValueError("leg: a leg that turns needs its 'turn_normal'")
+    if leg.radius < 0 or (turns > 0 and leg.radius == 0):
+        raise ValueError("leg: field 'radius' must be > 0 for a leg with a helix")
+    return leg

@@ -7,7 +7,11 @@ MAVLink 2 framing are set up in one place.
 
 from __future__ import annotations
 
+import errno
 import os
+import re
+import socket
+import stat
 import threading
 import time
 from typing import Any
@@ -23,13 +27,71 @@ if getattr(mavutil.mavlink, "WIRE_PROTOCOL_VERSION", "1.0") != "2.0":
     os.environ["MAVLINK20"] = "1"
     mavutil.set_dialect("ardupilotmega")
 
-from gcs_planner.errors import LinkError  # noqa: E402
+from gcs_planner.errors import InputError  # noqa: E402
 from gcs_planner.link.signing import enable_signing  # noqa: E402
 
 mavlink = mavutil.mavlink
 
 # Component id a ground station uses (MAV_COMP_ID_MISSIONPLANNER).
 GCS_COMPONENT = 190
+
+# The network forms pymavlink opens; anything else must be a serial device.
+NETWORK_SCHEMES = ("udpin", "udpout", "udp", "udpbcast", "tcp", "tcpin")
+_LISTENING = {"udpin": socket.SOCK_DGRAM, "udp": socket.SOCK_DGRAM, "tcpin": socket.SOCK_STREAM}
+CONNECTION_FORMS = (
+    "udpin:HOST:PORT, udpout:HOST:PORT, tcp:HOST:PORT, tcpin:HOST:PORT or a serial device such "
+    "as /dev/ttyUSB0 or COM3"
+)
+
+
+def check_connection(connection: str) -> str:
+    """``connection`` if it is a form pymavlink opens as we mean it, else :class:`InputError`.
+
+    pymavlink itself takes any ``a:b`` as UDP and anything else as a serial port or a log file,
+    so a typo surfaces later as an unrelated failure; here it is named as what it is.
+    """
+    flag = "--connect"
+    text = connection.strip()
+    scheme, sep, rest = text.partition(":")
+    if sep and scheme.lower() in NETWORK_SCHEMES:
+        host, sep2, port_text = rest.rpartition(":")
+        if not sep2 or not host or not port_text.isdigit():
+            raise InputError(f"{connection!r} is not {scheme}:HOST:PORT", field=flag)
+        port = int(port_text)
+        if not 1 <= port <= 65535:
+            raise InputError(f"port {port_text} of {connection!r} is not in 1..65535", field=flag)
+        return text
+    if re.fullmatch(r"(?i)com\d+", text) or text.startswith("/dev/"):
+        return text
+    try:
+        if stat.S_ISCHR(os.stat(text).st_mode):
+            return text  # a serial device under another name (a pty, a udev symlink)
+    except OSError:
+        pass
+    raise InputError(f"{connection!r} is not a connection: expected {CONNECTION_FORMS}", field=flag)
+
+
+def _check_port_free(connection: str) -> None:
+    """Refuse a listening connection on a port another process holds.
+
+    pymavlink binds with SO_REUSEADDR, which on Linux lets a second listener bind the same UDP
+    port and silently share (or steal) its traffic; a bind without it fails as it should.
+    """
+    scheme, _, rest = connection.partition(":")
+    kind = _LISTENING.get(scheme.lower())
+    if kind is None:
+        return
+    host, _, port = rest.rpartition(":")
+    with socket.socket(socket.AF_INET, kind) as probe:
+        try:
+            probe.bind((host, int(port)))
+        except OSError as exc:
+            reason = exc.strerror or str(exc)
+            raise InputError(
+                f"cannot listen on {host}:{port} ({reason}): is another vehicle or ground "
+                "station already using it?",
+                field="--connect",
+            ) from None
 
 
 class Link:
@@ -47,7 +109,15 @@ class Link:
         source_component: int = GCS_COMPONENT,
         signing_key: bytes | None = None,
     ) -> None:
+        connection = check_connection(connection)
+        for name, value, low in (
+            ("source system", source_system, 1),
+            ("source component", source_component, 0),
+        ):
+            if not low <= value <= 255:
+                raise InputError(f"{name} {value} is not in {low}..255")
         self.connection = connection
+        _check_port_free(connection)
         try:
             self.conn = mavutil.mavlink_connection(
                 connection,
@@ -57,14 +127,48 @@ class Link:
                 autoreconnect=False,
             )
         except (OSError, ValueError) as exc:
-            raise LinkError(f"cannot open {connection!r}: {exc}") from exc
+            reason = getattr(exc, "strerror", None) or str(exc)
+            raise InputError(f"cannot open {connection!r}: {reason}", field="--connect") from None
         self.mav = self.conn.mav
+        # The UDP address the last datagram came from (udpin only; None otherwise): a vehicle
+        # binds a transfer to it, since two ground stations may use the same ids.
+        self.last_sender: Any = None
+        if isinstance(self.conn, mavutil.mavudp):
+            self.conn.recv = self._udp_recv
         self.signed = signing_key is not None
         if signing_key is not None:
             enable_signing(self.conn, signing_key)
         self.refused_signature = 0  # messages refused for a missing or wrong signature
+        self.peer_signed = 0  # signed frames heard while we do not sign: the peer wants a key
         self.bad_data = 0
         self._send_lock = threading.Lock()
+
+    def _udp_recv(self, n: int | None = None) -> bytes:
+        """pymavlink's mavudp.recv, keeping the sender's address, and knowing that MAVLink frames
+        never span UDP datagrams: a truncated frame left by the previous datagram is dropped
+        instead of swallowing the frames of this one (pymavlink parses UDP as a byte stream)."""
+        conn = self.conn
+        try:
+            data, sender = conn.port.recvfrom(65535)
+        except OSError as exc:
+            if exc.errno in (errno.EAGAIN, errno.EWOULDBLOCK, errno.ECONNREFUSED):
+                return b""
+            raise
+        if conn.udp_server:
+            if hasattr(conn, "clients"):  # answers go to every client heard (pymavlink >= 2.4.41)
+                conn.clients.add(sender)
+                conn.clients_last_alive[sender] = time.time()
+            else:
+                conn.last_address = sender
+        elif getattr(conn, "broadcast", False):
+            conn.last_address = sender
+        self.last_sender = sender
+        if _partial_frame_pending(conn.mav):
+            conn.mav.buf = bytearray()
+            conn.mav.buf_index = 0
+            conn.mav.expected_length = mavlink.HEADER_LEN_V1 + 2
+            self.bad_data += 1
+        return data
 
     # The sending side -------------------------------------------------------------------------
     def send(self, msg: Any) -> None:
@@ -85,7 +189,15 @@ class Link:
         """
         deadline = time.monotonic() + max(0.0, timeout)
         while True:
-            msg = self.conn.recv_msg()
+            try:
+                msg = self.conn.recv_msg()
+            except Exception:  # a hostile frame must not end the link
+                # pymavlink's robust parser turns most bad frames into BAD_DATA; what slips
+                # through (a field it cannot unpack) is counted the same way.
+                self.bad_data += 1
+                msg = None
+                if time.monotonic() >= deadline:
+                    return None
             if msg is not None:
                 if msg.get_type() == "BAD_DATA":
                     if "signature" in str(getattr(msg, "reason", "")).lower():
@@ -93,6 +205,8 @@ class Link:
                     else:
                         self.bad_data += 1
                     continue
+                if not self.signed and _is_signed(msg):
+                    self.peer_signed += 1
                 return msg
             remaining = deadline - time.monotonic()
             if remaining <= 0:
@@ -110,6 +224,30 @@ class Link:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+def _partial_frame_pending(mav: Any) -> bool:
+    """True when pymavlink's parse buffer holds the start of a frame and not all of it."""
+    n = mav.buf_len()
+    if n == 0:
+        return False
+    buf, i = mav.buf, mav.buf_index
+    if buf[i] == 0xFD:  # MAVLink 2: 10-byte header, 2-byte CRC, 13-byte signature if flagged
+        if n < 3:
+            return True
+        need = buf[i + 1] + 12 + (13 if buf[i + 2] & 0x01 else 0)
+    elif buf[i] == 0xFE:  # MAVLink 1: 6-byte header, 2-byte CRC
+        if n < 2:
+            return True
+        need = buf[i + 1] + 8
+    else:
+        return False  # garbage: the parser skips it as a bad prefix
+    return n < need
+
+
+def _is_signed(msg: Any) -> bool:
+    buf = msg.get_msgbuf()
+    return bool(buf) and len(buf) > 2 and buf[0] == 0xFD and bool(buf[2] & 0x01)
 
 
 def open_link(

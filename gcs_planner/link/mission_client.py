@@ -15,7 +15,7 @@ from typing import Any
 
 from gcs_planner.errors import LinkError
 from gcs_planner.link.connection import Link, mavlink
-from gcs_planner.link.params import set_loiter_radius
+from gcs_planner.link.params import read_parameter, set_loiter_radius
 from gcs_planner.link.progress import Progress
 from gcs_planner.link.protocol import (
     DEFAULT_RETRIES,
@@ -27,9 +27,15 @@ from gcs_planner.link.protocol import (
     item_to_message,
     mission_differences,
 )
+from gcs_planner.link.rtt import RoundTrip
 from gcs_planner.mission.items import MAV_MISSION_TYPE_MISSION, MissionItem
-from gcs_planner.vehicle import FIRMWARE_OF_AUTOPILOT, FIRMWARES
+from gcs_planner.vehicle import FIRMWARE_OF_AUTOPILOT, FIRMWARES, LOITER_RADIUS_PARAM
 
+# Requests outstanding at once on download (MAVProxy keeps several too), and the shortest wait
+# before a resend however fast the link answers.
+DOWNLOAD_WINDOW = 8
+MIN_RESEND_S = 0.03
+_LEFTOVER_ACKS = (mavlink.MAV_MISSION_ACCEPTED, mavlink.MAV_MISSION_INVALID_SEQUENCE)
 _COMMAND_OK = (mavlink.MAV_RESULT_ACCEPTED, mavlink.MAV_RESULT_IN_PROGRESS)
 _NOT_VEHICLES = {mavlink.MAV_TYPE_GCS, mavlink.MAV_TYPE_GIMBAL, mavlink.MAV_TYPE_ADSB}
 
@@ -75,6 +81,7 @@ class MissionClient:
         item_timeout: float = ITEM_TIMEOUT_S,
         retries: int = DEFAULT_RETRIES,
         progress: ProgressFactory | None = None,
+        window: int = DOWNLOAD_WINDOW,
     ) -> None:
         if firmware is not None and firmware not in FIRMWARES:
             raise LinkError(f"unknown firmware {firmware!r}: expected one of {FIRMWARES}")
@@ -90,6 +97,10 @@ class MissionClient:
             lambda label, total: Progress(label, total, enabled=False)
         )
         self.retry_count = 0  # resends done so far, for reports
+        if window < 1:
+            raise LinkError("the download window must be at least 1 request")
+        self.window = window
+        self._rtt = RoundTrip(floor=MIN_RESEND_S, ceiling=item_timeout)
         self.vehicle: Vehicle | None = None
         self._last_gcs_heartbeat = 0.0
 
@@ -176,7 +187,12 @@ class MissionClient:
 
     def _give_up(self, what: str) -> LinkError:
         extra = ""
-        if self.link.refused_signature:
+        if self.link.peer_signed and not self.link.signed:
+            extra = (
+                " (the vehicle signs its messages and ignores unsigned ones: give its key "
+                "with --signing-key)"
+            )
+        elif self.link.refused_signature:
             extra = f" ({self.link.refused_signature} message(s) refused: unsigned or another key)"
         return LinkError(f"{what}: no answer after {self.retries + 1} attempts{extra}")
 
@@ -191,15 +207,22 @@ class MissionClient:
         )
 
     # Upload -----------------------------------------------------------------------------------
+    def _stall_limit(self) -> float:
+        """Seconds without progress after which a transfer is given up: the specification's
+        retries of its default timeout. Resends within it go at the round-trip's pace."""
+        return (self.retries + 1) * self.timeout
+
     def upload(
         self, items: Sequence[MissionItem], mission_type: int = MAV_MISSION_TYPE_MISSION
     ) -> None:
         """Send ``items`` (MISSION_COUNT, then each requested item, until MISSION_ACK).
 
         Answers MISSION_REQUEST and MISSION_REQUEST_INT alike, always with MISSION_ITEM_INT.
-        An INVALID_SEQUENCE acknowledgement mid-transfer is ArduPilot saying it dropped an
-        out-of-order item and will ask again: not fatal. Any other error result ends the
-        transfer with that result in words.
+        An item that gets no answer is sent again after the round-trip timeout. An
+        INVALID_SEQUENCE acknowledgement of a resent item says the vehicle already had it and
+        its request for the next one was lost: the next one is sent without waiting for the
+        vehicle's own re-request (ArduPilot's comes only after a second). Any other error result
+        ends the transfer with that result in words.
         """
         ts, tc = self._target()
         items = [it.with_seq(i) if it.seq != i else it for i, it in enumerate(items)]
@@ -207,22 +230,25 @@ class MissionClient:
         count_msg = self.mav.mission_count_encode(ts, tc, count, mission_type)
         self.link.send(count_msg)
         bar = self.progress("upload", count)
-        attempts = 0
-        requested: int | None = None
-        highest = -1
+        requested: int | None = None  # the item last sent, answering a request
+        sent_at = time.monotonic()
+        resent = False
+        highest = -1  # the highest item the vehicle asked for
+        sent_upto = -1  # the highest item sent, asked for or inferred
+        last_progress = time.monotonic()
         try:
             while True:
+                wait = self.timeout if requested is None else self._rtt.timeout
                 msg = self._recv(
-                    self.timeout,
-                    {"MISSION_REQUEST", "MISSION_REQUEST_INT", "MISSION_ACK"},
-                    mission_type,
+                    wait, {"MISSION_REQUEST", "MISSION_REQUEST_INT", "MISSION_ACK"}, mission_type
                 )
+                now = time.monotonic()
                 if msg is None:
-                    attempts += 1
-                    if attempts > self.retries:
+                    if now - last_progress > self._stall_limit():
                         where = "MISSION_COUNT" if requested is None else f"item {requested}"
                         raise self._give_up(f"upload stalled after {where}")
                     self.retry_count += 1
+                    resent, sent_at = True, now
                     if requested is None:
                         self.link.send(count_msg)
                     else:
@@ -230,18 +256,39 @@ class MissionClient:
                     continue
                 if msg.get_type() == "MISSION_ACK":
                     if msg.type == mavlink.MAV_MISSION_ACCEPTED:
-                        if highest == count - 1:
+                        if count == 0 or sent_upto == count - 1:
                             return
                         continue  # a late acknowledgement of an earlier transfer
                     if msg.type == mavlink.MAV_MISSION_INVALID_SEQUENCE:
+                        # In reply to a resent item j: the vehicle has j (it would have taken it
+                        # otherwise) and its request for j + 1 was lost. A wrong guess costs
+                        # only a refusal; the vehicle's own re-request sets us right.
+                        if resent and requested is not None and requested + 1 < count:
+                            requested += 1
+                            sent_upto = max(sent_upto, requested)
+                            resent, sent_at = False, now
+                            self.link.send(item_to_message(self.mav, items[requested], ts, tc))
                         continue
                     raise LinkError(f"upload refused: {describe_result(msg.type)}")
                 seq = int(msg.seq)
                 if not 0 <= seq < count:
                     raise LinkError(f"the vehicle asked for item {seq} of a {count}-item mission")
-                attempts = 0
+                if seq > sent_upto + 1:
+                    # The vehicle holds items we never sent: someone with our ids is feeding it.
+                    raise LinkError(
+                        f"the vehicle asked for item {seq} but was sent only up to item "
+                        f"{sent_upto}: another ground station with the same ids "
+                        f"({self.mav.srcSystem}/{self.mav.srcComponent}) is uploading; give "
+                        "each its own --source-system"
+                    )
+                if requested is not None and seq == requested + 1 and not resent:
+                    self._rtt.sample(now - sent_at)
+                if seq > highest:
+                    last_progress = now
                 requested = seq
                 highest = max(highest, seq)
+                sent_upto = max(sent_upto, seq)
+                resent, sent_at = False, now
                 self.link.send(item_to_message(self.mav, items[seq], ts, tc))
                 bar.update(highest + 1)
         finally:
@@ -249,9 +296,67 @@ class MissionClient:
 
     # Download ---------------------------------------------------------------------------------
     def download(self, mission_type: int = MAV_MISSION_TYPE_MISSION) -> list[MissionItem]:
-        """The vehicle's mission (MISSION_REQUEST_LIST, MISSION_COUNT, one MISSION_REQUEST_INT
-        per item, then our MISSION_ACK)."""
+        """The vehicle's mission (MISSION_REQUEST_LIST, MISSION_COUNT, MISSION_REQUEST_INT for
+        each item with up to ``window`` requests outstanding, as MAVProxy does, then our
+        MISSION_ACK)."""
         ts, tc = self._target()
+        count = self._download_count(ts, tc, mission_type)
+        got: dict[int, MissionItem] = {}
+        sent: dict[int, tuple[float, bool]] = {}  # seq -> (when asked, asked more than once)
+        bar = self.progress("download", count)
+        last_progress = time.monotonic()
+        next_new = 0
+        try:
+            while len(got) < count:
+                now = time.monotonic()
+                rto = self._rtt.timeout
+                for seq, (when, _) in list(sent.items()):
+                    if now - when > rto:  # no answer in time: ask again
+                        self.retry_count += 1
+                        sent[seq] = (now, True)
+                        self.link.send(
+                            self.mav.mission_request_int_encode(ts, tc, seq, mission_type)
+                        )
+                while len(sent) < self.window and next_new < count:
+                    if next_new not in got:
+                        sent[next_new] = (now, False)
+                        self._request_item(ts, tc, next_new, mission_type)
+                    next_new += 1
+                msg = self._recv(
+                    rto, {"MISSION_ITEM_INT", "MISSION_ITEM", "MISSION_ACK"}, mission_type
+                )
+                now = time.monotonic()
+                if msg is None:
+                    if now - last_progress > self._stall_limit():
+                        missing = min(set(range(count)) - set(got))
+                        raise self._give_up(f"download: item {missing}")
+                    continue
+                if msg.get_type() == "MISSION_ACK":
+                    if msg.type in (
+                        mavlink.MAV_MISSION_ACCEPTED,
+                        mavlink.MAV_MISSION_INVALID_SEQUENCE,
+                    ):
+                        continue  # leftovers of an earlier transfer
+                    raise LinkError(f"download refused: {describe_result(msg.type)}")
+                seq = int(msg.seq)
+                if seq in got or not 0 <= seq < count:
+                    continue  # a duplicate or late answer to an earlier request
+                asked = sent.pop(seq, None)
+                if asked is not None and not asked[1]:
+                    self._rtt.sample(now - asked[0])
+                got[seq] = item_from_message(msg)
+                last_progress = now
+                bar.update(len(got))
+        finally:
+            bar.close()
+        done = self.mav.mission_ack_encode(ts, tc, mavlink.MAV_MISSION_ACCEPTED, mission_type)
+        self.link.send(done)
+        return [got[seq] for seq in range(count)]
+
+    def _request_item(self, ts: int, tc: int, seq: int, mission_type: int) -> None:
+        self.link.send(self.mav.mission_request_int_encode(ts, tc, seq, mission_type))
+
+    def _download_count(self, ts: int, tc: int, mission_type: int) -> int:
         request_list = self.mav.mission_request_list_encode(ts, tc, mission_type)
         self.link.send(request_list)
         attempts = 0
@@ -277,50 +382,12 @@ class MissionClient:
                 continue
             kind = msg.get_type()
             if kind == "MISSION_COUNT":
-                count = int(msg.count)
-                break
+                return int(msg.count)
             if kind == "MISSION_ACK":
                 if msg.type in (mavlink.MAV_MISSION_ACCEPTED, mavlink.MAV_MISSION_INVALID_SEQUENCE):
                     continue  # leftovers of an earlier transfer
                 raise LinkError(f"download refused: {describe_result(msg.type)}")
             self._cancel_stray(msg, mission_type)
-
-        items: list[MissionItem] = []
-        bar = self.progress("download", count)
-        try:
-            for seq in range(count):
-                items.append(self._download_item(ts, tc, seq, mission_type))
-                bar.update(seq + 1)
-        finally:
-            bar.close()
-        done = self.mav.mission_ack_encode(ts, tc, mavlink.MAV_MISSION_ACCEPTED, mission_type)
-        self.link.send(done)
-        return items
-
-    def _download_item(self, ts: int, tc: int, seq: int, mission_type: int) -> MissionItem:
-        request = self.mav.mission_request_int_encode(ts, tc, seq, mission_type)
-        self.link.send(request)
-        attempts = 0
-        while True:
-            msg = self._recv(
-                self.item_timeout,
-                {"MISSION_ITEM_INT", "MISSION_ITEM", "MISSION_ACK"},
-                mission_type,
-            )
-            if msg is None:
-                attempts += 1
-                if attempts > self.retries:
-                    raise self._give_up(f"download: item {seq}")
-                self.retry_count += 1
-                self.link.send(request)
-                continue
-            if msg.get_type() == "MISSION_ACK":
-                if msg.type in (mavlink.MAV_MISSION_ACCEPTED, mavlink.MAV_MISSION_INVALID_SEQUENCE):
-                    continue
-                raise LinkError(f"download of item {seq} refused: {describe_result(msg.type)}")
-            if int(msg.seq) != seq:
-                continue  # a duplicate or late answer to an earlier request
-            return item_from_message(msg)
 
     # Clear and set current --------------------------------------------------------------------
     def clear(self, mission_type: int = MAV_MISSION_TYPE_MISSION) -> None:
@@ -368,6 +435,35 @@ class MissionClient:
             self.retry_count += 1
         raise self._give_up(f"set current item {seq}")
 
+    def _read_back(self, attempts: int = 3) -> list[MissionItem]:
+        """The mission just uploaded, read back. The vehicle acknowledged the whole upload, so a
+        read-back that fails is said as such: "could not read it back" is not "it differs"."""
+        for attempt in range(attempts):
+            try:
+                return self.download()
+            except LinkError as exc:
+                if attempt == attempts - 1:
+                    raise LinkError(
+                        "the vehicle acknowledged the whole upload (MISSION_ACK ACCEPTED) but "
+                        f"it could not be read back to verify it: {exc}; it most likely holds "
+                        "the mission: run `gcs-planner download` to check"
+                    ) from None
+        raise AssertionError("unreachable")
+
+    def check_loiter_parameter(self) -> None:
+        """Raise a :class:`LinkError` naming the parameter when the vehicle has no loiter-radius
+        parameter under its firmware's name (autopilots stay silent about unknown names)."""
+        firmware = self.firmware if self.firmware in FIRMWARES else "ardupilot"
+        name = LOITER_RADIUS_PARAM[firmware][0]
+        try:
+            read_parameter(self.link, self._target(), name, timeout=self.timeout, retries=1)
+        except LinkError:
+            raise LinkError(
+                f"the vehicle did not answer a read of {name}, the {firmware} loiter radius "
+                "the plan's turning radius is set in; nothing was uploaded (use "
+                "--keep-loiter-radius to upload without setting it)"
+            ) from None
+
     # The whole job ----------------------------------------------------------------------------
     def upload_verified(
         self,
@@ -386,7 +482,7 @@ class MissionClient:
         retries_before = self.retry_count
         self.upload(items)
         uploaded = time.perf_counter()
-        got = self.download()
+        got = self._read_back()
         skip_home = self.firmware == "ardupilot"
         diffs = mission_differences(
             list(items), got, skip_home=skip_home, tol=tolerance or Tolerance()

@@ -12,6 +12,17 @@ one route of its front into MAVLink mission items (MISSION_ITEM_INT semantics, c
 * Each Dubins arc densified into NAV_WAYPOINTs at most 16 degrees apart and close enough that a
   chord stays within 2 m of the arc (sagitta R(1 - cos(step/2)) <= 2 m), so the autopilot flies
   the planned turn and not its own shortcut. Straight legs need no intermediate item.
+* A helix (airplane legs: whole turns on the leg's turning circle to gain or lose height, MODEL.md)
+  becomes a loiter at the circle's centre whose radius is the turning radius, signed by the turn's
+  sense (positive = clockwise, MAVLink's convention), at the altitude the plan reaches at the end
+  of the helix, with the exit cross-track flag set (param4 = 1: leave on the tangent towards the
+  next item, not through the centre). ArduPlane: NAV_LOITER_TURNS, param1 the number of turns,
+  counted from when it reaches the circle (ArduPlane's verify_loiter_turns sums the heading
+  change). PX4 has no loiter-turns item in missions; it gets NAV_LOITER_TO_ALT (param2 the signed
+  radius), which circles until the altitude is reached and then leaves towards the next item: at
+  the climb limit the plan counted, that is after the planned turns. The aircraft starts the
+  helix on the circle (it enters it from the correction point, tangent to its heading) and the
+  arc's waypoints continue on the same circle after it.
 * At B a NAV_WAYPOINT on B, then the end action: MAV_CMD_NAV_LOITER_UNLIM about B whose radius is
   the turning radius (positive = clockwise, MAVLink's convention), RTL, or LAND at B at sea level.
 
@@ -29,12 +40,15 @@ from typing import Any
 import numpy as np
 
 from gcs_planner.errors import InputError
-from gcs_planner.geometry.dubins import CSLeg
+from gcs_planner.geometry.airplane import AirplaneLeg
+from gcs_planner.geometry.legs import FlownLeg
 from gcs_planner.geometry.trajectory import leg_from_dict
 from gcs_planner.mission.georef import DEFAULT_ORIGIN, LocalFrame, validate_origin
 from gcs_planner.mission.items import (
     MAV_CMD_DO_CHANGE_SPEED,
     MAV_CMD_NAV_LAND,
+    MAV_CMD_NAV_LOITER_TO_ALT,
+    MAV_CMD_NAV_LOITER_TURNS,
     MAV_CMD_NAV_LOITER_UNLIM,
     MAV_CMD_NAV_RETURN_TO_LAUNCH,
     MAV_CMD_NAV_WAYPOINT,
@@ -149,7 +163,7 @@ def route_entry(plan: dict, route_index: int | None = None, source: str = "") ->
     return k, entry
 
 
-def route_legs(entry: dict, source: str = "") -> list[CSLeg]:
+def route_legs(entry: dict, source: str = "") -> list[FlownLeg]:
     """The flown legs of a front entry, from their ``geometry``."""
     out = []
     for i, leg in enumerate(entry["legs"]):
@@ -168,7 +182,7 @@ def point_table(plan: dict) -> dict[str, dict]:
     return {str(p["id"]): p for p in points if isinstance(p, dict) and "id" in p}
 
 
-def route_xyz(plan: dict, entry: dict, legs: list[CSLeg], source: str = "") -> np.ndarray:
+def route_xyz(plan: dict, entry: dict, legs: list[FlownLeg], source: str = "") -> np.ndarray:
     """(m, 3) local positions of the route's points: the points table where it has them (the
     scenario's own coordinates), else the ends of the legs."""
     table = point_table(plan)
@@ -215,20 +229,35 @@ def arc_step(radius: float) -> float:
     return step
 
 
-def arc_waypoints(leg: CSLeg) -> np.ndarray:
-    """(k, 3) points on the leg's arc after its start, evenly spaced in angle at most
-    ``arc_step`` apart, the last one the tangent point. Empty for a straight leg."""
+def arc_waypoints(leg: FlownLeg) -> np.ndarray:
+    """(k, 3) points on the leg's arc after its start (after its helix, if any), evenly spaced in
+    angle at most ``arc_step`` apart, the last one the tangent point. Empty for a straight leg."""
     if leg.centre is None or leg.arc_angle <= 0.0 or leg.radius <= 0.0:
         return np.empty((0, 3))
     step = arc_step(leg.radius)
     k = max(1, math.ceil(leg.arc_angle / step - 1e-9))
     angles = leg.arc_angle * np.arange(1, k + 1) / k
-    pts = np.array([leg.point_at(leg.radius * a) for a in angles])
+    if isinstance(leg, AirplaneLeg):
+        pts = np.array(
+            [leg.point_at_horizontal(leg.helix_horizontal + leg.radius * a) for a in angles]
+        )
+    else:
+        pts = np.array([leg.point_at(leg.radius * a) for a in angles])
     pts[-1] = leg.tangent_point
     return pts
 
 
-def last_turn_sense(legs: list[CSLeg]) -> int:
+def helix_loiter(leg: FlownLeg) -> tuple[np.ndarray, int, float] | None:
+    """(centre at the altitude reached at the helix's end, whole turns, signed radius: positive
+    clockwise) of the leg's helix, None when the leg has none."""
+    if not isinstance(leg, AirplaneLeg) or leg.helix_turns <= 0 or leg.centre is None:
+        return None
+    end_of_helix = leg.point_at_horizontal(leg.helix_horizontal)
+    centre = np.array([leg.centre[0], leg.centre[1], end_of_helix[2]])
+    return centre, int(leg.helix_turns), float(-leg.sense * leg.radius)
+
+
+def last_turn_sense(legs: list[FlownLeg]) -> int:
     """Sense (+1 counter-clockwise, -1 clockwise seen from above) of the route's last turn that
     has one; clockwise when the route never turns."""
     for leg in reversed(legs):
@@ -348,6 +377,29 @@ def build_mission(
 
     n_legs = len(legs)
     for i, leg in enumerate(legs):
+        helix = helix_loiter(leg)
+        if helix is not None:
+            centre, turns, signed = helix
+            note = f"helix {ids[i]}->{ids[i + 1]}: {turns} turn(s) to {at(centre)['z']:.1f} m"
+            if firmware == "ardupilot":
+                add(
+                    MAV_CMD_NAV_LOITER_TURNS,
+                    mav_frame,
+                    note,
+                    param1=turns,
+                    param3=signed,
+                    param4=1,
+                    **at(centre),
+                )
+            else:
+                add(
+                    MAV_CMD_NAV_LOITER_TO_ALT,
+                    mav_frame,
+                    note,
+                    param2=signed,
+                    param4=1,
+                    **at(centre),
+                )
         arc = arc_waypoints(leg)
         # A tangent point on the target itself (no straight part) is the target's own waypoint.
         if len(arc) and np.linalg.norm(arc[-1] - xyz[i + 1]) < 1.0:

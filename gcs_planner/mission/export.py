@@ -8,13 +8,13 @@ from __future__ import annotations
 import os
 from collections.abc import Callable
 from pathlib import Path
+from types import ModuleType
 from typing import Any
 
 from gcs_planner.atomic import write_atomic
 from gcs_planner.errors import InputError
 from gcs_planner.mission.builder import Mission, build_mission
 from gcs_planner.mission.geo_exports import csv_text, geojson_text, kml_text
-from gcs_planner.mission.pictures import front_png, route_png
 from gcs_planner.mission.qgc_plan import dumps_plan
 from gcs_planner.mission.waypoints import dumps_waypoints
 
@@ -25,9 +25,20 @@ FORMATS: dict[str, tuple[str, Callable[[dict, Mission], str | bytes]]] = {
     "geojson": ("route.geojson", geojson_text),
     "kml": ("route.kml", kml_text),
     "csv": ("route.csv", csv_text),
-    "png": ("route.png", lambda plan, m: route_png(plan, m.route_index)),
-    "front-png": ("front.png", lambda plan, m: front_png(plan)),
+    "png": ("route.png", lambda plan, m: _pictures().route_png(plan, m.route_index)),
+    "front-png": ("front.png", lambda plan, m: _pictures().front_png(plan)),
+    "error-budget-png": (
+        "error_budget.png",
+        lambda plan, m: _pictures().error_budget_png(plan, m.route_index),
+    ),
 }
+
+
+def _pictures() -> ModuleType:
+    # matplotlib takes most of a second to import: only the pictures pay for it.
+    from gcs_planner.mission import pictures
+
+    return pictures
 
 
 def render(plan: dict, fmt: str, mission: Mission) -> str | bytes:
@@ -46,9 +57,9 @@ def export(
 
 
 def write_all(plan: dict, out_dir: str | os.PathLike[str], **mission_options: Any) -> list[Path]:
-    """Write mission.plan, mission.waypoints, route.geojson, route.kml, route.csv, route.png and
-    front.png into ``out_dir``. Everything is rendered before the first file is written, so a
-    bad plan or option leaves the folder as it was."""
+    """Write mission.plan, mission.waypoints, route.geojson, route.kml, route.csv, route.png,
+    front.png and error_budget.png into ``out_dir``. Everything is rendered before the first
+    file is written, so a bad plan or option leaves the folder as it was."""
     mission = build_mission(plan, **mission_options)
     contents = [(name, fn(plan, mission)) for name, fn in FORMATS.values()]
     out = Path(out_dir)

@@ -13,7 +13,6 @@ import math
 from typing import Any
 
 import numpy as np
-from pyproj import CRS, Transformer
 
 from gcs_planner.errors import InputError
 from gcs_planner.scenario.model import Origin
@@ -65,6 +64,9 @@ class LocalFrame:
     """The azimuthal equidistant frame on WGS84 centred on ``origin`` (see module docstring)."""
 
     def __init__(self, origin: Origin) -> None:
+        # pyproj takes a third of a second to import: only what projects pays for it.
+        from pyproj import CRS, Transformer
+
         self.origin = validate_origin(origin)
         o = self.origin
         local = CRS.from_proj4(

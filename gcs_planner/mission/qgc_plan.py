@@ -31,8 +31,9 @@ from gcs_planner.mission.items import (
     MissionFile,
     MissionItem,
 )
+from gcs_planner.vehicle import AUTOPILOT_IDS
 
-MAV_AUTOPILOT = {"ardupilot": 3, "px4": 12}  # MAV_AUTOPILOT_ARDUPILOTMEGA, MAV_AUTOPILOT_PX4
+MAV_AUTOPILOT = AUTOPILOT_IDS
 MAV_TYPE_FIXED_WING = 1
 # QGroundControl's AltMode enum (QGroundControlQmlGlobal.h).
 QGC_ALT_MODE_RELATIVE = 1

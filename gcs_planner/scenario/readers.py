@@ -1,8 +1,10 @@
 """Reading a scenario from the user's files: the one entry point :func:`load_scenario`.
 
-The format modules (:mod:`.xlsx`, :mod:`.csv_reader`, :mod:`.toml_reader`) know where things are
-in a file; this module knows what the cells mean and checks them, once for every format, so that
-a workbook and a CSV with the same points are judged by the same rules and the same messages.
+The format modules (:mod:`.xlsx`, :mod:`.csv_reader`, :mod:`.geojson_reader`,
+:mod:`.toml_reader`) know where things are in a file; :mod:`.geographic` projects landmarks given
+in latitude, longitude and altitude into the local frame; this module knows what the cells mean
+and checks them, once for every format, so that a workbook and a CSV with the same points are
+judged by the same rules and the same messages.
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from gcs_planner.errors import InputError
-from gcs_planner.scenario import csv_reader, toml_reader, xlsx
+from gcs_planner.scenario import csv_reader, geographic, toml_reader
 from gcs_planner.scenario.model import PARAMETER_NAMES, Kind, Origin, Parameters, Scenario
 from gcs_planner.vehicle import (
     DEFAULT_CRUISE_AIRSPEED,
@@ -51,12 +53,19 @@ class Points:
     xyz: np.ndarray
     kind: np.ndarray
     unreliable: np.ndarray
+    # The frame a geographic file was projected into (None for a file in local metres).
+    origin: Origin | None = None
+
+
+# Files of points only (no parameters), by suffix.
+POINTS_SUFFIXES = (".csv", ".xlsx", ".geojson", ".json")
 
 
 def load_scenario(
     path: str | os.PathLike[str], overrides: Mapping[str, object] | None = None
 ) -> Scenario:
-    """Read a scenario from a contest workbook (.xlsx), a points CSV (.csv) or a scenario TOML.
+    """Read a scenario from a contest workbook (.xlsx), a points CSV (.csv: local x, y, z or
+    geographic lat, lon, alt), GeoJSON points (.geojson) or a scenario TOML.
 
     ``overrides`` are values from command-line flags (parameter names, ``heading_at_a`` as three
     numbers, ``origin`` as an :class:`Origin`); ``None`` values are ignored and the others win
@@ -72,9 +81,11 @@ def load_scenario(
     _check_is_file(path)
     suffix = path.suffix.lower()
     vehicle: dict[str, object] = {}
+    # The origin is known before the points are read: a geographic file is projected with it.
+    given_origin = _override_origin(given["origin"]) if "origin" in given else None
     if suffix == ".toml":
         spec = toml_reader.read_scenario_toml(path)
-        points = load_points(spec.points)
+        points = load_points(spec.points, given_origin or spec.origin)
         values = dict(spec.parameters)
         sources = {k: (str(path), spec.parameter_lines.get(k)) for k in values}
         for key, value in spec.vehicle.items():
@@ -85,14 +96,17 @@ def load_scenario(
                 vehicle[key] = value
         name = spec.name or path.stem
         origin, heading = spec.origin, spec.heading_at_a
-    elif suffix in (".csv", ".xlsx"):
-        points = load_points(path)
+    elif suffix in POINTS_SUFFIXES:
+        points = load_points(path, given_origin)
         values, sources = {}, {}
         name, origin, heading = path.stem, None, None
     else:
         raise InputError(
-            f"unknown file type {path.suffix!r}: expected .xlsx, .csv or .toml", file=str(path)
+            f"unknown file type {path.suffix!r}: expected .xlsx, .csv, .geojson or .toml",
+            file=str(path),
         )
+    if origin is None:
+        origin = points.origin  # a geographic file's frame, when nobody gave one
 
     for key in PARAMETER_KEYS:
         if key in given:
@@ -110,8 +124,8 @@ def load_scenario(
     elif "max_bank_angle" in given and "turn_radius" not in given:
         values.pop("turn_radius", None)
     extra = _vehicle(path, vehicle, values, sources)
-    if "origin" in given:
-        origin = _override_origin(given["origin"])
+    if given_origin is not None:
+        origin = given_origin
     if "heading_at_a" in given:
         heading = toml_reader.check_heading(
             _as_list(given["heading_at_a"]), file=COMMAND_LINE, row=None
@@ -131,20 +145,33 @@ def load_scenario(
     )
 
 
-def load_points(path: str | os.PathLike[str]) -> Points:
-    """The checked points of a .csv or .xlsx file."""
+def load_points(path: str | os.PathLike[str], origin: Origin | None = None) -> Points:
+    """The checked points of a .csv, .xlsx or .geojson file. Geographic points (lat, lon, alt)
+    are projected into the local frame of ``origin``, or of A at mean sea level when None
+    (``Points.origin`` says which)."""
     path = Path(path)
     _check_is_file(path)
     suffix = path.suffix.lower()
     if suffix == ".csv":
         table = csv_reader.read_csv_cells(path)
     elif suffix == ".xlsx":
+        from gcs_planner.scenario import xlsx  # openpyxl: only for workbooks
+
         table = xlsx.read_workbook_cells(path)
+    elif suffix in (".geojson", ".json"):
+        from gcs_planner.scenario.geojson_reader import read_geojson_cells
+
+        table = read_geojson_cells(path)
     else:
         raise InputError(
-            f"unknown points file type {path.suffix!r}: expected .csv or .xlsx", file=str(path)
+            f"unknown points file type {path.suffix!r}: expected .csv, .xlsx or .geojson",
+            file=str(path),
         )
-    return _points(path, *table)
+    frame = None
+    if geographic.is_geographic(table[2]):
+        table, frame = geographic.to_local(path, table, origin, lambda cell: _kind(cell) == Kind.A)
+    found = _points(path, *table)
+    return Points(found.ids, found.xyz, found.kind, found.unreliable, frame)
 
 
 def _check_is_file(path: Path) -> None:

@@ -35,7 +35,7 @@ VEHICLE_KEYS = (
     "leg_model",
 )
 ORIGIN_KEYS = ("lat", "lon", "alt")
-POINTS_SUFFIXES = (".csv", ".xlsx")
+POINTS_SUFFIXES = (".csv", ".xlsx", ".geojson", ".json")
 
 
 @dataclass(frozen=True)
@@ -171,7 +171,7 @@ def read_scenario_toml(path: Path) -> ScenarioSpec:
     points_line = key_line(text, "", "points")
     if "points" not in doc:
         raise InputError(
-            "missing key: the points file (.csv or .xlsx), relative to this file",
+            "missing key: the points file (.csv, .xlsx or .geojson), relative to this file",
             file=file,
             field="points",
         )
@@ -180,7 +180,7 @@ def read_scenario_toml(path: Path) -> ScenarioSpec:
     points = path.parent / doc["points"]
     if points.suffix.lower() not in POINTS_SUFFIXES:
         raise InputError(
-            f"points file must be .csv or .xlsx (got {doc['points']!r})",
+            f"points file must be .csv, .xlsx or .geojson (got {doc['points']!r})",
             file=file,
             row=points_line,
             field="points",

@@ -1,0 +1,132 @@
+"""Section 6: the mock vehicle flies the longest route of the front.
+
+For each workbook the planner's front (length, corrections; R = 200 m) is exported with the dry
+run's 1 m acceptance radius and its longest route is replayed: the flight model and autopilot
+(sim/guidance.py, fixed 0.5 s step) plus the INS replay along the flown track, against the
+chord replay it replaced (the mission's items joined by straight segments, no autopilot), both
+timed in this process. Also the flown length against the planned one and the largest deviation
+from the planned path.
+
+    python -m benchmarks.flight [--runs N]
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from benchmarks.cases import load_case
+from benchmarks.report import seconds, table
+from gcs_planner.core.planner import plan
+from gcs_planner.dry_run import DRY_RUN_ACCEPTANCE_RADIUS_M, max_deviation
+from gcs_planner.mission.builder import build_mission
+from gcs_planner.mission.geo_exports import trajectory_local
+from gcs_planner.plan_json import plan_to_dict
+from gcs_planner.vehicle import FIRMWARES
+from sim import replay as replay_mod
+from sim.guidance import AutopilotParams
+
+TURN_RADIUS = 200.0
+FLAVOURS = FIRMWARES
+
+
+@dataclass(frozen=True)
+class FlightRow:
+    scenario: str
+    flavour: str
+    planned_m: float
+    flown_m: float
+    deviation_m: float
+    items: int
+    flight_s: float  # flight model + INS replay
+    chord_s: float  # the chord replay
+    arrived: bool
+
+
+def _chord_replay(items, scenario, home: bool) -> None:
+    path = replay_mod.decode_path(items, scenario, home_at_seq0=home)
+    encounters = replay_mod.find_encounters(path, scenario)
+    replay_mod._fly(path, encounters, scenario, scenario.params, np.random.default_rng(0), 5.0)
+
+
+def run_flight(specs: list[str], runs: int) -> list[FlightRow]:
+    rows = []
+    for spec in specs:
+        scenario = load_case(spec, TURN_RADIUS)
+        result = plan(scenario, objectives=("length", "corrections"))
+        longest = max(range(len(result.routes)), key=lambda k: result.routes[k].length)
+        route = result.routes[longest]
+        for flavour in FLAVOURS:
+            mission = build_mission(
+                plan_to_dict(result),
+                route_index=longest,
+                firmware=flavour,
+                capture_radius=DRY_RUN_ACCEPTANCE_RADIUS_M,
+            )
+            home = flavour == "ardupilot"
+            ap = AutopilotParams(
+                flavour, acceptance_radius=DRY_RUN_ACCEPTANCE_RADIUS_M, loiter_radius=TURN_RADIUS
+            )
+            flight_t, chord_t = [], []
+            report = None
+            for _ in range(runs):
+                t0 = time.perf_counter()
+                report = replay_mod.replay(
+                    mission.items, scenario, home_at_seq0=home, flavour=flavour, autopilot=ap
+                )
+                flight_t.append(time.perf_counter() - t0)
+                t0 = time.perf_counter()
+                _chord_replay(mission.items, scenario, home)
+                chord_t.append(time.perf_counter() - t0)
+            assert report is not None and report.flown is not None
+            rows.append(
+                FlightRow(
+                    spec,
+                    flavour,
+                    route.length,
+                    report.flown.length,
+                    max_deviation(report, trajectory_local(plan_to_dict(result), longest, 2.0))[0],
+                    len(mission.items),
+                    statistics.median(flight_t),
+                    statistics.median(chord_t),
+                    report.arrived,
+                )
+            )
+    return rows
+
+
+def render(rows: list[FlightRow]) -> str:
+    head = ["scenario", "autopilot", "planned", "flown", "largest deviation", "items",
+            "flight + INS", "chord replay", "ratio", "arrived"]  # fmt: skip
+    body = [
+        [
+            r.scenario,
+            r.flavour,
+            f"{r.planned_m / 1000:,.3f} km",
+            f"{r.flown_m / 1000:,.3f} km ({(r.flown_m - r.planned_m):+,.1f} m)",
+            f"{r.deviation_m:.1f} m",
+            str(r.items),
+            seconds(r.flight_s),
+            seconds(r.chord_s),
+            f"{r.flight_s / r.chord_s:.1f}x",
+            "yes" if r.arrived else "no",
+        ]
+        for r in rows
+    ]
+    return table(head, body)
+
+
+def main(argv: list[str] | None = None) -> None:
+    ap = argparse.ArgumentParser(prog="python -m benchmarks.flight", description=__doc__)
+    ap.add_argument("--runs", type=int, default=3)
+    ap.add_argument("--scenarios", nargs="+", default=["dataset1", "dataset2"])
+    args = ap.parse_args(argv)
+    print(render(run_flight(args.scenarios, args.runs)))
+
+
+if __name__ == "__main__":
+    main()

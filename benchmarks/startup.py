@@ -1,0 +1,112 @@
+"""Section 6: how long a user waits for the command line, as whole processes, beside the floor
+of any numpy/scipy program on the same machine in the same run.
+
+Each command is a fresh ``python -m gcs_planner ...`` process (what the installed ``gcs-planner``
+script runs); the runs of the commands are interleaved so that a change in the machine's load
+falls on all of them alike. The planner's own search time comes from the plan JSON's ``stats``,
+so the start-up overhead is what is left: total − floor − search.
+
+    python -m benchmarks --startup            # this section alone
+"""
+
+from __future__ import annotations
+
+import compileall
+import json
+import statistics
+import subprocess
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import gcs_planner
+from benchmarks.cases import DATA
+from benchmarks.report import seconds, table
+
+EXAMPLE = Path(__file__).resolve().parents[1] / "missions" / "example" / "scenario.toml"
+FLOOR = ("python -c 'import numpy, scipy.spatial'", ["-c", "import numpy, scipy.spatial"])
+DATASET1_FLAGS = ["--alpha1", "25", "--alpha2", "15", "--beta1", "20", "--beta2", "25",
+                  "--theta", "30", "--delta", "0.001"]  # fmt: skip
+# (label, arguments after `python -m gcs_planner`)
+COMMANDS = (
+    ("gcs-planner --help", ["--help"]),
+    ("gcs-planner plan dataset1.xlsx --json (defaults: R 200 m, 3 objectives)",
+     ["plan", str(DATA / "dataset1.xlsx"), *DATASET1_FLAGS, "--json"]),
+    ("gcs-planner plan missions/example/scenario.toml --json (a CSV: no openpyxl)",
+     ["plan", str(EXAMPLE), "--json"]),
+    ("gcs-planner plan dataset1.xlsx --json --turn-radius 0 --objectives length,corrections",
+     ["plan", str(DATA / "dataset1.xlsx"), *DATASET1_FLAGS, "--json", "--turn-radius", "0",
+      "--objectives", "length,corrections"]),
+)  # fmt: skip
+
+
+@dataclass(frozen=True)
+class Timing:
+    label: str
+    wall: float  # median whole-process seconds
+    search: float | None  # median search seconds reported by the plan, if it is a plan
+
+
+def _once(args: list[str]) -> tuple[float, float | None]:
+    started = time.perf_counter()
+    done = subprocess.run(
+        [sys.executable, *args], capture_output=True, text=True, check=True, timeout=600
+    )
+    wall = time.perf_counter() - started
+    search = None
+    if "--json" in args:
+        search = float(json.loads(done.stdout)["stats"]["search_seconds"])
+    return wall, search
+
+
+def run_startup(runs: int) -> list[Timing]:
+    """Median wall time of the floor and of each command over ``runs`` interleaved rounds."""
+    # pip compiles an installed package's bytecode; an editable checkout under
+    # PYTHONDONTWRITEBYTECODE would recompile every module at every start instead.
+    compileall.compile_dir(str(Path(gcs_planner.__file__).parent), quiet=1)
+    jobs = [(FLOOR[0], FLOOR[1])] + [(label, ["-m", "gcs_planner", *a]) for label, a in COMMANDS]
+    _once(jobs[0][1])  # warm the file cache once, for every job alike
+    walls: dict[str, list[float]] = {label: [] for label, _ in jobs}
+    searches: dict[str, list[float]] = {label: [] for label, _ in jobs}
+    for _ in range(runs):
+        for label, args in jobs:
+            wall, search = _once(args)
+            walls[label].append(wall)
+            if search is not None:
+                searches[label].append(search)
+    return [
+        Timing(
+            label,
+            statistics.median(walls[label]),
+            statistics.median(searches[label]) if searches[label] else None,
+        )
+        for label, _ in jobs
+    ]
+
+
+def render(rows: list[Timing]) -> str:
+    floor = rows[0].wall
+    out = []
+    for r in rows:
+        above = r.wall - floor
+        overhead = None if r.search is None else above - r.search
+        out.append(
+            [
+                f"`{r.label}`",
+                seconds(r.wall),
+                "–" if r is rows[0] else f"{above:+.2f} s",
+                seconds(r.search),
+                "–" if overhead is None else f"{overhead:+.2f} s",
+            ]
+        )
+    head = ["process", "wall (median)", "above the floor", "search", "above floor + search"]
+    return table(head, out)
+
+
+def main() -> None:
+    print(render(run_startup(5)))
+
+
+if __name__ == "__main__":
+    main()

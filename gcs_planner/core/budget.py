@@ -1,0 +1,166 @@
+"""The user's budget for a search that may not finish: labels, seconds, and what to show meanwhile.
+
+A branch and bound proves its front by exhausting its queue; on hard scenarios that can take
+longer than a planner at the console waits. The budget says when to stop (a number of labels, a
+time limit, or both, each the user's choice), and the search then reports what it has proven so
+far. One budget is shared by every round of one plan (relaxation rounds, the straight-leg
+floor), so the limits are the user's total, not per round.
+
+The time limit is checked between labels, never inside one: a search stops within one label's
+work of the limit. Progress is reported to a callback at most every ``every`` seconds, so a slow
+terminal never slows the search.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TextIO
+
+DEFAULT_MAX_LABELS = 5_000
+
+
+@dataclass(frozen=True)
+class Progress:
+    """How far a proof has got: labels expanded, partial routes still open, routes found, and
+    the least length an open partial route can still reach (the front is complete below it)."""
+
+    labels: int
+    open_routes: int
+    routes_found: int
+    bound: float
+    seconds: float
+    stage: str = ""
+
+
+ProgressCallback = Callable[[Progress], None]
+
+
+class Budget:
+    """Labels and seconds a plan may spend; ``None`` for either means unlimited.
+
+    ``max_labels`` is per search (each relaxation round and fallback of one search shares it),
+    the time limit is the whole plan's: see :meth:`share`."""
+
+    def __init__(
+        self,
+        max_labels: int | None = DEFAULT_MAX_LABELS,
+        time_limit: float | None = None,
+        progress: ProgressCallback | None = None,
+        every: float = 0.5,
+    ) -> None:
+        if max_labels is not None and max_labels < 0:
+            raise ValueError(f"max_labels must be >= 0, not {max_labels}")
+        if time_limit is not None and not (time_limit >= 0 and math.isfinite(time_limit)):
+            raise ValueError(f"time_limit must be finite seconds >= 0, not {time_limit}")
+        self.max_labels = max_labels
+        self.time_limit = time_limit
+        self.progress = progress
+        self.every = every
+        self.start = time.monotonic()
+        self.deadline = None if time_limit is None else self.start + time_limit
+        self.spent = 0
+        self._next_report = self.start + every
+        self._root = self
+        # Which limit stopped a search of this plan ("labels" or "time"; None while none has).
+        self.stopped_by: str | None = None
+        self.stage = ""
+
+    def share(self, fraction: float = 1.0, stage: str = "") -> Budget:
+        """A budget for one search of this plan: its own label count, and at most ``fraction``
+        of the time left (so an early stage cannot take all of it from the last)."""
+        child = Budget(self.max_labels, None, self.progress, self.every)
+        child.start = self.start
+        child._root = self._root
+        child._next_report = self._next_report
+        child.time_limit = self.time_limit
+        if self.deadline is not None:
+            now = time.monotonic()
+            child.deadline = min(self.deadline, now + fraction * max(0.0, self.deadline - now))
+        child.stage = stage
+        return child
+
+    def elapsed(self) -> float:
+        return time.monotonic() - self.start
+
+    def take(self) -> bool:
+        """Spend one label; False (and nothing spent) when the budget is used up."""
+        if self.max_labels is not None and self.spent >= self.max_labels:
+            return self._stop("labels")
+        # A time limit of 0 stops before the first label: deterministic, whatever the machine.
+        if self.deadline is not None and (
+            self.time_limit == 0 or time.monotonic() >= self.deadline
+        ):
+            return self._stop("time")
+        self.spent += 1
+        return True
+
+    def _stop(self, why: str) -> bool:
+        self.stopped_by = why
+        self._root.stopped_by = why
+        return False
+
+    def due(self) -> bool:
+        """Whether a progress report is due (cheap: called once per label)."""
+        if self.progress is None:
+            return False
+        now = time.monotonic()
+        if now < self._next_report:
+            return False
+        self._next_report = now + self.every
+        return True
+
+    def report(self, labels: int, open_routes: int, found: int, bound: float) -> None:
+        if self.progress is not None:
+            self.progress(Progress(labels, open_routes, found, bound, self.elapsed(), self.stage))
+
+    def describe(self) -> str:
+        """The limits in the user's words, for statements."""
+        parts = []
+        if self.max_labels is not None:
+            parts.append(f"{self.max_labels:,} labels")
+        if self.time_limit is not None:
+            parts.append(f"{self.time_limit:g} s")
+        return " and ".join(parts) if parts else "no limit"
+
+    def advice(self) -> str:
+        """Which flag to raise, named after the limit that stopped the search."""
+        if self.stopped_by == "time":
+            return "raise --time-limit (library: time_limit=) to search further"
+        return "raise --max-labels (library: max_labels=) or set --time-limit to search further"
+
+
+class TerminalProgress:
+    """Keeps one status line up to date on a terminal (stderr by default); ``finish`` ends the
+    line so that what is printed next starts on its own. Plain newlines when the stream is no
+    terminal (a log file keeps every report)."""
+
+    def __init__(self, stream: TextIO | None = None) -> None:
+        self.out = stream if stream is not None else sys.stderr
+        self.tty = bool(getattr(self.out, "isatty", lambda: False)())
+        self.shown = False
+
+    def __call__(self, p: Progress) -> None:
+        bound = "none open" if math.isinf(p.bound) else f"{p.bound:,.0f} m"
+        stage = f"{p.stage}: " if p.stage else ""
+        line = (
+            f"{stage}{p.seconds:.1f} s, {p.labels:,} labels, {p.open_routes:,} partial routes "
+            f"open, {p.routes_found} routes found, front complete below {bound}"
+        )
+        self.out.write(f"\r{line}\x1b[K" if self.tty else f"{line}\n")
+        self.out.flush()
+        self.shown = True
+
+    def finish(self) -> None:
+        if self.shown and self.tty:
+            self.out.write("\n")
+            self.out.flush()
+        self.shown = False
+
+
+def terminal_progress(stream: TextIO | None = None) -> TerminalProgress:
+    """A progress callback for the console (see :class:`TerminalProgress`)."""
+    return TerminalProgress(stream)

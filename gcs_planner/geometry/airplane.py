@@ -1,0 +1,379 @@
+"""Airplane legs (MODEL.md, "Airplane legs"; Owen, Beard & McLain's Dubins airplane).
+
+The aircraft's heading is horizontal. A leg from Pi (horizontal unit heading u) to Pj is:
+
+* the horizontal CS path of ``dubins`` done in the x-y plane: an arc of radius R towards j, then
+  the tangent; its horizontal length H = R phi + t;
+* altitude dz = zj - zi spread evenly over the leg (one flight-path angle for the whole leg);
+* when the leg is too steep for its horizontal length (H < |dz| / tan gamma, gamma the climb
+  limit for dz > 0 and the descent limit for dz < 0), first k whole turns on the leg's turning
+  circle (a helix, in the sense of the arc), k the least integer with H + 2 pi R k >= |dz| / tan
+  gamma. The heading at j does not change with the helix: the turns are whole.
+
+Flown length sqrt((H + 2 pi R k)^2 + dz^2). With R = 0 a too-steep leg cannot be flown (no helix):
+its length is inf. A heading-free lower bound of any leg is sqrt(max(h, |dz|/tan gamma)^2 + dz^2)
+= max(|w|, |dz| / sin gamma) (h the horizontal distance): the straight leg under the same limits.
+It is subadditive (the maximum of a norm and a sublinear function of dz), so sums of it along a
+walk bound the straight distance-like cost-to-go from below as the chord did.
+
+The leg is flown in this order: the helix (starting and ending at Pi's horizontal position, with
+Pi's heading), then the arc, then the tangent; the altitude changes at the same rate throughout.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from gcs_planner.geometry.dubins import COINCIDENT_M, TWO_PI, _core
+
+# Rounding slack on "steep enough for a helix": a leg needing 1e-9 m more horizontal path than it
+# has is flown without one (the difference is far below anything an aircraft can fly).
+STEEP_SLACK_M = 1e-9
+
+
+def slope_limit(climb_deg: float, descent_deg: float, dz: np.ndarray | float) -> np.ndarray:
+    """tan(gamma) for each dz (climb limit for dz > 0, descent for dz < 0); inf for 90 deg."""
+    dz = np.asarray(dz, dtype=float)
+    return np.where(dz > 0, _tan(climb_deg), _tan(descent_deg))
+
+
+def _tan(angle_deg: float) -> float:
+    return math.inf if angle_deg >= 90.0 else math.tan(math.radians(angle_deg))
+
+
+def needed_horizontal(dz: np.ndarray, climb_deg: float, descent_deg: float) -> np.ndarray:
+    """The least horizontal path (m) on which the aircraft can change altitude by ``dz``."""
+    dz = np.asarray(dz, dtype=float)
+    g = slope_limit(climb_deg, descent_deg, dz)
+    return np.where(np.isinf(g), 0.0, np.abs(dz) / np.where(np.isinf(g), 1.0, g))
+
+
+def helix_turns(
+    horizontal: np.ndarray, need: np.ndarray, radius: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """(k, feasible): whole helix turns so that horizontal + 2 pi R k >= need; with R = 0 a leg
+    that needs more horizontal path than it has is infeasible."""
+    horizontal = np.asarray(horizontal, dtype=float)
+    short = need - horizontal > STEEP_SLACK_M
+    if radius <= 0.0:
+        return np.zeros(horizontal.shape, dtype=np.int64), ~short
+    k = np.where(short, np.ceil((need - horizontal - STEEP_SLACK_M) / (TWO_PI * radius)), 0.0)
+    return np.maximum(k, 0).astype(np.int64), np.ones(horizontal.shape, dtype=bool)
+
+
+def lower_bounds(
+    start: np.ndarray, ends: np.ndarray, climb_deg: float, descent_deg: float, radius: float
+) -> np.ndarray:
+    """Heading-free lower bounds of the airplane legs from ``start`` to each row of ``ends``:
+    max(chord, |dz| / sin gamma), or inf where R = 0 and the straight leg is too steep."""
+    w = np.asarray(ends, dtype=float) - np.asarray(start, dtype=float)
+    h = np.hypot(w[:, 0], w[:, 1])
+    dz = w[:, 2]
+    need = needed_horizontal(dz, climb_deg, descent_deg)
+    out = np.sqrt(np.maximum(h, need) ** 2 + dz * dz)
+    if radius <= 0.0:
+        out = np.where(need - h > STEEP_SLACK_M, math.inf, out)
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class _Horizontal:
+    length: np.ndarray  # H
+    phi: np.ndarray
+    normal: np.ndarray  # (m, 3) horizontal unit normals towards the turn (meaningless if straight)
+    heading: np.ndarray  # (m, 3) horizontal headings at the targets
+    reachable: np.ndarray
+    straight: np.ndarray
+
+
+def _horizontal(start: np.ndarray, heading: np.ndarray | None, ends: np.ndarray, radius: float):
+    flat_start = np.array([start[0], start[1], 0.0])
+    flat_ends = np.column_stack([ends[:, 0], ends[:, 1], np.zeros(len(ends))])
+    if heading is None:
+        w = flat_ends - flat_start
+        h = np.hypot(w[:, 0], w[:, 1])
+        apart = h > COINCIDENT_M
+        dirs = np.where(apart[:, None], w / np.where(apart, h, 1.0)[:, None], [1.0, 0.0, 0.0])
+        ones = np.ones(len(ends), dtype=bool)
+        return _Horizontal(h, np.zeros(len(ends)), _left_of(dirs), dirs, ones, ones)
+    u = np.array([heading[0], heading[1], 0.0])
+    u /= math.hypot(u[0], u[1])
+    core = _core(flat_start, u, flat_ends, radius)
+    # A straight-ahead leg holds its helix on the left (either side gives the same length).
+    normal = np.where(core.straight[:, None], _left_of(np.broadcast_to(u, (len(ends), 3))), 0.0)
+    normal = np.where(core.straight[:, None], normal, core.normal)
+    return _Horizontal(
+        core.length, core.phi, normal, core.heading_out, core.reachable, core.straight
+    )
+
+
+def _left_of(dirs: np.ndarray) -> np.ndarray:
+    """Horizontal unit vectors on the left of each horizontal direction (z x d)."""
+    return np.column_stack([-dirs[:, 1], dirs[:, 0], np.zeros(len(dirs))])
+
+
+@dataclass(frozen=True, eq=False)
+class AirplaneLegs:
+    """The airplane legs from one start and heading to many targets (vectorised)."""
+
+    length: np.ndarray  # inf where not flyable
+    heading: np.ndarray  # (m, 3) horizontal heading at each target; NaN where not flyable
+    horizontal: np.ndarray  # H + 2 pi R k
+    helix_turns: np.ndarray  # k
+    arc_angle: np.ndarray  # phi
+    normal: np.ndarray  # (m, 3) horizontal normal towards the turn (and the helix)
+    straight: np.ndarray  # no arc
+
+
+def airplane_legs(
+    start: np.ndarray,
+    heading: np.ndarray | None,
+    ends: np.ndarray,
+    radius: float,
+    climb_deg: float,
+    descent_deg: float,
+) -> AirplaneLegs:
+    """Airplane legs from ``start`` (horizontal ``heading``, None = free: straight legs) to each
+    row of ``ends``."""
+    start = np.asarray(start, dtype=float)
+    ends = np.asarray(ends, dtype=float)
+    hz = _horizontal(start, heading if radius > 0 else None, ends, radius)
+    dz = ends[:, 2] - start[2]
+    need = needed_horizontal(dz, climb_deg, descent_deg)
+    k, ok = helix_turns(hz.length, need, radius)
+    ok &= hz.reachable
+    flat = hz.length + TWO_PI * radius * k
+    length = np.where(ok, np.sqrt(flat * flat + dz * dz), math.inf)
+    head = np.where(ok[:, None], hz.heading, np.nan)
+    return AirplaneLegs(length, head, flat, k, hz.phi, hz.normal, hz.straight)
+
+
+@dataclass(frozen=True, eq=False)
+class AirplaneLeg:
+    """One airplane leg with its geometry: helix, arc, tangent, and the altitude along them.
+
+    Positions use the same names as ``dubins.CSLeg`` (start, end, centre, normal, arc_angle,
+    tangent_point, heading_in/out), so that exporters and pictures read either; ``centre`` and
+    ``tangent_point`` are horizontal positions given at the altitude the aircraft has there.
+    """
+
+    start: np.ndarray
+    heading_in: np.ndarray
+    end: np.ndarray
+    radius: float
+    normal: np.ndarray | None  # horizontal, towards the turn; None for a straight leg, no helix
+    arc_angle: float
+    helix_turns: int
+    heading_out: np.ndarray
+    reachable: bool
+    climb_limit_deg: float = 90.0
+    descent_limit_deg: float = 90.0
+
+    # -- lengths (horizontal first, then along the climbing path) --
+
+    @property
+    def dz(self) -> float:
+        return float(self.end[2] - self.start[2])
+
+    @property
+    def helix_horizontal(self) -> float:
+        return TWO_PI * self.radius * self.helix_turns
+
+    @property
+    def arc_horizontal(self) -> float:
+        return self.radius * self.arc_angle if self.normal is not None else 0.0
+
+    @property
+    def _tangent_flat(self) -> np.ndarray:
+        """Horizontal position where the arc ends."""
+        p = self.start[:2]
+        if self.normal is None or self.arc_angle == 0.0:
+            return p.copy()
+        u, n, r, a = self.heading_in[:2], self.normal[:2], self.radius, self.arc_angle
+        return p + r * math.sin(a) * u + r * (1.0 - math.cos(a)) * n
+
+    @property
+    def straight_horizontal(self) -> float:
+        return float(np.linalg.norm(self.end[:2] - self._tangent_flat))
+
+    @property
+    def horizontal_length(self) -> float:
+        return self.helix_horizontal + self.arc_horizontal + self.straight_horizontal
+
+    @property
+    def _scale(self) -> float:
+        """Flown metres per horizontal metre (1 / cos of the flight-path angle)."""
+        h = self.horizontal_length
+        return math.hypot(h, self.dz) / h if h > 0 else 1.0
+
+    @property
+    def length(self) -> float:
+        if not self.reachable:
+            return math.inf
+        return math.hypot(self.horizontal_length, self.dz)
+
+    @property
+    def helix_length(self) -> float:
+        return self.helix_horizontal * self._scale
+
+    @property
+    def arc_length(self) -> float:
+        """The turning part of the leg (helix and arc), flown metres."""
+        return (self.helix_horizontal + self.arc_horizontal) * self._scale
+
+    @property
+    def straight_length(self) -> float:
+        return self.straight_horizontal * self._scale if self.reachable else math.inf
+
+    @property
+    def path_angle(self) -> float:
+        """Flight-path angle in degrees (positive climbing)."""
+        return math.degrees(math.atan2(self.dz, self.horizontal_length))
+
+    @property
+    def centre(self) -> np.ndarray | None:
+        """Centre of the turning circle (horizontal), at the start's altitude."""
+        if self.normal is None:
+            return None
+        return self.start + self.radius * self.normal
+
+    @property
+    def tangent_point(self) -> np.ndarray:
+        return self.point_at_horizontal(self.helix_horizontal + self.arc_horizontal)
+
+    @property
+    def sense(self) -> int:
+        """+1 counter-clockwise seen from above, -1 clockwise, 0 when the leg never turns."""
+        if self.normal is None or (self.arc_angle == 0.0 and self.helix_turns == 0):
+            return 0
+        u, n = self.heading_in, self.normal
+        return 1 if u[0] * n[1] - u[1] * n[0] > 0 else -1
+
+    # -- positions --
+
+    def _altitude(self, s_h: float) -> float:
+        h = self.horizontal_length
+        return float(self.start[2] + (self.dz * s_h / h if h > 0 else self.dz))
+
+    def point_at_horizontal(self, s_h: float) -> np.ndarray:
+        """Position after ``s_h`` horizontal metres along the leg."""
+        return self.points_at_horizontal(np.array([float(s_h)]))[0]
+
+    def points_at_horizontal(self, s_h: np.ndarray) -> np.ndarray:
+        """(m, 3) positions after each of ``s_h`` horizontal metres along the leg."""
+        if not self.reachable:
+            raise ValueError("the target lies inside the turning circle: this leg is not flown")
+        s_h = np.clip(np.asarray(s_h, dtype=float), 0.0, self.horizontal_length)
+        h = self.horizontal_length
+        z = self.start[2] + (self.dz * s_h / h if h > 0 else np.full(len(s_h), self.dz))
+        turning = self.helix_horizontal + self.arc_horizontal
+        xy = np.empty((len(s_h), 2))
+        on_circle = s_h < turning
+        if self.normal is not None and self.radius > 0 and on_circle.any():
+            # the angle turned; the helix is whole turns, so the position repeats every 2 pi
+            a = s_h[on_circle] / self.radius
+            u, n, r = self.heading_in[:2], self.normal[:2], self.radius
+            xy[on_circle] = (
+                self.start[:2]
+                + r * np.sin(a)[:, None] * u
+                + r * (1.0 - np.cos(a))[:, None] * n
+            )
+        else:
+            on_circle[:] = False
+        rest = ~on_circle
+        if rest.any():
+            flat0 = self._tangent_flat
+            span = self.end[:2] - flat0
+            dist = float(np.linalg.norm(span))
+            frac = np.zeros(rest.sum()) if dist == 0 else (s_h[rest] - turning) / dist
+            xy[rest] = flat0 + np.clip(frac, 0.0, 1.0)[:, None] * span
+        return np.column_stack([xy, z])
+
+    def point_at(self, s: float) -> np.ndarray:
+        """Position after flying ``s`` metres along the leg."""
+        return self.point_at_horizontal(float(s) / self._scale)
+
+    def heading_at(self, s: float) -> np.ndarray:
+        """Horizontal unit heading after flying ``s`` metres."""
+        s_h = float(s) / self._scale
+        turning = self.helix_horizontal + self.arc_horizontal
+        if s_h < turning and self.normal is not None and self.radius > 0:
+            a = s_h / self.radius
+            return math.cos(a) * self.heading_in + math.sin(a) * self.normal
+        return self.heading_out.copy()
+
+    def sample(self, max_step: float) -> np.ndarray:
+        """(k, 3) polyline from start to end, consecutive points at most ``max_step`` apart
+        horizontally (and along the path), the helix's end and the tangent point included."""
+        if not self.reachable:
+            raise ValueError("the target lies inside the turning circle: this leg is not flown")
+        if not (max_step > 0.0 and math.isfinite(max_step)):
+            raise ValueError(f"max_step must be a positive number, got {max_step!r}")
+        marks = [0.0]
+        turning = self.helix_horizontal + self.arc_horizontal
+        for lo, hi in ((0.0, turning), (turning, self.horizontal_length)):
+            if hi > lo:
+                k = max(1, math.ceil((hi - lo) / max_step))
+                marks.extend(np.linspace(lo, hi, k + 1)[1:].tolist())
+        if self.helix_horizontal > 0:
+            marks.append(self.helix_horizontal)
+        marks = sorted(set(marks))
+        out = self.points_at_horizontal(np.array(marks))
+        if len(out) == 1:
+            out = np.concatenate([out, self.end[None, :]], axis=0)
+        out[-1] = self.end
+        return out
+
+
+def airplane_leg(
+    start: np.ndarray,
+    heading: np.ndarray | None,
+    end: np.ndarray,
+    radius: float,
+    climb_deg: float,
+    descent_deg: float,
+) -> AirplaneLeg:
+    """The airplane leg from ``start`` (horizontal ``heading``; None = free) to ``end``."""
+    p = np.asarray(start, dtype=float).reshape(3)
+    q = np.asarray(end, dtype=float).reshape(3)
+    legs = airplane_legs(p, heading, q[None, :], radius, climb_deg, descent_deg)
+    reachable = bool(np.isfinite(legs.length[0]))
+    if heading is None or radius <= 0:
+        w = q[:2] - p[:2]
+        h = math.hypot(*w)
+        u = np.array([w[0] / h, w[1] / h, 0.0]) if h > COINCIDENT_M else np.array([1.0, 0, 0])
+        if heading is not None and h <= COINCIDENT_M:
+            u = np.array([heading[0], heading[1], 0.0]) / math.hypot(heading[0], heading[1])
+    else:
+        u = np.array([heading[0], heading[1], 0.0]) / math.hypot(heading[0], heading[1])
+    k = int(legs.helix_turns[0])
+    phi = float(legs.arc_angle[0]) if reachable and radius > 0 else 0.0
+    turns = k > 0 or phi > 0.0
+    normal = legs.normal[0] if turns and radius > 0 else None
+    if normal is not None and heading is None:
+        normal = np.array([-u[1], u[0], 0.0])  # free heading: a straight leg, helix on the left
+    out = legs.heading[0] if reachable else u
+    if not reachable:
+        out = u
+    return AirplaneLeg(
+        start=_frozen(p),
+        heading_in=_frozen(u),
+        end=_frozen(q),
+        radius=float(radius),
+        normal=None if normal is None else _frozen(normal),
+        arc_angle=phi,
+        helix_turns=k,
+        heading_out=_frozen(out),
+        reachable=reachable,
+        climb_limit_deg=climb_deg,
+        descent_limit_deg=descent_deg,
+    )
+
+
+def _frozen(v: np.ndarray) -> np.ndarray:
+    v = np.array(v, dtype=float)
+    v.setflags(write=False)
+    return v

@@ -1,0 +1,202 @@
+"""Leg models: what the search asks of the geometry, and never more (as OMPL's planners ask a state
+space for distances and never know the formula).
+
+Each model answers, for one start point and heading and many targets:
+
+* ``lengths(start, heading, ends)``: the flown lengths and the headings at the targets (inf and
+  NaN where the leg cannot be flown);
+* ``lower_bounds(start, ends)``: a heading-free lower bound of each leg's flown length, which the
+  reach graph, the cost-to-go and every admissible bound are made of;
+* ``leg(start, heading, end)``: the flown geometry of one leg, for tables, exports and pictures.
+
+``carries_heading`` says whether a leg depends on the heading it starts with; when it does not,
+partial routes at one point are comparable whatever their past, and the lower bound is the flown
+length itself (``exact_bounds``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+
+from gcs_planner.geometry.airplane import AirplaneLeg, airplane_leg, airplane_legs, lower_bounds
+from gcs_planner.geometry.dubins import CSLeg, cs_leg, cs_lengths, straight_leg
+
+FlownLeg = CSLeg | AirplaneLeg
+
+
+class LegModel(Protocol):
+    name: str
+    radius: float
+    carries_heading: bool
+
+    def lengths(
+        self, start: np.ndarray, heading: np.ndarray | None, ends: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray | None]: ...
+
+    def lower_bounds(self, start: np.ndarray, ends: np.ndarray) -> np.ndarray: ...
+
+    def leg(self, start: np.ndarray, heading: np.ndarray | None, end: np.ndarray) -> FlownLeg: ...
+
+    def relaxation(self) -> LegModel: ...
+
+
+def _chords(start: np.ndarray, ends: np.ndarray) -> np.ndarray:
+    w = np.asarray(ends, dtype=float) - np.asarray(start, dtype=float)
+    return np.sqrt(np.einsum("ij,ij->i", w, w))
+
+
+@dataclass(frozen=True)
+class StraightLegs:
+    """Straight legs: the chord, no heading (turning radius 0, no climb limit)."""
+
+    name: str = "straight"
+    radius: float = 0.0
+    carries_heading: bool = False
+
+    def lengths(self, start, heading, ends):
+        return _chords(start, ends), None
+
+    def lower_bounds(self, start, ends):
+        return _chords(start, ends)
+
+    def leg(self, start, heading, end):
+        if heading is None:
+            return straight_leg(start, end, None, 0.0)
+        return cs_leg(start, heading, end, 0.0)  # the heading jumps to the chord's
+
+    def relaxation(self) -> LegModel:
+        return self
+
+
+@dataclass(frozen=True)
+class CS3DLegs:
+    """The tilted-plane 3D Dubins CS leg (MODEL.md), kept to reproduce earlier figures. It plans
+    without climb limits."""
+
+    radius: float
+    name: str = "cs3d"
+    carries_heading: bool = True
+
+    def lengths(self, start, heading, ends):
+        if heading is None:  # free heading at A: the chord
+            chord = _chords(start, ends)
+            w = np.asarray(ends, dtype=float) - np.asarray(start, dtype=float)
+            return chord, w / np.where(chord > 0, chord, 1.0)[:, None]
+        return cs_lengths(start, heading, ends, self.radius)
+
+    def lower_bounds(self, start, ends):
+        return _chords(start, ends)
+
+    def leg(self, start, heading, end):
+        if heading is None:
+            return straight_leg(start, end, None, self.radius)
+        return cs_leg(start, heading, end, self.radius)
+
+    def relaxation(self) -> LegModel:
+        return StraightLegs()
+
+
+@dataclass(frozen=True)
+class AirplaneLegs:
+    """Horizontal turns of radius R, a constant flight-path angle within the climb and descent
+    limits, helices where a leg is too steep (MODEL.md, "Airplane legs")."""
+
+    radius: float
+    max_climb_angle: float = 90.0
+    max_descent_angle: float = 90.0
+    name: str = "airplane"
+
+    @property
+    def carries_heading(self) -> bool:
+        return self.radius > 0
+
+    def lengths(self, start, heading, ends):
+        legs = airplane_legs(
+            start, heading, ends, self.radius, self.max_climb_angle, self.max_descent_angle
+        )
+        return legs.length, (legs.heading if self.radius > 0 else None)
+
+    def lower_bounds(self, start, ends):
+        return lower_bounds(
+            start, ends, self.max_climb_angle, self.max_descent_angle, self.radius
+        )
+
+    def leg(self, start, heading, end):
+        return airplane_leg(
+            start, heading, end, self.radius, self.max_climb_angle, self.max_descent_angle
+        )
+
+    def relaxation(self) -> LegModel:
+        """Legs whose flown length is this model's heading-free lower bound: a relaxation every
+        route of this model is at least as long as, and at least as feasible under."""
+        return BoundLegs(self)
+
+
+@dataclass(frozen=True)
+class BoundLegs:
+    """The heading-free relaxation of a model: each leg as long as the model's lower bound."""
+
+    model: LegModel
+    name: str = "bound"
+    radius: float = 0.0
+    carries_heading: bool = False
+
+    def lengths(self, start, heading, ends):
+        return self.model.lower_bounds(start, ends), None
+
+    def lower_bounds(self, start, ends):
+        return self.model.lower_bounds(start, ends)
+
+    def leg(self, start, heading, end):
+        raise NotImplementedError("a relaxation has no flown geometry")
+
+    def relaxation(self) -> LegModel:
+        return self
+
+
+def leg_model_of(
+    radius: float,
+    leg_model: str = "airplane",
+    max_climb_angle: float = 90.0,
+    max_descent_angle: float = 90.0,
+) -> LegModel:
+    """The leg model a scenario plans with. R = 0 is straight legs (airplane: within the climb
+    limits, a too-steep leg infeasible); cs3d ignores the climb limits."""
+    unlimited = max_climb_angle >= 90.0 and max_descent_angle >= 90.0
+    if leg_model == "cs3d":
+        return CS3DLegs(radius) if radius > 0 else StraightLegs()
+    if leg_model != "airplane":
+        raise ValueError(f"unknown leg model {leg_model!r}")
+    if radius <= 0 and unlimited:
+        return StraightLegs()
+    return AirplaneLegs(radius, max_climb_angle, max_descent_angle)
+
+
+def scenario_leg_model(scenario) -> LegModel:  # noqa: ANN001 - Scenario, no import cycle
+    """The leg model of ``scenario`` (its turning radius, leg model and climb limits)."""
+    p = scenario.params
+    return leg_model_of(
+        p.turn_radius, scenario.leg_model, p.max_climb_angle, p.max_descent_angle
+    )
+
+
+def path_angle_deg(leg: FlownLeg) -> float:
+    """Flight-path angle of a flown leg in degrees (positive climbing). An airplane leg has one
+    angle throughout; a CS leg's angle varies along its tilted arc, and the steepest one is given
+    (the one a climb limit must admit)."""
+    if isinstance(leg, AirplaneLeg):
+        return leg.path_angle
+    if not leg.reachable:
+        return math.nan
+    z = [float(leg.heading_in[2]), float(leg.heading_out[2])]
+    if leg.normal is not None and leg.arc_angle > 0:
+        a = np.linspace(0.0, leg.arc_angle, 65)
+        z.extend((np.cos(a) * leg.heading_in[2] + np.sin(a) * leg.normal[2]).tolist())
+    if leg.arc_angle == 0 and leg.length > 0:  # a chord: its own direction
+        z = [float((leg.end[2] - leg.start[2]) / leg.length)]
+    steepest = max(z, key=abs)
+    return math.degrees(math.asin(max(-1.0, min(1.0, steepest))))

@@ -1,0 +1,439 @@
+"""The vehicle side of the MAVLink mission protocol, as ArduPilot and PX4 serve it.
+
+What a real autopilot does, modelled from ArduPilot's ``MissionItemProtocol`` and PX4's
+``MavlinkMissionManager``:
+
+* one transfer at a time, bound to the ground station that started it: anyone else (other
+  system/component ids, or the same ids from another network address) is DENIED until it ends;
+* an upload is a restartable series of requests: ArduPilot asks with the legacy MISSION_REQUEST;
+  PX4 with MISSION_REQUEST_INT until a ground station speaks the legacy messages to it, then with
+  MISSION_REQUEST (its ``_int_mode``); an item not received within ``request_timeout`` is asked for
+  again and an upload silent for ``upload_timeout`` is cancelled;
+* a MISSION_REQUEST is answered with the legacy float MISSION_ITEM and a MISSION_REQUEST_INT
+  with MISSION_ITEM_INT, as both autopilots answer;
+* ArduPilot always holds its home at seq 0 (an "empty" mission is one item, home); PX4 holds no
+  home item;
+* mission types: MISSION is stored, FENCE and RALLY exist but this vehicle holds none (uploads
+  are UNSUPPORTED, downloads are empty, clears succeed), MAV_MISSION_TYPE_ALL clears them all;
+  any other type is refused UNSUPPORTED.
+
+Every field is range-checked before it is stored, so nothing is stored that cannot be sent back.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+from gcs_planner.link.connection import mavlink
+from gcs_planner.link.protocol import GLOBAL_FLOAT_FRAMES, GLOBAL_INT_FRAMES, item_to_message
+from gcs_planner.mission.items import MAV_MISSION_TYPE_MISSION, MissionItem
+from sim import replay as replay_mod
+
+SUPPORTED_FRAMES = frozenset({0, 2, 3, 5, 6})
+SUPPORTED_COMMANDS = frozenset(
+    {16, 17, 18, 19, 20, 21, 22, 31, 112, 113, 114, 115, 176, 177, 178, 179, 183, 184, 189, 201}
+)
+POSITION_COMMANDS = replay_mod.NAV_POSITION_COMMANDS
+ALT_RANGE_M = (-1000.0, 100_000.0)
+INT32 = (-(2**31), 2**31 - 1)
+FLOAT32_MAX = 3.4028234663852886e38
+
+MAV_MISSION_TYPE_FENCE = 1
+MAV_MISSION_TYPE_RALLY = 2
+MAV_MISSION_TYPE_ALL = 255
+KNOWN_TYPES = frozenset({MAV_MISSION_TYPE_MISSION, MAV_MISSION_TYPE_FENCE, MAV_MISSION_TYPE_RALLY})
+
+Peer = tuple[int, int]
+
+
+@dataclass
+class Upload:
+    """An upload in progress (the vehicle is receiving)."""
+
+    peer: Peer
+    address: Any  # where its frames came from (a UDP address; None on serial and TCP)
+    count: int
+    last_receive: float
+    last_request: float
+    items: list[MissionItem] = field(default_factory=list)
+
+    @property
+    def expected(self) -> int:
+        return len(self.items)
+
+
+def _fits_int32(value: int) -> bool:
+    return INT32[0] <= value <= INT32[1]
+
+
+def check_item(item: MissionItem) -> int:
+    """The MAV_MISSION_RESULT an autopilot gives ``item``: ACCEPTED, or why not."""
+    if item.frame not in SUPPORTED_FRAMES:
+        return mavlink.MAV_MISSION_UNSUPPORTED_FRAME
+    if item.command not in SUPPORTED_COMMANDS:
+        return mavlink.MAV_MISSION_UNSUPPORTED
+    if not 0 <= item.autocontinue <= 1:
+        return mavlink.MAV_MISSION_INVALID
+    if not _fits_int32(item.x):
+        return mavlink.MAV_MISSION_INVALID_PARAM5_X
+    if not _fits_int32(item.y):
+        return mavlink.MAV_MISSION_INVALID_PARAM6_Y
+    if math.isfinite(item.z) and abs(item.z) > FLOAT32_MAX:
+        return mavlink.MAV_MISSION_INVALID_PARAM7
+    for name, result in (
+        ("param1", mavlink.MAV_MISSION_INVALID_PARAM1),
+        ("param2", mavlink.MAV_MISSION_INVALID_PARAM2),
+        ("param3", mavlink.MAV_MISSION_INVALID_PARAM3),
+        ("param4", mavlink.MAV_MISSION_INVALID_PARAM4),
+    ):
+        value = getattr(item, name)
+        if math.isfinite(value) and abs(value) > FLOAT32_MAX:
+            return result
+    if item.command in POSITION_COMMANDS and item.frame != 2:
+        if not -900_000_000 <= item.x <= 900_000_000:
+            return mavlink.MAV_MISSION_INVALID_PARAM5_X
+        if not -1_800_000_000 <= item.y <= 1_800_000_000:
+            return mavlink.MAV_MISSION_INVALID_PARAM6_Y
+        if not (math.isfinite(item.z) and ALT_RANGE_M[0] <= item.z <= ALT_RANGE_M[1]):
+            return mavlink.MAV_MISSION_INVALID_PARAM7
+    return mavlink.MAV_MISSION_ACCEPTED
+
+
+def item_from_wire(msg: Any) -> MissionItem | int:
+    """The item a MISSION_ITEM_INT or legacy MISSION_ITEM carries, or the MAV_MISSION_RESULT
+    that refuses it (a legacy float that does not fit the integer the vehicle stores)."""
+    x, y = float(msg.x), float(msg.y)
+    if msg.get_type() == "MISSION_ITEM":
+        scale = 1e7 if msg.frame in GLOBAL_FLOAT_FRAMES or msg.frame in GLOBAL_INT_FRAMES else 1e4
+        x, y = x * scale, y * scale
+        if not (math.isfinite(x) and _fits_int32(round(x))):
+            return mavlink.MAV_MISSION_INVALID_PARAM5_X
+        if not (math.isfinite(y) and _fits_int32(round(y))):
+            return mavlink.MAV_MISSION_INVALID_PARAM6_Y
+    return MissionItem(
+        seq=int(msg.seq),
+        frame=int(msg.frame),
+        command=int(msg.command),
+        current=int(msg.current),
+        autocontinue=int(msg.autocontinue),
+        param1=float(msg.param1),
+        param2=float(msg.param2),
+        param3=float(msg.param3),
+        param4=float(msg.param4),
+        x=round(x),
+        y=round(y),
+        z=float(msg.z),
+        mission_type=int(getattr(msg, "mission_type", 0)),
+    )
+
+
+def legacy_item_message(mav: Any, item: MissionItem, target: Peer) -> Any:
+    """MISSION_ITEM (float latitude/longitude in degrees), what autopilots answer a legacy
+    MISSION_REQUEST with."""
+    global_frame = item.frame in GLOBAL_FLOAT_FRAMES or item.frame in GLOBAL_INT_FRAMES
+    scale = 1e7 if global_frame else 1e4
+    return mav.mission_item_encode(
+        target[0],
+        target[1],
+        item.seq,
+        item.frame,
+        item.command,
+        item.current,
+        item.autocontinue,
+        item.param1,
+        item.param2,
+        item.param3,
+        item.param4,
+        item.x / scale,
+        item.y / scale,
+        item.z,
+        item.mission_type,
+    )
+
+
+def seq_from_param(value: float, count: int) -> int | None:
+    """A mission index carried in a float command parameter, or None when it is not one."""
+    if not math.isfinite(value) or value != int(value):
+        return None
+    seq = int(value)
+    return seq if 0 <= seq < count else None
+
+
+class MissionServer:
+    """Holds the missions and serves the mission protocol.
+
+    ``send`` sends a message; ``statustext`` announces a line; ``lock`` guards the mission and the
+    current item (shared with the vehicle that flies them).
+    """
+
+    HANDLED = (
+        "MISSION_COUNT",
+        "MISSION_ITEM_INT",
+        "MISSION_ITEM",
+        "MISSION_REQUEST_LIST",
+        "MISSION_REQUEST_INT",
+        "MISSION_REQUEST",
+        "MISSION_ACK",
+        "MISSION_CLEAR_ALL",
+        "MISSION_SET_CURRENT",
+    )
+
+    def __init__(
+        self,
+        mav: Any,
+        send: Callable[[Any], None],
+        statustext: Callable[..., None],
+        *,
+        flavour: str,
+        capacity: int,
+        home: tuple[int, int, float],
+        request_timeout: float,
+        upload_timeout: float,
+        lock: threading.Lock,
+    ) -> None:
+        self.mav = mav
+        self.send = send
+        self.statustext = statustext
+        self.flavour = flavour
+        self.capacity = capacity
+        self.home = home
+        self.request_timeout = request_timeout
+        self.upload_timeout = upload_timeout
+        self.lock = lock
+        self.items: list[MissionItem] = []
+        self.current_seq = 0
+        self.upload: Upload | None = None
+        # (peer, count) of the last upload completed: its final item may come again when the
+        # ground station missed the acknowledgement, and is answered with it again.
+        self.completed: tuple[Peer, int] | None = None
+        self.acks_sent: list[int] = []  # MAV_MISSION_RESULT of every MISSION_ACK sent
+        self.conflicts = 0  # uploads aborted because two senders with the same ids interleaved
+        self.int_mode = flavour != "ardupilot"  # PX4 answers in the spelling it last heard
+        self.commit([])
+
+    # What it holds ----------------------------------------------------------------------------
+    @property
+    def mission(self) -> list[MissionItem]:
+        with self.lock:
+            return list(self.items)
+
+    @property
+    def current(self) -> int:
+        with self.lock:
+            return self.current_seq
+
+    def commit(self, items: list[MissionItem]) -> None:
+        items = [replace(it, current=0, seq=k) for k, it in enumerate(items)]
+        if self.flavour == "ardupilot":
+            # ArduPilot always holds its own home at seq 0, whatever was sent there.
+            lat, lon, alt = self.home
+            home = MissionItem(0, 0, 16, 0, 1, 0.0, 0.0, 0.0, 0.0, lat, lon, alt)
+            items = [home, *items[1:]]
+        with self.lock:
+            self.items = items
+            self.current_seq = 1 if self.flavour == "ardupilot" and len(items) > 1 else 0
+
+    # Sending ----------------------------------------------------------------------------------
+    def ack(self, peer: Peer, result: int, mission_type: int = MAV_MISSION_TYPE_MISSION) -> None:
+        self.acks_sent.append(result)
+        self.send(self.mav.mission_ack_encode(peer[0], peer[1], result, mission_type))
+
+    def mission_current(self) -> None:
+        with self.lock:
+            seq, total = self.current_seq, len(self.items)
+        self.send(self.mav.mission_current_encode(seq, total))
+
+    def _request(self, up: Upload, now: float) -> None:
+        up.last_request = now
+        encode = (
+            self.mav.mission_request_int_encode
+            if self.int_mode
+            else self.mav.mission_request_encode
+        )
+        self.send(encode(up.peer[0], up.peer[1], up.expected, MAV_MISSION_TYPE_MISSION))
+
+    def timers(self, now: float) -> None:
+        up = self.upload
+        if up is None:
+            return
+        if now - up.last_receive > self.upload_timeout:
+            self.upload = None
+            self.ack(up.peer, mavlink.MAV_MISSION_OPERATION_CANCELLED)
+            self.statustext("Mission upload timed out", mavlink.MAV_SEVERITY_WARNING)
+        elif now - up.last_request > self.request_timeout:
+            self._request(up, now)
+
+    # Handlers ---------------------------------------------------------------------------------
+    def handle(self, msg: Any, peer: Peer, address: Any = None) -> None:
+        kind = msg.get_type()
+        if self.flavour == "px4" and kind in ("MISSION_ITEM", "MISSION_REQUEST"):
+            self.int_mode = False
+        elif self.flavour == "px4" and kind in ("MISSION_ITEM_INT", "MISSION_REQUEST_INT"):
+            self.int_mode = True
+        if kind in ("MISSION_ITEM_INT", "MISSION_ITEM"):
+            self.on_item(msg, peer, address)
+        elif kind == "MISSION_COUNT":
+            self.on_count(msg, peer, address)
+        elif kind == "MISSION_REQUEST_LIST":
+            self.on_request_list(msg, peer)
+        elif kind in ("MISSION_REQUEST_INT", "MISSION_REQUEST"):
+            self.on_request(msg, peer)
+        elif kind == "MISSION_ACK":
+            up = self.upload
+            if (
+                up is not None
+                and peer == up.peer
+                and msg.type != mavlink.MAV_MISSION_ACCEPTED
+                and address == up.address
+            ):
+                self.upload = None  # the ground station cancelled the upload
+        elif kind == "MISSION_CLEAR_ALL":
+            self.on_clear_all(msg, peer)
+        elif kind == "MISSION_SET_CURRENT":
+            self.set_current(int(msg.seq))
+
+    def _transfer_owner(self, peer: Peer, address: Any) -> bool:
+        up = self.upload
+        return up is not None and up.peer == peer and up.address == address
+
+    def on_count(self, msg: Any, peer: Peer, address: Any) -> None:
+        mtype = int(getattr(msg, "mission_type", 0))
+        if mtype != MAV_MISSION_TYPE_MISSION:
+            # FENCE and RALLY: this vehicle has no fence or rally points; others do not exist.
+            self.ack(peer, mavlink.MAV_MISSION_UNSUPPORTED, mtype)
+            return
+        if self.upload is not None and not self._transfer_owner(peer, address):
+            self.ack(peer, mavlink.MAV_MISSION_DENIED, mtype)
+            return
+        self.upload = None  # the same sender may restart (ArduPilot does the same)
+        self.completed = None
+        count = int(msg.count)
+        if count > self.capacity:
+            self.ack(peer, mavlink.MAV_MISSION_NO_SPACE)
+            self.statustext(f"Only {self.capacity} items are supported")
+            return
+        now = time.monotonic()
+        if count == 0:
+            self.commit([])
+            self.ack(peer, mavlink.MAV_MISSION_ACCEPTED)
+            return
+        self.upload = Upload(peer, address, count, now, now)
+        self._request(self.upload, now)
+
+    def on_item(self, msg: Any, peer: Peer, address: Any) -> None:
+        up = self.upload
+        mtype = int(getattr(msg, "mission_type", 0))
+        if up is None or mtype != MAV_MISSION_TYPE_MISSION:
+            if up is None and self.completed == (peer, int(msg.seq) + 1):
+                # The final item resent: the acknowledgement was lost (PX4 answers the same).
+                self.ack(peer, mavlink.MAV_MISSION_ACCEPTED)
+            return  # otherwise a late copy of an item from a finished transfer
+        if not self._transfer_owner(peer, address):
+            self.ack(peer, mavlink.MAV_MISSION_DENIED)
+            return
+        item = item_from_wire(msg)
+        result = item if isinstance(item, int) else check_item(item)
+        seq = int(msg.seq)
+        if seq != up.expected:
+            if (
+                seq == up.expected - 1
+                and not isinstance(item, int)
+                and _differs(item, up.items[seq])
+            ):
+                # The item just stored came again with other contents: two ground stations
+                # with the same ids are uploading at once. Neither mission is stored.
+                self.upload = None
+                self.conflicts += 1
+                self.statustext(
+                    "Mission upload aborted: two uploads with the same ids interleaved",
+                    mavlink.MAV_SEVERITY_WARNING,
+                )
+                self.ack(peer, mavlink.MAV_MISSION_ERROR)
+                return
+            self.ack(peer, mavlink.MAV_MISSION_INVALID_SEQUENCE)
+            return
+        if result != mavlink.MAV_MISSION_ACCEPTED:
+            self.upload = None
+            self.ack(peer, result)
+            return
+        assert isinstance(item, MissionItem)
+        now = time.monotonic()
+        up.items.append(item)
+        up.last_receive = now
+        if up.expected == up.count:
+            self.upload = None
+            self.completed = (peer, up.count)
+            self.commit(up.items)
+            self.ack(peer, mavlink.MAV_MISSION_ACCEPTED)
+            self.mission_current()
+        else:
+            self._request(up, now)
+
+    def on_request_list(self, msg: Any, peer: Peer) -> None:
+        mtype = int(getattr(msg, "mission_type", 0))
+        if mtype not in KNOWN_TYPES:
+            self.ack(peer, mavlink.MAV_MISSION_UNSUPPORTED, mtype)
+            return
+        if self.upload is not None:
+            self.ack(peer, mavlink.MAV_MISSION_DENIED, mtype)
+            return
+        count = len(self.mission) if mtype == MAV_MISSION_TYPE_MISSION else 0
+        self.send(self.mav.mission_count_encode(peer[0], peer[1], count, mtype))
+
+    def on_request(self, msg: Any, peer: Peer) -> None:
+        mtype = int(getattr(msg, "mission_type", 0))
+        if mtype not in KNOWN_TYPES:
+            self.ack(peer, mavlink.MAV_MISSION_UNSUPPORTED, mtype)
+            return
+        if self.upload is not None:
+            self.ack(peer, mavlink.MAV_MISSION_DENIED, mtype)
+            return
+        mission = self.mission if mtype == MAV_MISSION_TYPE_MISSION else []
+        seq = int(msg.seq)
+        if not 0 <= seq < len(mission):
+            self.ack(peer, mavlink.MAV_MISSION_INVALID_SEQUENCE, mtype)
+            return
+        item = mission[seq]
+        if seq == self.current:
+            item = replace(item, current=1)
+        if msg.get_type() == "MISSION_REQUEST":
+            self.send(legacy_item_message(self.mav, item, peer))
+        else:
+            self.send(item_to_message(self.mav, item, peer[0], peer[1]))
+
+    def on_clear_all(self, msg: Any, peer: Peer) -> None:
+        mtype = int(getattr(msg, "mission_type", 0))
+        if mtype not in KNOWN_TYPES and mtype != MAV_MISSION_TYPE_ALL:
+            self.ack(peer, mavlink.MAV_MISSION_UNSUPPORTED, mtype)
+            return
+        if self.upload is not None:
+            self.ack(peer, mavlink.MAV_MISSION_ERROR, mtype)
+            return
+        if mtype in (MAV_MISSION_TYPE_MISSION, MAV_MISSION_TYPE_ALL):
+            self.commit([])
+        self.ack(peer, mavlink.MAV_MISSION_ACCEPTED, mtype)
+
+    def set_current(self, seq: int) -> bool:
+        with self.lock:
+            ok = 0 <= seq < len(self.items)
+            if ok:
+                self.current_seq = seq
+        if ok:
+            self.mission_current()
+        else:
+            self.statustext(f"Set current item {seq} failed: no such item")
+        return ok
+
+
+def _differs(a: MissionItem, b: MissionItem) -> bool:
+    fields = ("frame", "command", "autocontinue", "param1", "param2", "param3", "param4", "x", "y")
+    for name in (*fields, "z"):
+        va, vb = getattr(a, name), getattr(b, name)
+        if va != vb and not (isinstance(va, float) and math.isnan(va) and math.isnan(vb)):
+            return True
+    return False

@@ -1,0 +1,233 @@
+"""The search budget: what a search cut short still proves, and the user's flags for it.
+
+The mechanism behind the long-scenario report (a front of many-correction routes, each marked
+optimal with gap 0, missing the routes with fewer corrections): best-first search by length
+finds the short many-correction routes first, and a budget that ends it there leaves the longer
+fewer-correction routes unexplored. Each found route's gap of 0 is true of that point, but
+"optimal" must mean more: no route with no more corrections, nor one at least as likely to
+arrive, left unexplored. These tests cut searches short at every budget and check both claims
+against the exhaustive front.
+"""
+
+from __future__ import annotations
+
+import io
+import math
+
+import pytest
+from test_bnb import enumerate_front, turning_scenario
+
+from gcs_planner import plan_json
+from gcs_planner.cli import main
+from gcs_planner.core.bnb import bnb_front
+from gcs_planner.core.budget import Budget, Progress, terminal_progress
+from gcs_planner.core.planner import plan
+from gcs_planner.errors import InfeasibleError
+from gcs_planner.scenario.generate import random_scenario
+from gcs_planner.scenario.model import Parameters
+
+THREE = ("length", "corrections", "probability")
+EPS = 1e-9
+
+
+def corridor(seed: int, n: int = 60):
+    """A long narrow corridor: routes of many corrections, several front points."""
+    params = Parameters(25, 15, 20, 25, 30, 0.001, turn_radius=0.0, fail_residual=5.0)
+    return random_scenario(
+        n, seed, params=params, box=(90_000, 6_000, 1_000), unreliable_fraction=0.4
+    )
+
+
+def claims_hold(front, proven, lower_bounds, exact, probability: bool) -> bool:
+    """Check a cut-short front's claims against the exact front (Found-like items).
+
+    Returns whether the cut-short front missed an exact route that an old-style flag (gap 0
+    alone) would have hidden: a route with gap 0 beside a missing exact route with fewer
+    corrections or a higher probability."""
+    hidden = False
+    for g, ok, lb in zip(front, proven, lower_bounds):
+        best = min(
+            (
+                h.length
+                for h in exact
+                if h.corrections <= g.corrections
+                and (not probability or h.probability >= g.probability - 1e-12)
+            ),
+            default=math.inf,
+        )
+        assert lb <= best + 1e-6, "a lower bound above the exact front"
+        missing = [
+            h
+            for h in exact
+            if (
+                h.corrections <= g.corrections
+                or (probability and h.probability > g.probability + 1e-12)
+            )
+            and not any(
+                f.corrections == h.corrections
+                and abs(f.length - h.length) < 1e-6
+                and (not probability or abs(f.probability - h.probability) < 1e-9)
+                for f in front
+            )
+        ]
+        if ok:
+            assert lb >= g.length - 1e-6
+            assert not missing, f"route {g} marked optimal while the front misses {missing}"
+        elif missing and lb >= g.length - 1e-6:
+            hidden = True
+    return hidden
+
+
+@pytest.mark.parametrize("probability", [False, True])
+def test_a_search_cut_short_never_marks_a_route_optimal_while_the_front_misses_one(
+    probability: bool,
+) -> None:
+    hidden = cut = 0
+    for seed in range(8):
+        scenario = corridor(seed)
+        full = bnb_front(scenario, probability=probability, max_labels=None)
+        assert full.optimal and all(full.proven)
+        for budget in sorted({1, 2, 3, 5, 8, full.labels // 4, full.labels // 2}):
+            if not 0 < budget < full.labels:
+                continue
+            res = bnb_front(scenario, probability=probability, max_labels=budget)
+            if res.optimal:
+                continue
+            cut += 1
+            hidden += claims_hold(res.front, res.proven, res.lower_bounds, full.front, probability)
+    assert cut >= 10
+    # The mechanism occurs: routes with gap 0 beside missing routes (the old flag's error).
+    assert hidden >= 1
+
+
+@pytest.mark.parametrize("probability", [False, True])
+def test_cut_short_claims_hold_against_enumeration_with_turns(probability: bool) -> None:
+    checked = 0
+    for seed in range(20):
+        scenario = turning_scenario(seed, radius=[200.0, 1500.0][seed % 2])
+        want = enumerate_front(scenario, probability)
+        exact = [_Point(w[0], w[1], -w[2] if probability else 1.0) for w in want]
+        for budget in (1, 3, 8):
+            res = bnb_front(scenario, probability=probability, max_labels=budget)
+            claims_hold(res.front, res.proven, res.lower_bounds, exact, probability)
+            checked += not res.optimal
+    assert checked >= 8
+
+
+class _Point:
+    def __init__(self, length: float, corrections: int, probability: float) -> None:
+        self.length, self.corrections, self.probability = length, corrections, probability
+
+
+def test_plan_json_flags_follow_the_settled_rule() -> None:
+    """The user-facing flag: plan() cut short, its JSON's "optimal" against the exact front."""
+    checked = 0
+    for seed in range(6):
+        scenario = corridor(seed)
+        try:
+            full = plan(scenario, objectives=THREE, max_labels=None)
+        except InfeasibleError:
+            continue
+        assert full.optimal and all(full.proven())
+        cut = plan(scenario, objectives=THREE, max_labels=2)
+        flags = [r["optimal"] for r in plan_json.plan_to_dict(cut)["front"]]
+        assert flags == list(cut.proven())
+        claims_hold(cut.routes, flags, cut.lower_bounds, full.routes, True)
+        checked += 1
+    assert checked >= 3
+
+
+def test_three_objective_front_holds_the_two_objective_fewest_corrections_end() -> None:
+    """Seeded by the two-objective front, even a search cut short at once keeps its fewest-
+    corrections route (flown, with its probability) or one that dominates it."""
+    for seed in range(6):
+        scenario = corridor(seed, n=80)
+        try:
+            two = plan(scenario, objectives=("length", "corrections"))
+        except InfeasibleError:
+            continue
+        fewest = two.routes[0]
+        three = plan(scenario, objectives=THREE, max_labels=1)
+        assert any(
+            r.corrections <= fewest.corrections
+            and r.length <= fewest.length + 1e-6
+            and r.probability >= fewest.probability - 1e-12
+            for r in three.routes
+        )
+        # The two-objective front bounds every three-objective route from below.
+        for r, lb in zip(three.routes, three.lower_bounds):
+            floor = min(q.length for q in two.routes if q.corrections <= r.corrections)
+            assert lb >= floor - 1e-6 or not any(q.corrections <= r.corrections for q in two.routes)
+
+
+def test_time_limit_zero_stops_before_the_first_label_and_names_the_flag() -> None:
+    scenario = corridor(1)
+    result = plan(scenario, objectives=THREE, max_labels=None, time_limit=0)
+    assert not result.optimal
+    assert "--time-limit" in result.statement
+    assert result.stats["labels"] == 0
+
+
+def test_infeasibility_not_proven_names_the_flag_to_raise() -> None:
+    scenario = corridor(2).with_params(turn_radius=200.0)
+    with pytest.raises(InfeasibleError, match="not proven.*--max-labels"):
+        plan(scenario, objectives=("length", "corrections"), max_labels=0)
+    with pytest.raises(InfeasibleError, match="not proven.*--time-limit"):
+        plan(scenario, objectives=("length", "corrections"), max_labels=None, time_limit=0)
+
+
+def test_progress_reports_bound_open_routes_and_routes_found() -> None:
+    seen: list[Progress] = []
+    scenario = corridor(3)
+    budget = Budget(max_labels=None, progress=seen.append, every=0.0)
+    res = bnb_front(scenario, probability=True, budget=budget)
+    assert len(seen) == res.labels > 0
+    if res.rounds == 1:
+        assert [p.labels for p in seen] == list(range(1, res.labels + 1))
+    assert all(0 < p.bound < math.inf and p.open_routes >= 0 for p in seen)
+    assert seen[-1].routes_found >= 1
+    out = io.StringIO()
+    show = terminal_progress(out)
+    show(seen[-1])
+    show.finish()
+    line = out.getvalue()
+    assert "labels" in line and "partial routes open" in line and "routes found" in line
+    assert line.endswith("\n") and "\r" not in line  # no terminal: one plain line per report
+
+
+def test_budget_flags_on_the_command_line(capsys) -> None:
+    scenario = "missions/example/scenario.toml"
+    rc = main(["plan", scenario, "--objectives", ",".join(THREE), "--time-limit", "0", "--json"])
+    captured = capsys.readouterr()
+    assert rc == 0 or "not proven" in captured.err
+    if rc == 0:
+        import json
+
+        doc = json.loads(captured.out)
+        assert doc["optimality"]["optimal"] is False
+        assert "--time-limit" in doc["optimality"]["statement"]
+    for bad in (["--time-limit", "-1"], ["--time-limit", "soon"], ["--max-labels", "-5"]):
+        with pytest.raises(SystemExit) as exc:
+            main(["plan", scenario, *bad])
+        assert exc.value.code == 2
+        err = capsys.readouterr().err
+        assert bad[0] in err and "Traceback" not in err
+
+
+def test_progress_flag_prints_to_stderr_only(capsys) -> None:
+    rc = main(
+        [
+            "plan",
+            "missions/example/scenario.toml",
+            "--objectives",
+            ",".join(THREE),
+            "--progress",
+            "--max-labels",
+            "50",
+            "--json",
+        ]
+    )
+    assert rc == 0
+    captured = capsys.readouterr()
+    assert captured.out.lstrip().startswith("{")  # stdout stays one JSON object
+    assert "Traceback" not in captured.err

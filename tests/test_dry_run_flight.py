@@ -1,0 +1,154 @@
+"""The check that matters: the dry run's vehicle flies with the scenario's vehicle profile
+(climb and descent limits included) whatever leg model planned the route, so a route whose
+legs break the limits does not "verify and arrive"."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from gcs_planner.cli import main
+from gcs_planner.core.planner import plan
+from gcs_planner.dry_run import EXIT_LOST, dry_run
+from gcs_planner.scenario.readers import load_scenario
+
+DS2 = {"alpha1": 20, "alpha2": 10, "beta1": 15, "beta2": 20, "theta": 20, "delta": 0.001}
+LIMITS = {"turn_radius": 200.0, "max_climb_angle": 15.0, "max_descent_angle": 15.0}
+FLAGS = [f for k, v in DS2.items() for f in (f"--{k}", str(v))] + [
+    "--turn-radius", "200", "--max-climb-angle", "15", "--max-descent-angle", "15",
+    "--choose", "most-reliable",
+]  # fmt: skip
+
+
+def _caught(d: dict) -> None:
+    """Not verified-and-arrived, and the report says where the flight went wrong."""
+    assert d["verified"] is True
+    assert d["arrived"] is False and d["ok"] is False
+    missed = [r for r in d["rows"] if r["outcome"] == "missed"]
+    lost = [r for r in d["rows"] if r["outcome"] == "lost"]
+    assert missed or lost or d["why"]
+    for r in missed:
+        assert r["miss"] > 5.0 and r["point"] in d["why"]  # named, with its 3D miss distance
+    assert d["max_deviation"] > 5.0
+
+
+def test_steep_cs3d_mission_is_caught_by_the_cli(capsys, dataset_paths):
+    """cs3d plans legs of up to 73 degrees; a 15 degree aircraft cannot fly them."""
+    rc = main(["dry-run", str(dataset_paths[2]), *FLAGS, "--leg-model", "cs3d", "--json"])
+    out, err = capsys.readouterr()
+    d = json.loads(out)
+    assert rc == EXIT_LOST
+    _caught(d)
+    assert "lost" in err and "missed" in err
+
+
+@pytest.fixture(scope="module")
+def steep_plan(dataset_paths):
+    scenario = load_scenario(dataset_paths[2], {**DS2, **LIMITS}).with_vehicle(leg_model="cs3d")
+    return plan(
+        scenario, objectives=("length", "corrections", "probability"), choice="most-reliable"
+    )
+
+
+def test_steep_cs3d_mission_is_caught_by_a_px4_vehicle(steep_plan, dataset_paths):
+    landmarks = load_scenario(dataset_paths[2], {**DS2, **LIMITS})
+    report = dry_run(steep_plan, landmarks, flavour="px4")
+    _caught(report.to_dict())
+    # PX4 will not count a waypoint reached off its altitude: it circles there.
+    assert report.flown_to_b > report.planned_length or not report.arrived
+
+
+@pytest.fixture(scope="module")
+def airplane_plan(dataset_paths):
+    scenario = load_scenario(dataset_paths[2], {**DS2, **LIMITS})  # default: airplane legs
+    return plan(
+        scenario, objectives=("length", "corrections", "probability"), choice="most-reliable"
+    )
+
+
+def test_airplane_legs_within_the_limits_are_flown_as_planned_and_arrive(
+    airplane_plan, dataset_paths
+):
+    """The counterpart: the default airplane legs respect the 15 degree limits (helices where a
+    leg is too steep), so the same aircraft flies them and overflies every planned correction,
+    in order, for both autopilots; the Monte Carlo over that flight agrees with the planned
+    probability, and a draw where the unreliable points work arrives."""
+    landmarks = load_scenario(dataset_paths[2], {**DS2, **LIMITS})
+    assert airplane_plan.scenario.vehicle.leg_model == "airplane"
+    for flavour in ("ardupilot", "px4"):
+        report = dry_run(airplane_plan, landmarks, flavour=flavour, runs=400)
+        assert report.verified and report.corrections_as_planned, flavour
+        assert not report.missed and all(r.miss <= 5.0 for r in report.rows)
+        low, high = report.success_ci or (0.0, 0.0)
+        assert low <= report.planned_probability <= high
+        assert report.flown_to_b == pytest.approx(report.planned_length, rel=0.01)
+    for seed in range(40):
+        report = dry_run(airplane_plan, landmarks, seed=seed)
+        if report.arrived:
+            break
+    else:
+        raise AssertionError(f"no arriving draw in 40 seeds (P = {report.planned_probability})")
+    assert report.ok and [r.point for r in report.rows] == list(report.route[1:-1])
+
+
+def test_steep_cs3d_mission_is_caught_through_mock_vehicle_and_upload_processes(
+    tmp_path, capsys, dataset_paths
+):
+    """The same as a user runs it: plan and export here, `gcs-planner mock-vehicle` in its own
+    process with the workbook as its landmarks and the 15 degree aircraft, `gcs-planner upload`,
+    then MAV_CMD_MISSION_START; the vehicle's STATUSTEXTs say what it missed and that it was
+    lost."""
+    import subprocess
+    import sys
+    import time
+
+    from gcs_planner.link.connection import mavlink, open_link
+    from sim.vehicle import free_udp_port
+
+    workbook = str(dataset_paths[2])
+    out = tmp_path / "steep"
+    assert main(["plan", workbook, *FLAGS, "--leg-model", "cs3d", "--out", str(out)]) == 0
+    mission = tmp_path / "mission.plan"
+    assert main(["export", str(out / "plan.json"), "--format", "plan", "--acceptance-radius",
+                 "1", "--out", str(mission)]) == 0  # fmt: skip
+    capsys.readouterr()
+    port = free_udp_port()
+    limits = ["--turn-radius", "200", "--max-climb-angle", "15", "--max-descent-angle", "15"]
+    scenario = [f for k, v in DS2.items() for f in (f"--{k}", str(v))] + limits
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "gcs_planner", "mock-vehicle", "--connect",
+         f"udpin:127.0.0.1:{port}", "--scenario", workbook, *scenario, "--speedup", "0"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    texts: list[str] = []
+    try:
+        conn = ["--connect", f"udpout:127.0.0.1:{port}", "--quiet", "--wait", "60"]
+        assert main(["upload", str(mission), *conn]) == 0, capsys.readouterr().out
+        link = open_link(f"udpout:127.0.0.1:{port}")
+        try:
+            deadline = time.monotonic() + 120.0  # generous: ends on the vehicle's last word
+            started, asked = False, 0.0
+            while time.monotonic() < deadline and not any("INS LOST" in t for t in texts):
+                if not started and time.monotonic() - asked > 2.0:
+                    asked = time.monotonic()
+                    link.send(link.mav.heartbeat_encode(6, 8, 0, 0, 0))
+                    link.send(link.mav.command_long_encode(
+                        1, 1, mavlink.MAV_CMD_MISSION_START, 0, 0, 0, 0, 0, 0, 0, 0))  # fmt: skip
+                msg = link.recv(0.5)
+                if msg is None:
+                    continue
+                kind = msg.get_type()
+                if kind == "COMMAND_ACK" and msg.command == mavlink.MAV_CMD_MISSION_START:
+                    # The first start is accepted; a repeat while flying is denied (busy).
+                    assert started or msg.result == mavlink.MAV_RESULT_ACCEPTED
+                    started = True
+                elif kind == "STATUSTEXT":
+                    texts.append(msg.text)
+        finally:
+            link.close()
+    finally:
+        proc.send_signal(2)
+        proc.communicate(timeout=60)
+    assert any("MISSED" in t for t in texts), texts
+    assert any("INS LOST" in t for t in texts), texts

@@ -1,0 +1,154 @@
+"""The mock vehicle's autopilot (sim/guidance.py) on small missions: the aircraft keeps its
+envelope, and each flavour reaches, circles and leaves items as its autopilot does."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from gcs_planner.mission.georef import LocalFrame
+from gcs_planner.mission.items import MissionItem
+from gcs_planner.scenario.model import Origin
+from gcs_planner.vehicle import VehicleProfile
+from sim.guidance import AutopilotParams, fly
+
+FRAME = LocalFrame(Origin(30.5, 123.5, 0.0))
+PROFILE = VehicleProfile(turn_radius=200.0, max_climb_angle=15.0, max_descent_angle=15.0)
+
+
+def item(seq: int, command: int, xyz=None, **params) -> MissionItem:
+    if xyz is None:
+        return MissionItem(seq, 2, command, **params)
+    lat, lon, alt = FRAME.to_geodetic(*xyz)
+    return MissionItem(seq, 0, command, x=round(lat * 1e7), y=round(lon * 1e7), z=float(alt),
+                       **params)  # fmt: skip
+
+
+def mission(*specs) -> list[MissionItem]:
+    return [
+        item(k, *spec[:2], **(spec[2] if len(spec) > 2 else {})) for k, spec in enumerate(specs)
+    ]
+
+
+def turn_radii(flight) -> np.ndarray:
+    v = flight.airspeed
+    bank = np.radians(np.abs(flight.bank))
+    with np.errstate(divide="ignore"):
+        return np.where(bank > 1e-9, v * v / (9.80665 * np.tan(bank)), np.inf)
+
+
+@pytest.mark.parametrize("flavour", ["ardupilot", "px4"])
+def test_a_sharp_turn_is_flown_no_tighter_than_the_turning_radius(flavour):
+    items = mission((16, (0, 0, 1000), {"param2": 1}), (16, (3000, 0, 1000), {"param2": 1}),
+                    (16, (3000, 3000, 1000), {"param2": 1}))  # fmt: skip
+    f = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour=flavour,
+            params=AutopilotParams(flavour, acceptance_radius=1.0))  # fmt: skip
+    assert f.ended == "mission end"
+    assert turn_radii(f).min() >= PROFILE.turn_radius * (1 - 1e-9)
+    # It turned 90 degrees: it flew the corner, wider than the chord corner.
+    assert f.cumulative[-1] > 6000.0 - 2 * 200.0 + math.pi / 2 * 200.0 - 1.0
+
+
+@pytest.mark.parametrize("flavour", ["ardupilot", "px4"])
+def test_climb_and_sink_never_exceed_the_limits(flavour):
+    items = mission((16, (0, 0, 1000), {"param2": 1}), (16, (2000, 0, 2000), {"param2": 1}),
+                    (16, (4000, 0, 500), {"param2": 1}))  # fmt: skip
+    f = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour=flavour,
+            params=AutopilotParams(flavour, acceptance_radius=1.0))  # fmt: skip
+    v = PROFILE.cruise_airspeed
+    assert f.climb.max() <= v * math.sin(math.radians(15.0)) + 1e-9
+    assert f.climb.min() >= -v * math.sin(math.radians(15.0)) - 1e-9
+
+
+def test_arduplane_passes_a_waypoint_it_could_not_climb_to_and_moves_on():
+    # 1000 m up over 2 km: 26.6 degrees, more than the aircraft's 15.
+    items = mission((16, (0, 0, 1000), {"param2": 1}), (16, (2000, 0, 2000), {"param2": 1}),
+                    (16, (6000, 0, 2000), {"param2": 1}))  # fmt: skip
+    f = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour="ardupilot")
+    reached = [e for e in f.events if e.kind == "reached" and e.seq == 1]
+    assert reached
+    z_there = f.xyz[reached[0].sample, 2]
+    assert 2000.0 - z_there > 400.0  # well short of its altitude, passed all the same
+    assert f.xyz[:, 0].max() < 6100.0  # no circling: straight on to the next waypoint
+
+
+def test_px4_circles_a_waypoint_until_its_altitude_is_reached():
+    items = mission((16, (0, 0, 1000)), (16, (2000, 0, 2000)), (16, (6000, 0, 2000)))
+    f = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour="px4",
+            params=AutopilotParams("px4", acceptance_radius=1.0))  # fmt: skip
+    assert [e for e in f.events if e.kind == "altitude" and e.seq == 1]
+    reached = [e for e in f.events if e.kind == "reached" and e.seq == 1][0]
+    assert abs(f.xyz[reached.sample, 2] - 2000.0) <= 10.0  # NAV_FW_ALT_RAD
+    assert f.cumulative[reached.sample] > 2000.0 + 2 * math.pi * 200.0 * 0.5  # it circled
+
+
+@pytest.mark.parametrize("xtrack", [0.0, 1.0])
+def test_arduplane_loiter_turns_counts_its_turns_and_leaves_towards_the_next_waypoint(xtrack):
+    # Two clockwise turns of 300 m about (3000, 0), down 300 m, then on to (8000, 0).
+    items = mission((16, (0, 0, 1000), {"param2": 1}),
+                    (18, (3000, 0, 700), {"param1": 2, "param3": 300, "param4": xtrack}),
+                    (16, (8000, 0, 700), {"param2": 1}))  # fmt: skip
+    f = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour="ardupilot")
+    assert f.ended == "mission end"
+    during = f.current == 1
+    centre = np.array([3000.0, 0.0])
+    r = np.linalg.norm(f.xyz[during, :2] - centre, axis=1)
+    laps = np.sum(np.abs(np.diff(np.unwrap(f.course[during])))) / (2 * math.pi)
+    assert laps >= 2.0
+    assert np.median(r) == pytest.approx(300.0, rel=0.05)
+    assert f.xyz[during, 2][-1] == pytest.approx(700.0, abs=5.0)
+    # It left heading for the next waypoint: within 10 degrees, plus 10 per lap flown
+    # (ArduPlane widens the window so that wind cannot keep it circling for ever).
+    last = np.flatnonzero(during)[-1]
+    bearing = math.atan2(0.0 - f.xyz[last, 1], 8000.0 - f.xyz[last, 0])
+    window = math.radians(10.0 * (1 + math.floor(laps)))
+    assert abs((f.course[last] - bearing + math.pi) % (2 * math.pi) - math.pi) <= window
+    # Clockwise (positive radius): the course decreases.
+    assert np.sum(np.diff(np.unwrap(f.course[during]))) < 0
+
+
+@pytest.mark.parametrize("flavour", ["ardupilot", "px4"])
+def test_loiter_to_altitude_climbs_on_the_circle_then_leaves(flavour):
+    items = mission((16, (0, 0, 1000), {"param2": 1}),
+                    (31, (3000, 0, 2500), {"param2": 1, "param3": -250, "param4": 1}),
+                    (16, (8000, 0, 2500), {"param2": 1}))  # fmt: skip
+    f = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour=flavour,
+            params=AutopilotParams(flavour, acceptance_radius=1.0))  # fmt: skip
+    assert f.ended == "mission end"
+    reached = [e for e in f.events if e.kind == "reached" and e.seq == 1][0]
+    assert abs(f.xyz[reached.sample, 2] - 2500.0) <= 10.0  # 1500 m: more than the approach gives
+    during = f.current == 1
+    # Counter-clockwise (negative radius): the course increases.
+    assert np.sum(np.diff(np.unwrap(f.course[during]))) > 2 * math.pi
+
+
+def test_px4_skips_loiter_turns_and_says_so():
+    items = mission((16, (0, 0, 1000)), (18, (3000, 0, 700), {"param1": 2, "param3": 300}),
+                    (16, (8000, 0, 1000)))  # fmt: skip
+    f = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour="px4",
+            params=AutopilotParams("px4", acceptance_radius=1.0))  # fmt: skip
+    assert [e for e in f.events if e.kind == "skipped" and e.seq == 1]
+    assert any("LOITER_TURNS" in n for n in f.notes)
+
+
+def test_loiter_unlimited_ends_the_flight_and_a_time_limit_stops_a_stuck_one():
+    items = mission((16, (0, 0, 1000), {"param2": 1}), (17, (3000, 0, 1000), {"param3": 200}))
+    f = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour="ardupilot")
+    assert f.ended == "loiter at end"
+    # PX4 at a waypoint 5 km up with a 15 degree aircraft: circles, until the time limit.
+    items = mission((16, (0, 0, 1000)), (16, (2000, 0, 90000)))
+    f = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour="px4", time_limit=600.0,
+            params=AutopilotParams("px4", acceptance_radius=1.0))  # fmt: skip
+    assert f.ended == "time limit"
+
+
+def test_do_change_speed_changes_the_airspeed_and_widens_the_turns():
+    items = mission((16, (0, 0, 1000), {"param2": 1}), (178, None, {"param2": 35.0}),
+                    (16, (3000, 0, 1000), {"param2": 1}),
+                    (16, (3000, 3000, 1000), {"param2": 1}))  # fmt: skip
+    f = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour="ardupilot")
+    assert f.airspeed.max() == pytest.approx(35.0)
+    # Same bank limit, faster: R = V^2 / (g tan phi) grows by (35/25)^2.
+    assert turn_radii(f).min() >= 200.0 * (35.0 / 25.0) ** 2 * (1 - 1e-6)

@@ -1,0 +1,37 @@
+"""sim/ is the aircraft's side: it may read the vehicle profile, the landmark database and the
+MAVLink item types, never the planner (its answers would leak into the check of them)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+PLANNER = ("gcs_planner.core", "gcs_planner.geometry", "gcs_planner.mission.builder")
+CLIENT = ("gcs_planner.link",)
+
+
+def imported_by(module: str) -> list[str]:
+    """The modules loaded by importing ``module`` alone, in a fresh interpreter."""
+    code = f"import json, sys, {module}; print(json.dumps(sorted(sys.modules)))"
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120
+    ).stdout
+    return json.loads(out)
+
+
+@pytest.mark.parametrize(
+    "module", ["sim.aircraft", "sim.guidance", "sim.replay", "sim.telemetry", "sim.vehicle"]
+)
+def test_sim_does_not_import_the_planning_core(module):
+    loaded = imported_by(module)
+    assert module in loaded
+    assert not [m for m in loaded if m.startswith(PLANNER)]
+
+
+@pytest.mark.parametrize("module", ["sim.aircraft", "sim.guidance", "sim.replay", "sim.telemetry"])
+def test_the_flight_does_not_import_the_ground_stations_client(module):
+    loaded = imported_by(module)
+    assert not [m for m in loaded if m.startswith(CLIENT)]
