@@ -105,7 +105,7 @@ def render(rows: list[FlyRow]) -> str:
                 f"+{100 * (r.shortest[0] / ref - 1):.2f} %" if ref else "–",
                 f"{r.certain:,.1f}" if r.certain is not None else "none found",
                 r.routes,
-                "proven" if r.proven else f"gap ≤ {r.largest_gap:,.0f} m",
+                "proven" if r.proven else f"not proven (gap ≤ {r.largest_gap:,.0f} m)",
                 f"{r.steepest:.1f}°",
                 r.helices,
                 seconds(r.seconds),

@@ -267,9 +267,10 @@ def startup_section(runs: int) -> str:
         "## 8. Start-up: the command line as whole processes\n\n"
         "Each row a fresh process (`python -m gcs_planner`, what the installed script runs), "
         f"medians of {runs} interleaved rounds; the floor is a bare "
-        "`python -c 'import numpy, scipy.spatial'` measured in the same rounds. The last column "
-        "is what start-up, reading the workbook and writing the JSON add to the floor and the "
-        "search.\n\n" + startup.render(startup.run_startup(runs))
+        "`python -c 'import numpy, scipy.spatial'` measured in the same rounds. \"Above floor + "
+        'search" is what start-up, reading the scenario and writing the JSON add; CPU time '
+        "(user + system) is steadier than wall time on a shared machine.\n\n"
+        + startup.render(startup.run_startup(runs))
     )
 
 

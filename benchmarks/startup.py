@@ -4,7 +4,9 @@ of any numpy/scipy program on the same machine in the same run.
 Each command is a fresh ``python -m gcs_planner ...`` process (what the installed ``gcs-planner``
 script runs); the runs of the commands are interleaved so that a change in the machine's load
 falls on all of them alike. The planner's own search time comes from the plan JSON's ``stats``,
-so the start-up overhead is what is left: total − floor − search.
+so the start-up overhead is what is left: total − floor − search. The CPU time (user + system)
+of each process is reported beside its wall time: on a shared machine it is the steadier
+measure.
 
     python -m benchmarks --startup            # this section alone
 """
@@ -13,6 +15,7 @@ from __future__ import annotations
 
 import compileall
 import json
+import resource
 import statistics
 import subprocess
 import sys
@@ -45,19 +48,27 @@ COMMANDS = (
 class Timing:
     label: str
     wall: float  # median whole-process seconds
+    cpu: float  # median user + system CPU seconds of the process: less swayed by the load
     search: float | None  # median search seconds reported by the plan, if it is a plan
 
 
-def _once(args: list[str]) -> tuple[float, float | None]:
+def _cpu_of_children() -> float:
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
+def _once(args: list[str]) -> tuple[float, float, float | None]:
+    cpu_before = _cpu_of_children()
     started = time.perf_counter()
     done = subprocess.run(
         [sys.executable, *args], capture_output=True, text=True, check=True, timeout=600
     )
     wall = time.perf_counter() - started
+    cpu = _cpu_of_children() - cpu_before
     search = None
     if "--json" in args:
         search = float(json.loads(done.stdout)["stats"]["search_seconds"])
-    return wall, search
+    return wall, cpu, search
 
 
 def run_startup(runs: int) -> list[Timing]:
@@ -68,17 +79,20 @@ def run_startup(runs: int) -> list[Timing]:
     jobs = [(FLOOR[0], FLOOR[1])] + [(label, ["-m", "gcs_planner", *a]) for label, a in COMMANDS]
     _once(jobs[0][1])  # warm the file cache once, for every job alike
     walls: dict[str, list[float]] = {label: [] for label, _ in jobs}
+    cpus: dict[str, list[float]] = {label: [] for label, _ in jobs}
     searches: dict[str, list[float]] = {label: [] for label, _ in jobs}
     for _ in range(runs):
         for label, args in jobs:
-            wall, search = _once(args)
+            wall, cpu, search = _once(args)
             walls[label].append(wall)
+            cpus[label].append(cpu)
             if search is not None:
                 searches[label].append(search)
     return [
         Timing(
             label,
             statistics.median(walls[label]),
+            statistics.median(cpus[label]),
             statistics.median(searches[label]) if searches[label] else None,
         )
         for label, _ in jobs
@@ -86,21 +100,31 @@ def run_startup(runs: int) -> list[Timing]:
 
 
 def render(rows: list[Timing]) -> str:
-    floor = rows[0].wall
+    floor = rows[0]
     out = []
     for r in rows:
-        above = r.wall - floor
-        overhead = None if r.search is None else above - r.search
+        above, cpu_above = r.wall - floor.wall, r.cpu - floor.cpu
+        first = r is floor
         out.append(
             [
                 f"`{r.label}`",
                 seconds(r.wall),
-                "–" if r is rows[0] else f"{above:+.2f} s",
+                "–" if first else f"{above:+.2f} s",
                 seconds(r.search),
-                "–" if overhead is None else f"{overhead:+.2f} s",
+                "–" if r.search is None else f"{above - r.search:+.2f} s",
+                seconds(r.cpu),
+                "–" if first else f"{cpu_above:+.2f} s",
             ]
         )
-    head = ["process", "wall (median)", "above the floor", "search", "above floor + search"]
+    head = [
+        "process",
+        "wall (median)",
+        "above the floor",
+        "search",
+        "above floor + search",
+        "CPU (user + sys)",
+        "CPU above the floor (search included)",
+    ]
     return table(head, out)
 
 

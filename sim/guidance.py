@@ -421,9 +421,24 @@ class _Autopilot:
                 and -self.env.sink_rate < climb < self.env.climb_rate
             ):
                 dt = coarse
-        self.s = step(self.s, self.env, turn, climb, dt)
+        before = self.s
+        self.s = step(before, self.env, turn, climb, dt)
+        f0, f1 = self._finish_line(before, c), self._finish_line(self.s, c)
+        crossed = f0 < 0 <= f1
+        if crossed and not free_turn:
+            # The autopilot checks the finish line many times a second: stop the step on it,
+            # so that the next leg starts there and not up to a step beyond (a waypoint a few
+            # metres after this one would otherwise be behind the aircraft already).
+            self.s = step(before, self.env, turn, climb, dt * f0 / (f0 - f1))
         self._record()
-        return self._check_waypoint(c, acc)
+        return self._check_waypoint(c, acc, crossed)
+
+    def _finish_line(self, s: AircraftState, c: NavCommand) -> float:
+        """Signed distance (times the leg's length) of ``s`` past the finish line of the leg
+        prev -> c: >= 0 once past it."""
+        assert c.pos is not None
+        px, py = self.prev[0], self.prev[1]
+        return (s.x - c.pos[0]) * (c.pos[0] - px) + (s.y - c.pos[1]) * (c.pos[1] - py)
 
     def _acceptance(self, c: NavCommand) -> float:
         if self.px4:
@@ -440,12 +455,11 @@ class _Autopilot:
             turn = min(abs(math.degrees(_wrap(a2 - a1))), 90.0)
         return min(self.ap.wp_radius, l1) * turn / 90.0
 
-    def _check_waypoint(self, c: NavCommand, acc: float) -> bool:
+    def _check_waypoint(self, c: NavCommand, acc: float, crossed: bool = False) -> bool:
         s = self.s
         assert c.pos is not None
         dist = math.hypot(c.pos[0] - s.x, c.pos[1] - s.y)
-        px, py = self.prev[0], self.prev[1]
-        passed = (s.x - c.pos[0]) * (c.pos[0] - px) + (s.y - c.pos[1]) * (c.pos[1] - py) >= 0
+        passed = crossed or self._finish_line(s, c) >= 0
         horizontal = dist <= acc or passed
         if not horizontal:
             return True

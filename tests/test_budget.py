@@ -231,3 +231,13 @@ def test_progress_flag_prints_to_stderr_only(capsys) -> None:
     captured = capsys.readouterr()
     assert captured.out.lstrip().startswith("{")  # stdout stays one JSON object
     assert "Traceback" not in captured.err
+
+
+def test_table_marks_routes_that_are_not_settled(capsys) -> None:
+    args = ["plan", "missions/example/scenario.toml", "--objectives", ",".join(THREE)]
+    assert main([*args, "--max-labels", "3"]) == 0
+    cut = capsys.readouterr().out
+    assert "? = not settled" in cut
+    assert main([*args, "--max-labels", "0"]) == 0  # no limit: proven
+    full = capsys.readouterr().out
+    assert "optimality: exact" in full and "? = not settled" not in full

@@ -69,7 +69,15 @@ def test_readme_first_command_plans_the_example_as_installed(tmp_path):
     assert len(plan["front"]) >= 3  # the example shows a choice worth making
     assert len({round(r["probability"], 6) for r in plan["front"]}) >= 2
     assert plan["front"][plan["chosen"]]["probability"] >= 0.99
+    # ... and an aircraft limited to 15 degrees of climb flies some of its legs as helices.
+    assert any(leg["helix_turns"] > 0 for r in plan["front"] for leg in r["legs"])
     assert "P lost" in done.stdout and "warning: no origin" not in done.stderr
+    # README's export line reads that plan.json.
+    (using,) = [b for b in blocks(ROOT / "README.md", "sh") if "gcs-planner export" in b]
+    (export,) = [line for line in using.splitlines() if line.startswith("gcs-planner export")]
+    done = run_script(*export.split()[1:], cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert (tmp_path / "mission.waypoints").read_text().startswith("QGC WPL 110")
 
 
 def test_readme_dataset1_command_as_installed(tmp_path, dataset_paths):

@@ -130,7 +130,8 @@ def add_plan_arguments(parser: argparse.ArgumentParser) -> None:
         "--time-limit",
         type=_seconds,
         metavar="SECONDS",
-        help="stop the search after this many seconds (default: no limit)",
+        help="stop the branch and bound after this many seconds in all (default: no limit; "
+        "building the reach graph and the bounds before it is not interrupted)",
     )
     budget.add_argument(
         "--max-labels",

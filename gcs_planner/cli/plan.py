@@ -179,6 +179,12 @@ def render(result: Plan) -> str:
             if result.min_probability > 0
             else ""
         )
+        + (
+            "; ? = not settled: routes with no more corrections or a higher probability may "
+            "still be missing"
+            if not all(result.proven())
+            else ""
+        )
         + "):",
         f"  {'':1} {'length m':>11} {'corr':>4} {'P arrive':>9} {'P lost':>7} {'gap m':>7}  route",
     ]

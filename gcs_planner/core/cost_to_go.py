@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gcs_planner.core.reach import ReachGraph
+from gcs_planner.core.reach import ReachGraph, use_compiled
 from gcs_planner.core.search import _summarise, not_dominated
 from gcs_planner.scenario.model import Kind, Scenario
 
@@ -59,7 +59,12 @@ class CostToGo:
         return self.table[i] if i >= 0 else None
 
 
-def cost_to_go(scenario: Scenario, graph: ReachGraph) -> CostToGo:
+def cost_to_go(scenario: Scenario, graph: ReachGraph, compiled: bool | None = None) -> CostToGo:
+    """G of the scenario over ``graph``. ``compiled``: expand layers with the numba kernel
+    (True), numpy (False) or by size (None); the same table either way."""
+    compiled = use_compiled(scenario.n, compiled)
+    if compiled:
+        from gcs_planner.core.cost_to_go_kernel import backward_fan
     n = graph.n
     end = graph.end
     is_v = scenario.kind == Kind.V
@@ -94,6 +99,7 @@ def cost_to_go(scenario: Scenario, graph: ReachGraph) -> CostToGo:
     # that is one gather, where the full filter sorts every candidate. Both are kept labels,
     # so whatever they drop the full filter would drop too: the labels kept are the same.
     near_R, near_e, wide_R, wide_e = (np.full(n, np.inf) for _ in range(4))
+    summary = (near_R, near_e, wide_R, wide_e)
     _summarise(node, R, -E, near_R, near_e, wide_R, wide_e)
 
     # Reverse CSR over arcs between correction points.
@@ -104,35 +110,25 @@ def cost_to_go(scenario: Scenario, graph: ReachGraph) -> CostToGo:
     r_ptr = np.zeros(n + 1, dtype=np.int64)
     np.add.at(r_ptr, r_tgt + 1, 1)
     np.cumsum(r_ptr, out=r_ptr)
-    r_deg = np.diff(r_ptr)
 
     for layer in range(1, n):
         if not len(node):
             break
-        counts = r_deg[node]
-        total = int(counts.sum())
-        if total == 0:
-            break
-        lab = np.repeat(np.arange(len(node)), counts)
-        offs = np.cumsum(counts) - counts
-        arc = r_ptr[node][lab] + (np.arange(total) - offs[lab])
-        j = r_src[arc]  # the predecessor, where the new label lives
-        j1 = node[lab]  # the point the label was at
-        d = r_len[arc]
-        same = is_v[j] == is_v[j1]
-        # Component j resets ("own") arrives at j1 with d; the carried one with e + d.
-        lim_own = np.where(is_v[j], graph.lim_v[j1], graph.lim_h[j1])
-        lim_other = np.where(is_v[j], graph.lim_h[j1], graph.lim_v[j1])
-        E1 = E[lab]
-        feasible = (d <= lim_own) & (same | (d <= E1))
-        newE = np.where(same, np.minimum(lim_other, E1) - d, lim_other - d)
-        newR = R[lab] + d
-        feasible &= newE >= 0
-        feasible &= ~(
-            ((near_R[j] <= newR) & (near_e[j] <= -newE))
-            | ((wide_R[j] <= newR) & (wide_e[j] <= -newE))
-        )
-        j, newR, newE = j[feasible], newR[feasible], newE[feasible]
+        if compiled:
+            j, newR, newE = backward_fan(
+                node,
+                R,
+                E,
+                r_ptr,
+                r_src,
+                r_len,
+                is_v,
+                graph.lim_v,
+                graph.lim_h,
+                *(a.copy() for a in summary),
+            )
+        else:
+            j, newR, newE = _fan(node, R, E, r_ptr, r_src, r_len, is_v, graph, summary)
         empty = np.zeros((len(j), 0), np.uint64)
         keep = not_dominated(
             j,
@@ -168,3 +164,42 @@ def cost_to_go(scenario: Scenario, graph: ReachGraph) -> CostToGo:
         lo, hi = indptr[j], indptr[j + 1]
         table[lo:hi] = np.minimum.accumulate(table[lo:hi][::-1], axis=0)[::-1]
     return CostToGo(indptr, a_E, table)
+
+
+def _fan(
+    node: np.ndarray,
+    R: np.ndarray,
+    E: np.ndarray,
+    r_ptr: np.ndarray,
+    r_src: np.ndarray,
+    r_len: np.ndarray,
+    is_v: np.ndarray,
+    graph: ReachGraph,
+    summary: tuple[np.ndarray, ...],
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The candidates (predecessor, R, E) of one backward layer that are feasible and dominated
+    by neither summary label of their point (numpy; ``cost_to_go_kernel`` compiled)."""
+    counts = r_ptr[node + 1] - r_ptr[node]
+    total = int(counts.sum())
+    if total == 0:
+        return np.zeros(0, np.int64), np.zeros(0), np.zeros(0)
+    lab = np.repeat(np.arange(len(node)), counts)
+    offs = np.cumsum(counts) - counts
+    arc = r_ptr[node][lab] + (np.arange(total) - offs[lab])
+    j = r_src[arc]  # the predecessor, where the new label lives
+    j1 = node[lab]  # the point the label was at
+    d = r_len[arc]
+    same = is_v[j] == is_v[j1]
+    # Component j resets ("own") arrives at j1 with d; the carried one with e + d.
+    lim_own = np.where(is_v[j], graph.lim_v[j1], graph.lim_h[j1])
+    lim_other = np.where(is_v[j], graph.lim_h[j1], graph.lim_v[j1])
+    E1 = E[lab]
+    feasible = (d <= lim_own) & (same | (d <= E1))
+    newE = np.where(same, np.minimum(lim_other, E1) - d, lim_other - d)
+    newR = R[lab] + d
+    feasible &= newE >= 0
+    feasible &= ~(
+        ((summary[0][j] <= newR) & (summary[1][j] <= -newE))
+        | ((summary[2][j] <= newR) & (summary[3][j] <= -newE))
+    )
+    return j[feasible], newR[feasible], newE[feasible]

@@ -63,10 +63,13 @@ def straight_front(
     graph: ReachGraph | None = None,
     max_corrections: int | None = None,
     compiled: bool | None = None,
+    max_rounds: int | None = None,
 ) -> FrontResult:
     """Exact Pareto front of (length, corrections) over simple feasible routes, straight legs.
 
     ``compiled``: run the numba kernels (True), numpy (False), or decide by size (None).
+    ``max_rounds``: stop the relaxation after this many rounds; the front may then hold walks
+    that revisit points, and each of its lengths bounds the simple routes' from below.
     """
     t0 = time.perf_counter()
     stats = SearchStats()
@@ -87,7 +90,7 @@ def straight_front(
         repeated = sorted(
             {p for fp in front for p in fp.points if fp.points.count(p) > 1} - set(critical)
         )
-        if not repeated:
+        if not repeated or stats.rounds == max_rounds:
             break
         critical.extend(repeated)
     stats.critical = critical

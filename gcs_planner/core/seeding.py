@@ -12,8 +12,10 @@ with any chance to arrive is feasible when corrections are certain. Hence:
   and bound as incumbents (``seeds``) — in particular the fewest-corrections end of the front,
   which a best-first search by length reaches last.
 
-The layered search proves that front quickly (seconds at 20,000 points), so it costs little
-beside the branch and bound it strengthens.
+Only the layered search's first round runs (the compiled kernel on large maps): a front over
+walks, which may revisit points. Its lengths still bound simple routes from below (every route
+is a walk), and its simple routes are routes; the later rounds that make it exact cost more on
+long sparse corridors than the seeds are worth.
 """
 
 from __future__ import annotations
@@ -40,17 +42,19 @@ class CertainFront:
 
 
 def certain_front(scenario: Scenario, max_corrections: int | None = None) -> CertainFront:
-    """The exact (length, corrections) front with certain corrections and heading-free legs: each
-    leg as long as the leg model's lower bound (the chord for straight and cs3d legs; for
-    airplane legs the chord or the climb at the limit angle, whichever is longer). The reach
-    graph is made of those bounds, so the layered search over it is that front.
+    """The (length, corrections) front over walks with certain corrections and heading-free
+    legs, each as long as the leg model's lower bound (the chord for straight and cs3d legs; for
+    airplane legs the chord or the climb at the limit angle, whichever is longer): its simple
+    routes, and per number of corrections a lower bound on every route. The reach graph is made
+    of those bounds, so the layered search over it is that front.
 
     Not the straight-leg front of a copy with R = 0: airplane legs with R = 0 cannot fly a leg
     too steep for its length, which a helix flies with R > 0, so that front is no floor."""
-    res = straight_front(scenario, max_corrections=max_corrections)
+    res = straight_front(scenario, max_corrections=max_corrections, max_rounds=1)
     kmax = max((fp.corrections for fp in res.front), default=0)
     least = np.full(kmax + 1, np.inf)
     for fp in res.front:
         least[fp.corrections] = min(least[fp.corrections], fp.length)
     np.minimum.accumulate(least, out=least)
-    return CertainFront(tuple(fp.points for fp in res.front), least)
+    simple = tuple(fp.points for fp in res.front if len(set(fp.points)) == len(fp.points))
+    return CertainFront(simple, least)

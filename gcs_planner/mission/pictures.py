@@ -133,11 +133,28 @@ def sawtooth(entry: dict, component: str, resets: str) -> tuple[np.ndarray, np.n
     return np.repeat(along, 2)[1:], np.column_stack([arrival, after]).ravel()[1:]
 
 
-def _side_view(ax, track: np.ndarray, stops_along: np.ndarray, route: np.ndarray, ids, kinds):
+def _side_view(
+    ax, track: np.ndarray, stops_along: np.ndarray, route: np.ndarray, ids, kinds, entry: dict
+):
     """Altitude against distance flown, from the flown polyline: climbs, descents and helices
-    appear as flown, not as straight lines between the points."""
+    appear as flown (a helix keeps the leg's constant path angle, so it is named beside it)."""
     along = _flown_distance(track)
     ax.plot(along / KM, track[:, 2], color=COLOURS["track"], lw=1.4)
+    for n, leg in enumerate(entry["legs"]):
+        turns = int(leg.get("helix_turns", 0) or 0)
+        if turns:
+            ax.annotate(
+                f"helix: {turns} turn{'s' if turns > 1 else ''}",
+                (
+                    (stops_along[n] + stops_along[n + 1]) / 2 / KM,
+                    (route[n, 2] + route[n + 1, 2]) / 2,
+                ),
+                xytext=(6, 0),
+                textcoords="offset points",
+                fontsize=9,
+                color="#9467bd",
+                fontweight="bold",
+            )
     for k in ("V", "H"):
         sel = kinds == k
         ax.scatter(
@@ -203,7 +220,7 @@ def route_png(plan: dict, route_index: int | None = None) -> bytes:
     for n, pid in enumerate(route_ids):  # 3D text has no offset points: a small shift in km
         ax3.text(*(route[n] + [0.0, 0.0, 0.02 * max(np.ptp(xyz[:, 2]), 0.1)]), pid, fontsize=8)
     _label_points(axy, route[:, 0], route[:, 1], route_ids)
-    _side_view(axz, track_m, along, route_m, route_ids, route_kinds)
+    _side_view(axz, track_m, along, route_m, route_ids, route_kinds, entry)
     axz.set_xlabel("distance flown (km)")
 
     ax3.set_xlabel("x east (km)")
@@ -309,7 +326,7 @@ def error_budget_png(plan: dict, route_index: int | None = None) -> bytes:
     axy.set_aspect("equal", adjustable="datalim")
     axy.grid(True, alpha=0.3)
 
-    _side_view(axz, track_m, along, route_m, ids, kinds)
+    _side_view(axz, track_m, along, route_m, ids, kinds, entry)
     for ax, component, resets in ((axv, "v", "V"), (axh, "h", "H")):
         _budget(ax, entry, along, kinds, component, resets, unreliable, residual)
     axh.set_xlabel("distance flown (km)")

@@ -1,0 +1,95 @@
+"""Compiled (numba) expansion of one backward layer of the cost-to-go, for dense maps.
+
+The numpy layer in ``cost_to_go`` materialises every (label, predecessor) candidate of a layer
+in some twenty arrays before it filters them: tens of millions per layer at 5,000 points. This
+makes the same candidates one at a time and keeps only those the cheap tests pass (feasible,
+and dominated by neither of the two summary labels of their point), so only the survivors are
+ever stored.
+
+The summaries are updated with each survivor as it is made (the caller passes copies): a
+later candidate that an earlier one of the same layer dominates or equals is dropped at once.
+The full filter would drop it too (whatever dominates the earlier one dominates it), so the
+labels kept after the full filter are the same; only fewer reach the sort (tested equal to the
+numpy layer, table for table).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True)
+def backward_fan(
+    node: np.ndarray,
+    R: np.ndarray,
+    E: np.ndarray,
+    r_ptr: np.ndarray,
+    r_src: np.ndarray,
+    r_len: np.ndarray,
+    is_v: np.ndarray,
+    lim_v: np.ndarray,
+    lim_h: np.ndarray,
+    near_R: np.ndarray,
+    near_e: np.ndarray,
+    wide_R: np.ndarray,
+    wide_e: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The candidates (predecessor, R, E) of one layer that pass the cheap tests, in the order
+    the numpy layer makes them (labels in order, each label's reverse arcs in order). Updates
+    the four summary arrays in place."""
+    cap = 1024
+    out_j = np.empty(cap, np.int64)
+    out_R = np.empty(cap)
+    out_E = np.empty(cap)
+    n_out = 0
+    for lab in range(node.shape[0]):
+        j1 = node[lab]
+        E1 = E[lab]
+        R1 = R[lab]
+        for arc in range(r_ptr[j1], r_ptr[j1 + 1]):
+            j = r_src[arc]
+            d = r_len[arc]
+            same = is_v[j] == is_v[j1]
+            if is_v[j]:
+                lim_own = lim_v[j1]
+                lim_other = lim_h[j1]
+            else:
+                lim_own = lim_h[j1]
+                lim_other = lim_v[j1]
+            if not (d <= lim_own):
+                continue
+            if not same and not (d <= E1):
+                continue
+            if same:
+                new_E = min(lim_other, E1) - d
+            else:
+                new_E = lim_other - d
+            if not (new_E >= 0):
+                continue
+            new_R = R1 + d
+            neg = -new_E
+            if (near_R[j] <= new_R and near_e[j] <= neg) or (
+                wide_R[j] <= new_R and wide_e[j] <= neg
+            ):
+                continue
+            if new_R < near_R[j] or (new_R == near_R[j] and neg < near_e[j]):
+                near_R[j] = new_R
+                near_e[j] = neg
+            if neg < wide_e[j] or (neg == wide_e[j] and new_R < wide_R[j]):
+                wide_R[j] = new_R
+                wide_e[j] = neg
+            if n_out == cap:
+                cap *= 2
+                grown_j = np.empty(cap, np.int64)
+                grown_R = np.empty(cap)
+                grown_E = np.empty(cap)
+                grown_j[:n_out] = out_j[:n_out]
+                grown_R[:n_out] = out_R[:n_out]
+                grown_E[:n_out] = out_E[:n_out]
+                out_j, out_R, out_E = grown_j, grown_R, grown_E
+            out_j[n_out] = j
+            out_R[n_out] = new_R
+            out_E[n_out] = new_E
+            n_out += 1
+    return out_j[:n_out], out_R[:n_out], out_E[:n_out]
