@@ -115,7 +115,7 @@ def parse(argv: list[str] | None) -> tuple[Config, bool, bool]:
             command=f"{COMMAND} --quick",
             upload_items=100,
             sweep_scenarios=4,
-            sweep_corrections=150,
+            sweep_corrections=40,
         )
     else:
         cfg = Config(

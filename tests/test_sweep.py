@@ -27,13 +27,13 @@ def write_spec(tmp_path: Path, text: str, name: str = "spec.toml") -> Path:
 def test_example_spec_expands_scenarios_times_grid() -> None:
     spec = read_spec(EXAMPLE_SPEC)
     cells = expand(spec)
-    # the example scenario and four generated ones, x 3 deltas x 2 radii
-    assert len(spec.scenarios) == 5 and len(spec.value_sets) == 6 and len(cells) == 30
+    # the example scenario and three generated ones, x 3 deltas x 2 radii
+    assert len(spec.scenarios) == 4 and len(spec.value_sets) == 6 and len(cells) == 24
     assert spec.swept == ("delta", "turn_radius")
-    assert len({c.key for c in cells}) == 30
+    assert len({c.key for c in cells}) == 24
     assert spec.scenarios[0].describe() == {"file": str(EXAMPLE_SCENARIO)}
-    assert [s.seed for s in spec.scenarios[1:]] == [1, 2, 3, 4]
-    assert spec.dry_run_runs == 100
+    assert [s.seed for s in spec.scenarios[1:]] == [1, 2, 3]
+    assert spec.dry_run_runs == 50
 
 
 def test_cases_are_crossed_with_the_grid(tmp_path: Path) -> None:
@@ -175,3 +175,18 @@ def test_generated_cell_applies_bank_angle_and_leg_model(tmp_path: Path) -> None
     assert rows[0]["turn_radius"] == pytest.approx(turn_radius_from(30.0, 40.0))
     assert rows[0]["leg_model"] == "cs3d" and rows[0]["cruise_airspeed"] == 30.0
     assert sum(r["chosen"] for r in rows) == 1
+
+
+def test_out_that_is_a_file_is_bad_input(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    out = tmp_path / "out"
+    out.write_text("not a folder")
+    code = main(["sweep", str(EXAMPLE_SPEC), "--out", str(out)])
+    err = capsys.readouterr().err
+    assert (
+        code == 2 and err == f"gcs-planner: error: {out}: is a file, not a folder for the results\n"
+    )
+
+
+def test_workers_below_one_is_bad_input(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    code = main(["sweep", str(EXAMPLE_SPEC), "--out", str(tmp_path / "o"), "--workers", "0"])
+    assert code == 2 and "field '--workers'" in capsys.readouterr().err

@@ -7,11 +7,11 @@ from benchmarks import sweep as sweep_bench
 
 
 def test_sweep_benchmark_runs_all_three_ways_with_equal_fronts() -> None:
-    timings, ratios = sweep_bench.run_benchmark(4, corrections=150, workers=2, rounds=2)
+    timings, ratios = sweep_bench.run_benchmark(4, corrections=40, workers=2, rounds=2)
     assert [t.cells for t in timings] == [4, 4, 4] and len(ratios) == 2
     assert "serial" in timings[0].name and "local cluster" in timings[1].name
     assert "dask scheduler" in timings[2].name
     assert all(t.seconds > 0 and t.cpu_seconds > 0 for t in timings)
-    text = sweep_bench.render(timings, ratios, 4, 150, 200.0)
+    text = sweep_bench.render(timings, ratios, 4, 40, 200.0)
     assert text.count("\n| ") == 1 + 3  # the header and one row per run
     assert "identical fronts" in text

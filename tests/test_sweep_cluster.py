@@ -23,6 +23,7 @@ import sweep_tasks
 from distributed import LocalCluster
 
 from gcs_planner.core.planner import plan
+from gcs_planner.errors import InputError
 from gcs_planner.scenario.generate import DATASET1, random_scenario
 from gcs_planner.scenario.readers import load_scenario
 from gcs_planner.sweep import expand, read_results, read_spec, run_sweep, runner
@@ -181,7 +182,7 @@ def test_resume_runs_no_finished_cell_twice(tmp_path: Path, cluster) -> None:
     assert first.ran == 4
     before = {(r["cell_key"], r["route"]): r for r in read_results(out)}
     # ... without --resume a second sweep into the same folder is refused ...
-    with pytest.raises(Exception, match="pass --resume"):
+    with pytest.raises(InputError, match="pass --resume"):
         run_sweep(small_spec(tmp_path), out, scheduler=cluster.scheduler_address, task=task)
     # ... and with it only the other half runs.
     second = run_sweep(

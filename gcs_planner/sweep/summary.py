@@ -66,11 +66,23 @@ def summary_png(rows: list[dict], swept: tuple[str, ...], out: Path, title: str)
 
     fig, (ax_len, ax_corr) = plt.subplots(1, 2, figsize=(13, 4.8))
     if len(series) <= MAX_LINES:
+        # A colour per scenario, a line style per combination of the other swept values: the
+        # lines of one scenario often coincide, and a dashed line over a solid one still shows.
+        scenarios = sorted({label.split(" (")[0] for label in series})
+        variants = sorted({label.partition(" (")[2] for label in series})
+        styles = ("-", "--", ":", "-.")
         for label, points in sorted(series.items()):
             keys = sorted(points, key=_order)
             px = [position[k] for k in keys]
-            ax_len.plot(px, [points[k][0] for k in keys], marker="o", label=label)
-            ax_corr.plot(px, [points[k][1] for k in keys], marker="o", label=label)
+            scenario, _, variant = label.partition(" (")
+            look = {
+                "color": f"C{scenarios.index(scenario) % 10}",
+                "linestyle": styles[variants.index(variant) % len(styles)],
+                "marker": "o",
+                "label": label,
+            }
+            ax_len.plot(px, [points[k][0] for k in keys], **look)
+            ax_corr.plot(px, [points[k][1] for k in keys], **look)
         fig.legend(*ax_len.get_legend_handles_labels(), loc="center right", fontsize="small")
     else:
         for ax, which in ((ax_len, 0), (ax_corr, 1)):
