@@ -103,8 +103,8 @@ def _horizontal(start: np.ndarray, heading: np.ndarray | None, ends: np.ndarray,
     u /= math.hypot(u[0], u[1])
     core = _core(flat_start, u, flat_ends, radius)
     # A straight-ahead leg holds its helix on the left (either side gives the same length).
-    normal = np.where(core.straight[:, None], _left_of(np.broadcast_to(u, (len(ends), 3))), 0.0)
-    normal = np.where(core.straight[:, None], normal, core.normal)
+    left = _left_of(np.broadcast_to(u, (len(ends), 3)))
+    normal = np.where(core.straight[:, None], left, core.normal)
     return _Horizontal(
         core.length, core.phi, normal, core.heading_out, core.reachable, core.straight
     )
@@ -356,8 +356,6 @@ def airplane_leg(
     if normal is not None and heading is None:
         normal = np.array([-u[1], u[0], 0.0])  # free heading: a straight leg, helix on the left
     out = legs.heading[0] if reachable else u
-    if not reachable:
-        out = u
     return AirplaneLeg(
         start=_frozen(p),
         heading_in=_frozen(u),
