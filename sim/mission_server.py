@@ -374,24 +374,28 @@ class MissionServer:
         else:
             self._request(up, now)
 
-    def on_request_list(self, msg: Any, peer: Peer) -> None:
+    def _readable_type(self, msg: Any, peer: Peer) -> int | None:
+        """The mission type a download asks for, or None after refusing it: unknown types are
+        unsupported, and nothing is read while an upload is under way."""
         mtype = int(getattr(msg, "mission_type", 0))
         if mtype not in KNOWN_TYPES:
             self.ack(peer, mavlink.MAV_MISSION_UNSUPPORTED, mtype)
-            return
+            return None
         if self.upload is not None:
             self.ack(peer, mavlink.MAV_MISSION_DENIED, mtype)
+            return None
+        return mtype
+
+    def on_request_list(self, msg: Any, peer: Peer) -> None:
+        mtype = self._readable_type(msg, peer)
+        if mtype is None:
             return
         count = len(self.mission) if mtype == MAV_MISSION_TYPE_MISSION else 0
         self.send(self.mav.mission_count_encode(peer[0], peer[1], count, mtype))
 
     def on_request(self, msg: Any, peer: Peer) -> None:
-        mtype = int(getattr(msg, "mission_type", 0))
-        if mtype not in KNOWN_TYPES:
-            self.ack(peer, mavlink.MAV_MISSION_UNSUPPORTED, mtype)
-            return
-        if self.upload is not None:
-            self.ack(peer, mavlink.MAV_MISSION_DENIED, mtype)
+        mtype = self._readable_type(msg, peer)
+        if mtype is None:
             return
         mission = self.mission if mtype == MAV_MISSION_TYPE_MISSION else []
         seq = int(msg.seq)

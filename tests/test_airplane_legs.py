@@ -8,9 +8,9 @@ import math
 
 import numpy as np
 import pytest
-from test_bnb import enumerate_front, pareto
+from test_bnb import assert_front_equals_enumeration, enumerate_front, pareto
 
-from gcs_planner.core.bnb import bnb_front, flown_route
+from gcs_planner.core.bnb import flown_route
 from gcs_planner.core.planner import plan
 from gcs_planner.geometry.airplane import airplane_leg, airplane_legs, lower_bounds
 from gcs_planner.geometry.trajectory import scenario_trajectory
@@ -141,15 +141,7 @@ def test_front_with_airplane_legs_equals_enumeration(probability: bool) -> None:
     for seed in range(60):
         scenario = climbing_scenario(seed)
         assert scenario.leg_model == "airplane"
-        result = bnb_front(scenario, probability=probability, max_labels=10**6)
-        assert result.optimal
-        got = [
-            (round(f.length, 6), f.corrections, round(-f.probability, 12) if probability else 0.0)
-            for f in result.front
-        ]
-        want = enumerate_front(scenario, probability)
-        assert [g[1:] for g in got] == [w[1:] for w in want], seed
-        np.testing.assert_allclose([g[0] for g in got], [w[0] for w in want], atol=1e-6)
+        result, want = assert_front_equals_enumeration(scenario, probability, seed)
         nonempty += bool(want)
         for f in result.front:
             traj = scenario_trajectory(scenario, f.points)

@@ -48,6 +48,21 @@ def enumerate_front(scenario, probability: bool):
     return pareto(values)
 
 
+def assert_front_equals_enumeration(scenario, probability: bool, seed: int):
+    """The branch and bound's front, proven, equal to enumeration of every simple route; returns
+    (the search's result, the enumerated front)."""
+    result = bnb_front(scenario, probability=probability, max_labels=10**6)
+    assert result.optimal
+    got = [
+        (round(f.length, 6), f.corrections, round(-f.probability, 12) if probability else 0.0)
+        for f in result.front
+    ]
+    want = enumerate_front(scenario, probability)
+    assert [g[1:] for g in got] == [w[1:] for w in want], seed
+    np.testing.assert_allclose([g[0] for g in got], [w[0] for w in want], atol=1e-6)
+    return result, want
+
+
 def turning_scenario(seed: int, radius: float):
     rng = np.random.default_rng(seed)
     params = Parameters(
@@ -75,15 +90,7 @@ def test_front_with_turns_equals_enumeration(probability: bool) -> None:
     nonempty = uncertain = 0
     for seed in range(60):
         scenario = turning_scenario(seed, radius=[200.0, 1500.0, 4000.0][seed % 3])
-        result = bnb_front(scenario, probability=probability, max_labels=10**6)
-        assert result.optimal
-        got = [
-            (round(f.length, 6), f.corrections, round(-f.probability, 12) if probability else 0.0)
-            for f in result.front
-        ]
-        want = enumerate_front(scenario, probability)
-        assert [g[1:] for g in got] == [w[1:] for w in want], seed
-        np.testing.assert_allclose([g[0] for g in got], [w[0] for w in want], atol=1e-6)
+        _, want = assert_front_equals_enumeration(scenario, probability, seed)
         nonempty += bool(want)
         uncertain += any(w[2] > -1 for w in want)
     assert nonempty >= 20

@@ -144,22 +144,31 @@ def _table(doc: dict, key: str, file: str, text: str) -> dict:
     return value
 
 
-def read_scenario_toml(path: Path) -> ScenarioSpec:
-    """Parse and check a scenario TOML; the points file must exist (it is not read here)."""
+def load_toml(path: Path) -> tuple[dict, str]:
+    """The parsed document and its text (for line numbers), or InputError naming the file and,
+    for a syntax error, its line."""
     file = str(path)
     try:
         text = path.read_bytes().decode("utf-8")
+    except FileNotFoundError:
+        raise InputError("no such file", file=file) from None
     except OSError as exc:
         raise InputError(f"cannot read: {exc.strerror or exc}", file=file) from None
     except UnicodeDecodeError as exc:
         raise InputError(f"not UTF-8 text (offset {exc.start})", file=file) from None
     try:
-        doc = tomllib.loads(text)
+        return tomllib.loads(text), text
     except tomllib.TOMLDecodeError as exc:
         found = re.search(r"line (\d+)", str(exc))
         raise InputError(
             f"TOML syntax error: {exc}", file=file, row=int(found.group(1)) if found else None
         ) from None
+
+
+def read_scenario_toml(path: Path) -> ScenarioSpec:
+    """Parse and check a scenario TOML; the points file must exist (it is not read here)."""
+    file = str(path)
+    doc, text = load_toml(path)
 
     _unknown(doc, TOP_KEYS, "", file, text)
     name = doc.get("name")

@@ -50,12 +50,13 @@ from gcs_planner.errors import InputError
 from gcs_planner.scenario.generate import DATASET1, DATASET2
 from gcs_planner.scenario.model import Parameters
 from gcs_planner.scenario.readers import PARAMETER_KEYS
+from gcs_planner.scenario.toml_reader import load_toml
 from gcs_planner.vehicle import LEG_MODELS, MAX_BANK_DEG
 
 if sys.version_info >= (3, 11):
-    import tomllib
+    pass
 else:  # pragma: no cover - exercised only on Python 3.10
-    import tomli as tomllib
+    pass
 
 TOP_KEYS = ("name", "plan", "scenarios", "grid", "cases", "dry_run")
 PLAN_KEYS = ("objectives", "choice", "max_labels")
@@ -177,21 +178,7 @@ def read_spec(path: str | Path) -> SweepSpec:
         raise InputError("is a directory, not a sweep spec", file=file)
     if path.suffix.lower() != ".toml":
         raise InputError(f"a sweep spec is a .toml file (got {path.suffix!r})", file=file)
-    try:
-        text = path.read_bytes().decode("utf-8")
-    except FileNotFoundError:
-        raise InputError("no such file", file=file) from None
-    except OSError as exc:
-        raise InputError(f"cannot read: {exc.strerror or exc}", file=file) from None
-    except UnicodeDecodeError as exc:
-        raise InputError(f"not UTF-8 text (offset {exc.start})", file=file) from None
-    try:
-        doc = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        found = re.search(r"line (\d+)", str(exc))
-        raise InputError(
-            f"TOML syntax error: {exc}", file=file, row=int(found.group(1)) if found else None
-        ) from None
+    doc, text = load_toml(path)
     where = _Where(file, text)
     _unknown(doc, TOP_KEYS, where, "")
 
