@@ -31,6 +31,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from gcs_planner.core.planner import Plan
+from gcs_planner.core.route import Route
 from gcs_planner.errors import LinkError
 from gcs_planner.link.connection import mavlink, open_link
 from gcs_planner.link.mission_client import MissionClient
@@ -126,6 +127,11 @@ class DryRunReport:
     success_rate: float | None = None
     success_ci: tuple[float, float] | None = None
     confidence: float | None = None
+    # The plan's flight reserve, and the most the flight flew beyond the plan between two
+    # corrections of the same error (what the reserve must cover); None when no stretch of the
+    # route was flown from end to end.
+    reserve: float = 0.0
+    max_overrun: float | None = None
 
     @property
     def length_difference(self) -> float:
@@ -141,9 +147,14 @@ class DryRunReport:
 
     @property
     def probability_within_ci(self) -> bool | None:
+        """The Monte Carlo agrees with the plan: the planned probability within the interval;
+        with a flight reserve the plan's probability is a floor (held to limits lowered by the
+        reserve), so the promise is kept when it is not above the interval."""
         if self.success_ci is None:
             return None
         low, high = self.success_ci
+        if self.reserve > 0:
+            return self.planned_probability <= high
         return low <= self.planned_probability <= high
 
     @property
@@ -343,7 +354,35 @@ def dry_run(
         capture_radius=capture_radius,
         flight_notes=replayed.flight.notes if replayed.flight is not None else (),
         helices=sum(it.command in LOITER_COMMANDS for it in mission.items[:-1]),
+        reserve=plan.scenario.params.reserve,
+        max_overrun=stretch_overrun(
+            route, rows, replayed.flown.length if replayed.arrived and replayed.flown else None
+        ),
     )
+
+
+def stretch_overrun(
+    route: Route, rows: list[DryRunRow], flown_to_b: float | None = None
+) -> float | None:
+    """The most metres the flight flew beyond the plan between a reset of an error and a check
+    of it: over every planned point the flight met, the flown stretch since the last planned
+    correction of each error (or since A) less the planned one. Geometry only: what the drawn
+    outcomes did does not enter, so it is what the plan's reserve has to cover."""
+    flown_at = {r.point: r.distance for r in rows if r.on_route and r.outcome != "missed"}
+    if flown_to_b is not None:
+        flown_at[route.stops[-1].id] = flown_to_b
+    worst: float | None = None
+    last = {"V": (0.0, 0.0), "H": (0.0, 0.0)}  # (planned, flown) metres at the last reset
+    for stop in route.stops[1:]:
+        flown = flown_at.get(stop.id)
+        if flown is None:
+            break  # missed or never reached: the stretches after it were not flown as planned
+        for planned0, flown0 in last.values():
+            over = (flown - flown0) - (stop.cumulative - planned0)
+            worst = over if worst is None else max(worst, over)
+        if stop.kind.name in last:
+            last[stop.kind.name] = (stop.cumulative, flown)
+    return worst
 
 
 def max_deviation(report: replay_mod.ReplayReport, planned: np.ndarray) -> tuple[float, float]:

@@ -87,6 +87,16 @@ DEFAULT_CAPTURE_RADIUS_M = 5.0
 # turn for the next item early and pass a correction point by more than the capture radius.
 DEFAULT_ACCEPTANCE_RADIUS_M = 1.0
 
+# The flight reserve the airplane leg model plans with unless told (Parameters.reserve): the
+# metres an aircraft under its autopilot may fly beyond the plan between two resets of an error.
+# The mock vehicle's ArduPlane flies the contest routes' stretches up to ~125 m longer than
+# planned (turns entered late at a bank that leaves nothing to catch up with; loiters left where
+# the autopilot leaves them); a route planned to the metre is lost there.
+DEFAULT_RESERVE_M = 200.0
+# The default never takes more than this share of the tightest limit (a scenario with limits of
+# a few kilometres keeps most of them).
+DEFAULT_RESERVE_MAX_SHARE = 0.05
+
 
 def turn_radius_from(airspeed: float, bank_deg: float) -> float:
     """R = V^2 / (g tan phi): the coordinated-turn radius at airspeed ``airspeed`` (m/s) and bank

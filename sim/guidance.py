@@ -580,16 +580,23 @@ def fly(
     envelope, in fast-forward time with a fixed step ``dt``.
 
     ``course`` is the heading at the start (rad, counter-clockwise from east), by default
-    towards the first item. ``time_limit`` (s) stops an aircraft that never finishes, by default
-    three times the time to fly the items' chords plus ten minutes.
+    towards the first waypoint (loiter centres skipped). ``time_limit`` (s) stops an aircraft
+    that never finishes, by default three times the time to fly the items' chords plus ten
+    minutes.
     """
     ap = params or AutopilotParams(flavour=flavour, loiter_radius=profile.turn_radius)
     base_alt = float(start[2] + frame.origin.alt) if home_alt is None else home_alt
     cmds = nav_commands(items, frame, base_alt, home_at_seq0=home_at_seq0)
     positions = [c.pos for c in cmds if c.pos is not None]
     if course is None:
+        # Heading for the first waypoint: a loiter's position is the centre of its circle, not
+        # a point on the track, so an aircraft that starts a helix at A is on its circle's
+        # tangent (the planner's free heading at A), not pointed at its centre.
         course = 0.0
-        for p in positions:
+        for c in cmds:
+            p = c.pos
+            if p is None or c.command in LOITERS:
+                continue
             if math.hypot(p[0] - start[0], p[1] - start[1]) > 1.0:
                 course = math.atan2(p[1] - start[1], p[0] - start[0])
                 break

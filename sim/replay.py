@@ -378,7 +378,7 @@ def _fly(
     capture_radius: float,
 ) -> ReplayRun:
     delta = params.delta
-    residual_m = params.fail_residual / delta
+    residual_m = params.residual_m
     v = h = 0.0  # metres flown since the last reset of each component
     last = 0.0
     rows: list[CorrectionRow] = []
@@ -472,7 +472,7 @@ def monte_carlo(
     if runs < 1:
         raise ValueError("runs must be >= 1")
     rng = np.random.default_rng(seed)
-    residual_m = params.fail_residual / params.delta
+    residual_m = params.residual_m
     v = np.zeros(runs)
     h = np.zeros(runs)
     ok = np.ones(runs, dtype=bool)
@@ -557,7 +557,8 @@ def replay(
     ``seed``; with ``runs`` > 0 a Monte Carlo of that many replays (seeded from ``seed`` too)
     draws the outcomes at unreliable points over the same flight.
     """
-    params = params or scenario.params
+    # The aircraft is held to the true limits: the planner's reserve is its own margin.
+    params = (params or scenario.params).flown()
     profile = profile or scenario.vehicle
     if cruise_speed is not None and cruise_speed > 0:
         profile = replace(profile, cruise_airspeed=float(cruise_speed))

@@ -80,8 +80,12 @@ def test_airplane_legs_within_the_limits_are_flown_as_planned_and_arrive(
         report = dry_run(airplane_plan, landmarks, flavour=flavour, runs=400)
         assert report.verified and report.corrections_as_planned, flavour
         assert not report.missed and all(r.miss <= 5.0 for r in report.rows)
+        # Planned with the default flight reserve: the plan's probability is a floor the
+        # flight keeps, and the stretches flown beyond the plan fit in the reserve.
+        assert report.reserve > 0 and report.max_overrun is not None
+        assert report.max_overrun <= report.reserve, flavour
         low, high = report.success_ci or (0.0, 0.0)
-        assert low <= report.planned_probability <= high
+        assert report.planned_probability <= high and report.probability_within_ci
         assert report.flown_to_b == pytest.approx(report.planned_length, rel=0.01)
     for seed in range(40):
         report = dry_run(airplane_plan, landmarks, seed=seed)

@@ -16,6 +16,7 @@ from gcs_planner.errors import InputError
 from gcs_planner.scenario.generate import DATASET1, random_scenario
 from gcs_planner.scenario.model import PARAMETER_NAMES, Kind, Origin, Parameters, Scenario
 from gcs_planner.scenario.readers import load_scenario
+from gcs_planner.vehicle import DEFAULT_RESERVE_M
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "gmcm2019f"
 EXAMPLE = Path(__file__).resolve().parents[1] / "missions" / "example"
@@ -96,7 +97,8 @@ def test_contest_workbook_matches_published_counts(name: str) -> None:
     assert scenario.xyz.dtype == np.float64 and scenario.xyz.shape == (points, 3)
     assert scenario.kind.dtype == np.uint8 and scenario.unreliable.dtype == bool
     assert scenario.name == name and scenario.source == str(path)
-    assert scenario.params == Parameters(**REQUIRED)
+    # airplane legs (the default with a turning radius): the default flight reserve
+    assert scenario.params == Parameters(**REQUIRED, reserve=DEFAULT_RESERVE_M)
     assert scenario.origin is None and scenario.heading_at_a is None
 
 
@@ -214,7 +216,9 @@ alt = 12.0
     )
     scenario = load_scenario(path)
     assert scenario.name == "trial" and scenario.source == str(path)
-    assert scenario.params == Parameters(21, 12.5, 19, 24, 28, 0.002, 150, 0.7, 4)
+    assert scenario.params == Parameters(
+        21, 12.5, 19, 24, 28, 0.002, 150, 0.7, 4, reserve=DEFAULT_RESERVE_M
+    )
     assert scenario.origin == Origin(30.5, 123.5, 12.0)
     assert scenario.heading_at_a == pytest.approx((0.6, 0.8, 0.0))
     assert scenario.ids == ("0", "1", "2", "3")
@@ -297,7 +301,9 @@ def _a_feasible_route(scenario: Scenario) -> tuple[int, ...] | None:
 def test_bundled_example_loads_and_has_feasible_routes_with_margin() -> None:
     scenario = load_scenario(EXAMPLE / "scenario.toml")
     assert scenario.name == "example"
-    assert scenario.params == Parameters(25, 15, 20, 25, 30, 0.001, 200, 0.8, 5)
+    assert scenario.params == Parameters(
+        25, 15, 20, 25, 30, 0.001, 200, 0.8, 5, reserve=DEFAULT_RESERVE_M
+    )
     assert scenario.origin == Origin(30.5, 123.5, 0.0)
     counts = scenario.counts()
     assert 50 <= counts["points"] <= 80 and counts["unreliable"] > 0
@@ -555,7 +561,7 @@ def test_toml_without_points_or_with_a_bad_points_type(tmp_path: Path) -> None:
 def test_toml_without_parameters_takes_them_from_flags(tmp_path: Path) -> None:
     csv_file(tmp_path, GOOD_ROWS)
     path = toml_file(tmp_path, 'points = "points.csv"\n')
-    assert load_scenario(path, REQUIRED).params == Parameters(**REQUIRED)
+    assert load_scenario(path, REQUIRED).params == Parameters(**REQUIRED, reserve=DEFAULT_RESERVE_M)
     err = expect_error(path, {"alpha1": 1.0}, field="alpha2")
     assert "[parameters]" in str(err) and "alpha1" not in err.reason.split(":")[0]
 
@@ -576,3 +582,22 @@ def test_heading_override_as_an_array(tmp_path: Path) -> None:
     heading = np.array([0, 0, -4])
     scenario = load_scenario(path, {**REQUIRED, "heading_at_a": heading})
     assert scenario.heading_at_a == (0.0, 0.0, -1.0)
+
+
+def test_the_flight_reserve_defaults_by_leg_model_and_is_checked(tmp_path: Path) -> None:
+    """Airplane legs keep the default reserve (capped at a share of the tightest limit); cs3d and
+    straight legs plan the contest's model without one; a given reserve wins; a reserve that
+    eats a whole limit is refused naming the field."""
+    path = DATA / "dataset1.xlsx"
+    assert load_scenario(path, REQUIRED).params.reserve == DEFAULT_RESERVE_M
+    assert load_scenario(path, {**REQUIRED, "leg_model": "cs3d"}).params.reserve == 0.0
+    assert load_scenario(path, {**REQUIRED, "turn_radius": 0.0}).params.reserve == 0.0
+    assert load_scenario(path, {**REQUIRED, "reserve": 0.0}).params.reserve == 0.0
+    assert load_scenario(path, {**REQUIRED, "reserve": 75.0}).params.reserve == 75.0
+    tight = {**REQUIRED, "alpha2": 1.0, "delta": 0.001}  # 1,000 m: 5 % of it is the default
+    assert load_scenario(path, tight).params.reserve == pytest.approx(50.0)
+    err = expect_error(path, {**REQUIRED, "reserve": 15000.0}, field="reserve", file="command line")
+    assert "below the tightest limit" in str(err)
+    params = load_scenario(path, {**REQUIRED, "reserve": 100.0}).params
+    assert params.limits_m(Kind.V) == pytest.approx((25_000 - 100, 15_000 - 100))
+    assert params.flown().limits_m(Kind.V) == pytest.approx((25_000, 15_000))

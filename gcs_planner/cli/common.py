@@ -33,6 +33,8 @@ PARAMETER_FLAGS = {
     "fail_residual": "residual error after a failed correction",
     "max_climb_angle": "largest climb (flight-path) angle in degrees (90: unlimited)",
     "max_descent_angle": "largest descent angle in degrees (90: unlimited)",
+    "reserve": "flight reserve in metres: keep every error within its limit even when the "
+    "aircraft flies this much more than planned between two resets",
 }
 # The aircraft beyond the planning parameters.
 VEHICLE_FLAGS = {

@@ -170,6 +170,16 @@ def render(r: DryRunReport) -> str:
         f"from the planned path {r.max_deviation:.1f} m (3D), {r.max_deviation_at:,.0f} m from "
         f"A; acceptance radius {r.acceptance_radius:g} m, capture radius {r.capture_radius:g} m"
     )
+    if r.max_overrun is not None:
+        covered = (
+            "within the plan's flight reserve"
+            if r.max_overrun <= r.reserve
+            else "MORE than the plan's flight reserve"
+        )
+        out.append(
+            f"overrun: at most {r.max_overrun:+,.1f} m flown beyond the plan between two "
+            f"corrections of an error, {covered} of {r.reserve:,.0f} m"
+        )
     for note in r.flight_notes:
         out.append(f"  note: {note}")
     if r.missed:
@@ -184,11 +194,15 @@ def render(r: DryRunReport) -> str:
         out.append("corrections: NOT the planned points in the planned order (see the rows)")
     if r.runs > 0 and r.success_rate is not None and r.success_ci is not None:
         low, high = r.success_ci
-        verdict = "within" if r.probability_within_ci else "OUTSIDE"
+        if r.reserve > 0:  # the plan's probability is a floor: held to limits less the reserve
+            verdict = "kept" if r.probability_within_ci else "NOT kept (above the interval)"
+            said = f"planned at least {r.planned_probability:.4f} (with the reserve): {verdict}"
+        else:
+            verdict = "within" if r.probability_within_ci else "OUTSIDE"
+            said = f"planned probability {r.planned_probability:.4f}: {verdict} the interval"
         out.append(
             f"success rate {r.success_rate:.3f} over {r.runs} replays "
-            f"({(r.confidence or 0) * 100:g} % Wilson interval {low:.3f}-{high:.3f}); "
-            f"planned probability {r.planned_probability:.4f}: {verdict} the interval"
+            f"({(r.confidence or 0) * 100:g} % Wilson interval {low:.3f}-{high:.3f}); {said}"
         )
     if r.planned_probability < 1.0:
         out.append(

@@ -155,6 +155,17 @@ def render_table(route: Route) -> str:
     return "\n".join(lines)
 
 
+def reserve_line(reserve: float) -> str:
+    """What the flight reserve promises, in the operator's words."""
+    if reserve > 0:
+        return (
+            f"flight reserve: {reserve:,.0f} m (every error stays within its limit for a flight up "
+            f"to {reserve:,.0f} m longer than planned between two corrections; --reserve 0 "
+            "plans to the limits)"
+        )
+    return "flight reserve: none (the limits are planned to the metre: --reserve M keeps a margin)"
+
+
 def render(result: Plan) -> str:
     s = result.scenario
     p = s.params
@@ -169,6 +180,7 @@ def render(result: Plan) -> str:
             else ""
         ),
         f"vehicle: {s.vehicle.describe()}",
+        reserve_line(p.reserve),
         *(f"warning: {w}" for w in result.warnings),
         f"optimality: {result.statement}",
         "",

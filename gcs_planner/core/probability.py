@@ -80,7 +80,7 @@ class MonteCarloResult:
 
 def _residual_m(params: Parameters) -> float:
     # Computed in one place so every failed correction clips to the very same float.
-    return params.fail_residual / params.delta
+    return params.residual_m
 
 
 def propagate(

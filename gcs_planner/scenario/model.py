@@ -49,6 +49,11 @@ class Parameters:
     # "Airplane legs"). Only the airplane leg model plans with them.
     max_climb_angle: float = 90.0
     max_descent_angle: float = 90.0
+    # Flight reserve in metres: plan so that every error stays within its limit even when the
+    # aircraft flies this much more than planned between two resets of that error (an aircraft
+    # under its autopilot never flies the planned legs exactly: it enters turns late and leaves
+    # loiters where its guidance does). 0 is the model of MODEL.md as it stands.
+    reserve: float = 0.0
 
     def validate(self) -> list[str]:
         """Return the names of invalid parameters with why, empty when all are valid."""
@@ -67,19 +72,40 @@ class Parameters:
             value = getattr(self, name)
             if not math.isfinite(value) or not 0.0 < value <= 90.0:
                 bad.append(f"{name} must lie in (0, 90] degrees (got {value!r})")
+        if bad:
+            return bad  # the reserve is judged against valid limits only
+        tightest = min(getattr(self, k) for k in PARAMETER_NAMES[:5]) / self.delta
+        if not math.isfinite(self.reserve) or not 0.0 <= self.reserve < tightest:
+            bad.append(
+                f"reserve must lie in [0, {tightest:g}) metres, below the tightest limit in "
+                f"metres flown (got {self.reserve!r})"
+            )
         return bad
 
     # Limits in metres of flight: the search works in metres flown since the last reset of a
     # component, so that comparing against a limit needs no multiplication by delta.
     def limits_m(self, kind: Kind) -> tuple[float, float]:
-        """(vertical, horizontal) arrival limits at a point of ``kind``, in metres flown."""
+        """(vertical, horizontal) arrival limits at a point of ``kind``, in metres flown as
+        planned since the last reset: the limit over delta, less the reserve. Every check is
+        linear in those metres and a failed correction only clips them, so a flight that flies
+        at most ``reserve`` metres more than planned between two resets keeps every limit."""
+        reserve = self.reserve
         if kind == Kind.V:
-            return self.alpha1 / self.delta, self.alpha2 / self.delta
+            return self.alpha1 / self.delta - reserve, self.alpha2 / self.delta - reserve
         if kind == Kind.H:
-            return self.beta1 / self.delta, self.beta2 / self.delta
+            return self.beta1 / self.delta - reserve, self.beta2 / self.delta - reserve
         if kind == Kind.B:
-            return self.theta / self.delta, self.theta / self.delta
+            return self.theta / self.delta - reserve, self.theta / self.delta - reserve
         return math.inf, math.inf
+
+    @property
+    def residual_m(self) -> float:
+        """The residual after a failed correction, in metres flown."""
+        return self.fail_residual / self.delta
+
+    def flown(self) -> Parameters:
+        """The same parameters without the reserve: what the aircraft is held to in flight."""
+        return replace(self, reserve=0.0)
 
     def limits(self, kind: Kind) -> tuple[float, float]:
         """(vertical, horizontal) arrival limits at a point of ``kind``, in error units."""
@@ -94,7 +120,8 @@ class Parameters:
     @property
     def reach_m(self) -> float:
         """Longest leg any feasible route can contain, in metres."""
-        return max(self.alpha1, self.alpha2, self.beta1, self.beta2, self.theta) / self.delta
+        limits = (self.alpha1, self.alpha2, self.beta1, self.beta2, self.theta)
+        return max(limits) / self.delta - self.reserve
 
     def to_dict(self) -> dict[str, float]:
         return {k: float(getattr(self, k)) for k in self.__dataclass_fields__}

@@ -23,6 +23,9 @@ from gcs_planner.scenario import csv_reader, geographic, toml_reader
 from gcs_planner.scenario.model import PARAMETER_NAMES, Kind, Origin, Parameters, Scenario
 from gcs_planner.vehicle import (
     DEFAULT_CRUISE_AIRSPEED,
+    DEFAULT_LEG_MODEL,
+    DEFAULT_RESERVE_M,
+    DEFAULT_RESERVE_MAX_SHARE,
     LEG_MODELS,
     MAX_BANK_DEG,
     turn_radius_from,
@@ -114,9 +117,7 @@ def load_scenario(
             sources[key] = (COMMAND_LINE, None)
     for key in VEHICLE_EXTRA_KEYS:
         if key in given:
-            vehicle[key] = (
-                given[key] if key == "leg_model" else _override_number(key, given[key])
-            )
+            vehicle[key] = given[key] if key == "leg_model" else _override_number(key, given[key])
             sources[key] = (COMMAND_LINE, None)
     # On the command line a radius wins over a bank from the file, and a bank over a radius.
     if "turn_radius" in given and "max_bank_angle" not in given:
@@ -130,6 +131,7 @@ def load_scenario(
         heading = toml_reader.check_heading(
             _as_list(given["heading_at_a"]), file=COMMAND_LINE, row=None
         )
+    _default_reserve(values, extra)
     params = _parameters(path, suffix, values, sources)
     return Scenario(
         ids=points.ids,
@@ -216,6 +218,23 @@ def _override_origin(value: object) -> Origin:
     return toml_reader.check_origin(value.lat, value.lon, value.alt, file=COMMAND_LINE)
 
 
+def _default_reserve(values: dict[str, float], extra: dict[str, object]) -> None:
+    """A scenario flown on airplane legs keeps a flight reserve unless one is given: a plan
+    that uses its limits to the metre is lost by the first late turn (vehicle.DEFAULT_RESERVE_M).
+    Straight and cs3d legs reproduce the contest's model and plan without one."""
+    if "reserve" in values or any(k not in values for k in PARAMETER_NAMES):
+        return
+    radius = values.get("turn_radius", Parameters.turn_radius)
+    if extra.get("leg_model", DEFAULT_LEG_MODEL) != "airplane" or not radius > 0:
+        return
+    try:
+        tightest = min(float(values[k]) for k in PARAMETER_NAMES[:5]) / float(values["delta"])
+    except (TypeError, ValueError, ZeroDivisionError):
+        return  # _parameters says what is wrong with them
+    if math.isfinite(tightest) and tightest > 0:
+        values["reserve"] = min(DEFAULT_RESERVE_M, DEFAULT_RESERVE_MAX_SHARE * tightest)
+
+
 def _parameters(
     path: Path, suffix: str, values: dict[str, float], sources: dict[str, tuple[str, int | None]]
 ) -> Parameters:
@@ -250,6 +269,7 @@ def _vehicle(
 ) -> dict[str, object]:
     """The Scenario fields of the aircraft (leg model, airspeed, radius source); fills the
     turning radius into ``values`` when it comes from airspeed and bank."""
+
     def fail(key: str, message: str) -> InputError:
         file, row = sources.get(key, (str(path), None))
         return InputError(message, file=file, row=row, field=key)

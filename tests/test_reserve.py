@@ -1,0 +1,103 @@
+"""The flight reserve: a plan that keeps every error within its limit for a flight up to
+``reserve`` metres longer than planned between two resets of that error."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+from test_airplane_legs import climbing_scenario  # noqa: F401 (tight_scenario's base)
+from test_bnb import assert_front_equals_enumeration
+
+from gcs_planner.core.bnb import bnb_front, flown_route
+from gcs_planner.core.probability import success_probability
+from gcs_planner.scenario.model import PARAMETER_NAMES
+
+LIMIT_NAMES = PARAMETER_NAMES[:5]
+
+
+def tight_scenario(seed: int):
+    """test_airplane_legs' climbing scenarios (turns, helices, unreliable points) with their
+    limits scaled down, so that the limits, and with them the reserve, decide the front."""
+    base = climbing_scenario(seed)
+    scale = float(np.random.default_rng(500 + seed).uniform(0.5, 0.9))
+    p = base.params
+    tighter = {k: getattr(p, k) * scale for k in LIMIT_NAMES}
+    return dataclasses.replace(base, params=dataclasses.replace(p, **tighter))
+
+
+def with_reserve(scenario, reserve: float):
+    return dataclasses.replace(
+        scenario, params=dataclasses.replace(scenario.params, reserve=reserve)
+    )
+
+
+def with_tighter_limits(scenario, reserve: float):
+    """The same scenario without a reserve, every limit lowered by what the reserve's metres
+    would add to the error: an independent statement of what the reserve means."""
+    p = scenario.params
+    tighter = {k: getattr(p, k) - reserve * p.delta for k in LIMIT_NAMES}
+    return dataclasses.replace(scenario, params=dataclasses.replace(p, **tighter, reserve=0.0))
+
+
+def key(front, probability: bool):
+    return [
+        (f.points, round(f.length, 4), f.corrections, round(f.probability, 9) if probability else 0)
+        for f in front
+    ]
+
+
+@pytest.mark.parametrize("probability", [False, True])
+def test_a_reserve_plans_as_limits_lowered_by_its_metres(probability: bool) -> None:
+    """Over random scenarios with turns, helices and unreliable points: the front planned with a
+    reserve is the front of the same scenario whose limits are lowered by reserve x delta
+    (proven both), equal to enumeration of every simple route, and it differs from the front
+    without a reserve on some of them (the reserve is not ignored)."""
+    changed = nonempty = 0
+    for seed in range(40):
+        base = tight_scenario(seed)
+        rng = np.random.default_rng(1000 + seed)
+        tightest = min(getattr(base.params, k) for k in LIMIT_NAMES) / base.params.delta
+        reserve = float(rng.uniform(0.1, 0.5)) * tightest
+        reserved = with_reserve(base, reserve)
+        result, want = assert_front_equals_enumeration(reserved, probability, seed)
+        lowered = bnb_front(
+            with_tighter_limits(base, reserve), probability=probability, max_labels=10**6
+        )
+        assert lowered.optimal
+        assert key(result.front, probability) == key(lowered.front, probability), seed
+        plain = bnb_front(base, probability=probability, max_labels=10**6)
+        changed += key(plain.front, probability) != key(result.front, probability)
+        nonempty += bool(want)
+    assert nonempty >= 12
+    assert changed >= 4
+
+
+def test_every_route_of_a_reserved_front_survives_a_flight_that_much_longer() -> None:
+    """Fly each front route with any one leg ``reserve`` metres longer (so every stretch
+    between resets that holds it is that much longer), held to the true limits: the exact
+    probability of arriving is never below the one the plan promised, and on the all-success
+    path every check keeps the reserve in metres."""
+    checked = 0
+    for seed in range(70):
+        base = tight_scenario(seed)
+        reserve = 0.2 * min(getattr(base.params, k) for k in LIMIT_NAMES) / base.params.delta
+        reserved = with_reserve(base, reserve)
+        result = bnb_front(reserved, probability=True, max_labels=10**6)
+        for f in result.front:
+            true = flown_route(base, f.points)
+            for stop in true.stops[1:]:
+                v_lim, h_lim = base.params.limits_m(stop.kind)
+                assert stop.v_flown + reserve <= v_lim + 1e-6, seed
+                assert stop.h_flown + reserve <= h_lim + 1e-6, seed
+            lengths = [s.leg.length for s in true.stops[1:]]
+            assert success_probability(reserved, f.points, lengths).probability == (
+                pytest.approx(f.probability, abs=1e-12)
+            )
+            for i in range(len(lengths)):
+                longer = [x + (reserve if k == i else 0.0) for k, x in enumerate(lengths)]
+                p_flown = success_probability(base, f.points, longer).probability
+                assert p_flown >= f.probability - 1e-12, (seed, i)
+            checked += 1
+    assert checked >= 20
