@@ -62,6 +62,7 @@ def test_radius_and_bank_together_in_a_file_are_refused(tmp_path: Path) -> None:
         ("cruise_airspeed = -3\n", "cruise_airspeed"),
         ('cruise_airspeed = "fast"\n', "vehicle.cruise_airspeed"),
         ("wingspan = 3\n", "vehicle.wingspan"),
+        ("reserve = -1\n", "reserve"),
     ],
 )
 def test_bad_vehicle_values_name_file_row_and_field(tmp_path: Path, body: str, field: str) -> None:
@@ -75,6 +76,32 @@ def test_a_value_given_twice_is_refused(tmp_path: Path) -> None:
     path.write_text(path.read_text() + "[vehicle]\nturn_radius = 200\n")
     with pytest.raises(InputError, match="given twice"):
         load_scenario(path, {})
+
+
+def test_the_flight_reserve_stands_in_the_vehicle_table_and_reaches_the_plan(
+    tmp_path: Path,
+) -> None:
+    """How far the autopilot strays from the plan is the aircraft's: `[vehicle] reserve`;
+    the plan JSON carries it with the parameters, and --reserve on the command line wins."""
+    path = with_vehicle(tmp_path, "reserve = 120\n")
+    assert load_scenario(path, {}).params.reserve == 120
+    assert load_scenario(path, {"reserve": 0.0}).params.reserve == 0
+    out = subprocess.run(
+        [sys.executable, "-m", "gcs_planner", "plan", str(path), "--json", "--reserve", "75"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert out.returncode == 0, out.stderr
+    assert json.loads(out.stdout)["parameters"]["reserve"] == 75
+    bad = subprocess.run(
+        [sys.executable, "-m", "gcs_planner", "plan", str(path), "--reserve", "1e9"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert bad.returncode == 2 and "Traceback" not in bad.stderr
+    assert "reserve" in bad.stderr and "command line" in bad.stderr
 
 
 def test_radius_and_bank_are_inverse() -> None:

@@ -33,6 +33,7 @@ VEHICLE_KEYS = (
     "cruise_airspeed",
     "max_bank_angle",
     "leg_model",
+    "reserve",
 )
 ORIGIN_KEYS = ("lat", "lon", "alt")
 POINTS_SUFFIXES = (".csv", ".xlsx", ".geojson", ".json")
