@@ -115,21 +115,7 @@ def item_from_wire(msg: Any) -> MissionItem | int:
             return mavlink.MAV_MISSION_INVALID_PARAM5_X
         if not (math.isfinite(y) and _fits_int32(round(y))):
             return mavlink.MAV_MISSION_INVALID_PARAM6_Y
-    return MissionItem(
-        seq=int(msg.seq),
-        frame=int(msg.frame),
-        command=int(msg.command),
-        current=int(msg.current),
-        autocontinue=int(msg.autocontinue),
-        param1=float(msg.param1),
-        param2=float(msg.param2),
-        param3=float(msg.param3),
-        param4=float(msg.param4),
-        x=round(x),
-        y=round(y),
-        z=float(msg.z),
-        mission_type=int(getattr(msg, "mission_type", 0)),
-    )
+    return MissionItem.from_wire(msg, round(x), round(y))
 
 
 def legacy_item_message(mav: Any, item: MissionItem, target: Peer) -> Any:

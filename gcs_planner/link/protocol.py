@@ -93,21 +93,7 @@ def item_from_message(msg: Any) -> MissionItem:
             y = _deg_e7(y)
         else:
             x, y = _local_e4(x), _local_e4(y)
-    return MissionItem(
-        seq=int(msg.seq),
-        frame=int(msg.frame),
-        command=int(msg.command),
-        current=int(msg.current),
-        autocontinue=int(msg.autocontinue),
-        param1=float(msg.param1),
-        param2=float(msg.param2),
-        param3=float(msg.param3),
-        param4=float(msg.param4),
-        x=int(x),
-        y=int(y),
-        z=float(msg.z),
-        mission_type=int(getattr(msg, "mission_type", 0)),
-    )
+    return MissionItem.from_wire(msg, x, y)
 
 
 def _deg_e7(value: float) -> int:

@@ -7,6 +7,7 @@ knows how the route was planned.
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from typing import Any
 
 # MAV_FRAME
 MAV_FRAME_GLOBAL = 0
@@ -59,6 +60,27 @@ class MissionItem:
 
     def with_seq(self, seq: int) -> MissionItem:
         return replace(self, seq=seq)
+
+    @classmethod
+    def from_wire(cls, msg: Any, x: int, y: int) -> MissionItem:
+        """The item a MISSION_ITEM(_INT) message carries, with ``x``/``y`` already in the
+        stored integer units (how a legacy float message's position is scaled, and whether it
+        fits, is the receiver's to decide: the ground station and the vehicle differ)."""
+        return cls(
+            seq=int(msg.seq),
+            frame=int(msg.frame),
+            command=int(msg.command),
+            current=int(msg.current),
+            autocontinue=int(msg.autocontinue),
+            param1=float(msg.param1),
+            param2=float(msg.param2),
+            param3=float(msg.param3),
+            param4=float(msg.param4),
+            x=int(x),
+            y=int(y),
+            z=float(msg.z),
+            mission_type=int(getattr(msg, "mission_type", 0)),
+        )
 
 
 @dataclass(frozen=True)
