@@ -111,8 +111,10 @@ def test_arduplane_loiter_turns_counts_its_turns_and_leaves_towards_the_next_way
 
 @pytest.mark.parametrize("flavour", ["ardupilot", "px4"])
 def test_loiter_to_altitude_climbs_on_the_circle_then_leaves(flavour):
+    # LOITER_TO_ALT carries its signed radius in param2 (common.xml; PX4 and ArduPilot read it
+    # there), not in param3 as the other loiters.
     items = mission((16, (0, 0, 1000), {"param2": 1}),
-                    (31, (3000, 0, 2500), {"param2": 1, "param3": -250, "param4": 1}),
+                    (31, (3000, 0, 2500), {"param2": -250, "param3": 400, "param4": 1}),
                     (16, (8000, 0, 2500), {"param2": 1}))  # fmt: skip
     f = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour=flavour,
             params=AutopilotParams(flavour, acceptance_radius=1.0))  # fmt: skip
@@ -122,6 +124,8 @@ def test_loiter_to_altitude_climbs_on_the_circle_then_leaves(flavour):
     during = f.current == 1
     # Counter-clockwise (negative radius): the course increases.
     assert np.sum(np.diff(np.unwrap(f.course[during]))) > 2 * math.pi
+    r = np.linalg.norm(f.xyz[during, :2] - np.array([3000.0, 0.0]), axis=1)
+    assert np.median(r) == pytest.approx(250.0, rel=0.05)
 
 
 def test_px4_skips_loiter_turns_and_says_so():

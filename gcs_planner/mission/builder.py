@@ -81,6 +81,12 @@ ALTITUDE_FRAMES = {"amsl": MAV_FRAME_GLOBAL, "relative": MAV_FRAME_GLOBAL_RELATI
 FRAMES_ACCEPTED = {"ardupilot": ("amsl", "relative"), "px4": ("amsl", "relative")}
 END_ACTIONS = ("loiter", "rtl", "land")
 
+# PX4 enforces a loiter's exit heading (param1) only when the next waypoint is farther than this
+# many loiter radii from the centre (mission_block.cpp, exit_heading_is_reachable); the exporter
+# asks for it only with this margin more.
+PX4_EXIT_HEADING_RANGE = 1.2
+PX4_EXIT_MARGIN = 1.05
+
 PLAN_FORMAT = "gcs-planner-plan"
 PLAN_VERSION = 1
 
@@ -257,6 +263,16 @@ def helix_loiter(leg: FlownLeg) -> tuple[np.ndarray, int, float] | None:
     return centre, int(leg.helix_turns), float(-leg.sense * leg.radius)
 
 
+def px4_leaves_on_heading(leg: FlownLeg) -> bool:
+    """Whether PX4 can be told to leave the leg's turning circle on the heading to its target:
+    it enforces an exit heading only towards a waypoint farther than 1.2 turning radii from the
+    loiter's centre (mission_block.cpp); PX4_EXIT_MARGIN more keeps float rounding out of it."""
+    if leg.centre is None or leg.radius <= 0.0:
+        return False
+    far = math.hypot(leg.end[0] - leg.centre[0], leg.end[1] - leg.centre[1])
+    return far > PX4_EXIT_HEADING_RANGE * PX4_EXIT_MARGIN * leg.radius
+
+
 def last_turn_sense(legs: list[FlownLeg]) -> int:
     """Sense (+1 counter-clockwise, -1 clockwise seen from above) of the route's last turn that
     has one; clockwise when the route never turns."""
@@ -378,10 +394,14 @@ def build_mission(
     n_legs = len(legs)
     for i, leg in enumerate(legs):
         helix = helix_loiter(leg)
+        arc = arc_waypoints(leg)
+        # A tangent point on the target itself (no straight part) is the target's own waypoint.
+        if len(arc) and np.linalg.norm(arc[-1] - xyz[i + 1]) < 1.0:
+            arc = arc[:-1]
         if helix is not None:
             centre, turns, signed = helix
-            note = f"helix {ids[i]}->{ids[i + 1]}: {turns} turn(s) to {at(centre)['z']:.1f} m"
             if firmware == "ardupilot":
+                note = f"helix {ids[i]}->{ids[i + 1]}: {turns} turn(s) to {at(centre)['z']:.1f} m"
                 add(
                     MAV_CMD_NAV_LOITER_TURNS,
                     mav_frame,
@@ -391,7 +411,26 @@ def build_mission(
                     param4=1,
                     **at(centre),
                 )
+            elif px4_leaves_on_heading(leg):
+                # Helix and arc as one loiter to the altitude of the arc's end, left on the
+                # heading to the target: its tangent point is the arc's end (module docstring).
+                centre = np.array([centre[0], centre[1], leg.tangent_point[2]])
+                note = (
+                    f"helix and arc {ids[i]}->{ids[i + 1]}: {turns} turn(s) and "
+                    f"{math.degrees(leg.arc_angle):.0f} deg to {at(centre)['z']:.1f} m"
+                )
+                add(
+                    MAV_CMD_NAV_LOITER_TO_ALT,
+                    mav_frame,
+                    note,
+                    param1=1,
+                    param2=signed,
+                    param4=1,
+                    **at(centre),
+                )
+                arc = arc[:0]
             else:
+                note = f"helix {ids[i]}->{ids[i + 1]}: to {at(centre)['z']:.1f} m"
                 add(
                     MAV_CMD_NAV_LOITER_TO_ALT,
                     mav_frame,
@@ -400,14 +439,7 @@ def build_mission(
                     param4=1,
                     **at(centre),
                 )
-        arc = arc_waypoints(leg)
-        # A tangent point on the target itself (no straight part) is the target's own waypoint.
-        if len(arc) and np.linalg.norm(arc[-1] - xyz[i + 1]) < 1.0:
-            arc = arc[:-1]
-        # The autopilot must pass close to arc points, not cut inside the turn: their acceptance
-        # radius is at most a quarter of the spacing between them.
-        chord = 2.0 * leg.radius * math.sin(arc_step(leg.radius) / 2.0)
-        arc_accept = float(max(1, min(capture, math.floor(chord / 4.0))))
+        arc_accept = _arc_acceptance(leg, capture)
         for j, p in enumerate(arc):
             note = f"arc {ids[i]}->{ids[i + 1]} {j + 1}/{len(arc)}"
             add(MAV_CMD_NAV_WAYPOINT, mav_frame, note, param2=arc_accept, **at(p))
@@ -443,6 +475,13 @@ def build_mission(
         route=tuple(ids),
         point_seqs=tuple(point_seqs),
     )
+
+
+def _arc_acceptance(leg: FlownLeg, capture: int) -> float:
+    """param2 of the waypoints on a leg's circle: the autopilot must pass close to them, not cut
+    inside the turn, so at most a quarter of the spacing between them."""
+    chord = 2.0 * leg.radius * math.sin(arc_step(leg.radius) / 2.0)
+    return float(max(1, min(capture, math.floor(chord / 4.0))))
 
 
 def _deg_e7(deg: float) -> int:
