@@ -614,8 +614,8 @@ def fly(
     envelope, in fast-forward time with a fixed step ``dt``.
 
     ``course`` is the heading at the start (rad, counter-clockwise from east), by default
-    towards the first item that is not a loiter. ``time_limit`` (s) stops an aircraft that never finishes, by default
-    three times the time to fly the items' chords plus ten minutes.
+    towards the first item that is not a loiter. ``time_limit`` (s) stops an aircraft that never
+    finishes, by default three times the time to fly the items' chords plus ten minutes.
     """
     ap = params or AutopilotParams(flavour=flavour, loiter_radius=profile.turn_radius)
     base_alt = float(start[2] + frame.origin.alt) if home_alt is None else home_alt
