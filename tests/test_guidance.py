@@ -156,3 +156,25 @@ def test_do_change_speed_changes_the_airspeed_and_widens_the_turns():
     assert f.airspeed.max() == pytest.approx(35.0)
     # Same bank limit, faster: R = V^2 / (g tan phi) grows by (35/25)^2.
     assert turn_radii(f).min() >= 200.0 * (35.0 / 25.0) ** 2 * (1 - 1e-6)
+
+
+@pytest.mark.parametrize("heading_required", [0.0, 1.0])
+def test_px4_loiter_to_altitude_leaves_on_the_heading_only_when_param1_asks(heading_required):
+    """PX4 reads LOITER_TO_ALT's "heading required" from param1 (mavlink_mission.cpp); with it,
+    the aircraft leaves once its course points at the next waypoint (MIS_YAW_ERR, 12 degrees),
+    without it as soon as the altitude is in."""
+    items = mission((16, (0, 0, 1000)),
+                    (31, (3000, 0, 1300), {"param1": heading_required, "param2": -250,
+                                           "param4": 1}),
+                    (16, (3000, 6000, 1300)))  # fmt: skip
+    f = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour="px4",
+            params=AutopilotParams("px4", acceptance_radius=1.0))  # fmt: skip
+    assert f.ended == "mission end"
+    left = [e for e in f.events if e.kind == "reached" and e.seq == 1][0].sample
+    bearing = math.atan2(6000.0 - f.xyz[left, 1], 3000.0 - f.xyz[left, 0])
+    error = abs((f.course[left] - bearing + math.pi) % (2 * math.pi) - math.pi)
+    assert abs(f.xyz[left, 2] - 1300.0) <= 10.0
+    if heading_required:
+        assert error <= math.radians(12.0)
+    else:
+        assert error > math.radians(30.0)  # it left where the altitude came in
