@@ -18,12 +18,13 @@ ArduPlane (ArduPlane/commands_logic.cpp, ArduPlane/navigation.cpp, libraries/AP_
   keeps climbing or sinking at its limit towards the next target.
 * The next leg starts at the reached waypoint, or at the aircraft when it is already past the
   new leg's finish line (set_next_WP).
-* Loiters circle the item's position on |param3| (0: WP_LOITER_RAD), clockwise when positive.
-  LOITER_TURNS counts param1 turns once on the circle; LOITER_TO_ALT circles until the altitude
-  is within 5 m; LOITER_TIME for param1 seconds. Each then waits until the course points at the
-  next waypoint within 10 degrees (plus 10 per extra lap) and leaves towards it
-  (verify_loiter_heading); with param4 (xtrack) > 0 the next leg is tracked from the exit point,
-  otherwise from the loiter's centre. LOITER_UNLIM circles for ever: the flight ends there.
+* Loiters circle the item's position on |param3| (LOITER_TO_ALT: |param2|; 0: WP_LOITER_RAD),
+  clockwise when positive. LOITER_TURNS counts param1 turns once on the circle; LOITER_TO_ALT
+  circles until the altitude is within 5 m; LOITER_TIME for param1 seconds. Each then waits
+  until the course points at the next waypoint within 10 degrees, plus 10 per lap flown
+  (verify_loiter_heading, mode_loiter.cpp isHeadingLinedUp_cd), and leaves towards it; with
+  param4 (xtrack) > 0 the next leg is tracked from the exit point, otherwise from the loiter's
+  centre. LOITER_UNLIM circles for ever: the flight ends there.
 
 PX4 (src/modules/navigator/mission_block.cpp, src/modules/fw_pos_control/
 FixedwingPositionControl.cpp):
@@ -37,10 +38,17 @@ FixedwingPositionControl.cpp):
   setpoint turned into a loiter), then leaves with its course on the next waypoint (12 degrees,
   MIS_YAW_ERR). The altitude target slides linearly to the waypoint's, reached at the acceptance
   radius (the "altitude first-order hold").
-* LOITER_TO_ALT keeps the current altitude until on the circle, then climbs or sinks to the
-  item's; reached within NAV_FW_ALT_RAD; param2 > 0 asks for the exit heading first; param4 > 0
-  leaves on the tangent towards the next waypoint. LOITER_TURNS is not a position item in PX4's
-  navigator (item_contains_position): it is skipped, as are DO items other than DO_CHANGE_SPEED.
+* LOITER_TO_ALT (mavlink_mission.cpp: param1 heading required, param2 the signed radius, param4
+  cross-track exit) keeps the current altitude until on the circle, then climbs or sinks to the
+  item's; reached within NAV_FW_ALT_RAD, wherever on the circle (no turns counted). With the
+  heading required, and the next waypoint farther than 1.2 radii from the centre, it then waits
+  for the course to point at the next waypoint (MIS_YAW_ERR). With param4 > 0 the next leg starts
+  at the tangent point PX4 computes from the centre towards the next waypoint, not where the
+  aircraft is. LOITER_TIME: param2 heading required, param3 the radius.
+* A leg whose previous and current setpoints coincide has no "passed" line on PX4 (it is checked
+  only for a segment longer than 1e-6 m): such a waypoint is reached within NAV_ACC_RAD only.
+* LOITER_TURNS is not a position item in PX4's navigator (item_contains_position): it is
+  skipped, as are DO items other than DO_CHANGE_SPEED.
 
 Both: DO_CHANGE_SPEED (param2 > 0) changes the airspeed from the next leg on; RTL and LAND end
 the flight (the route is over); unknown items are skipped. Not modelled: wind, roll and pitch

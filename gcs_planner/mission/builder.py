@@ -14,15 +14,25 @@ one route of its front into MAVLink mission items (MISSION_ITEM_INT semantics, c
   the planned turn and not its own shortcut. Straight legs need no intermediate item.
 * A helix (airplane legs: whole turns on the leg's turning circle to gain or lose height, MODEL.md)
   becomes a loiter at the circle's centre whose radius is the turning radius, signed by the turn's
-  sense (positive = clockwise, MAVLink's convention), at the altitude the plan reaches at the end
-  of the helix, with the exit cross-track flag set (param4 = 1: leave on the tangent towards the
-  next item, not through the centre). ArduPlane: NAV_LOITER_TURNS, param1 the number of turns,
-  counted from when it reaches the circle (ArduPlane's verify_loiter_turns sums the heading
-  change). PX4 has no loiter-turns item in missions; it gets NAV_LOITER_TO_ALT (param2 the signed
-  radius), which circles until the altitude is reached and then leaves towards the next item: at
-  the climb limit the plan counted, that is after the planned turns. The aircraft starts the
-  helix on the circle (it enters it from the correction point, tangent to its heading) and the
-  arc's waypoints continue on the same circle after it.
+  sense (positive = clockwise, MAVLink's convention), with the exit cross-track flag set (param4 =
+  1: leave on the tangent towards the next item, not through the centre). The aircraft starts the
+  helix on the circle (it enters it from the correction point, tangent to its heading).
+  ArduPlane: NAV_LOITER_TURNS at the altitude the plan reaches at the end of the helix, param1 the
+  number of turns, counted from when it reaches the circle (verify_loiter_turns sums the heading
+  change); the arc's waypoints continue on the same circle after it.
+  PX4 has no loiter-turns item in missions. Its NAV_LOITER_TO_ALT (param2 the signed radius)
+  counts no turns: TECS climbs or sinks at its limit and the loiter ends as soon as the altitude
+  is within NAV_FW_ALT_RAD, wherever the aircraft is on the circle (mission_block.cpp), while the
+  plan spreads the height over the whole leg; left there, the aircraft cuts across to the next
+  item. So PX4's loiter covers the helix AND the arc, to the altitude the plan reaches at the
+  arc's end (the tangent point), with param1 = 1 (heading required): it ends only once the course
+  points at the target (MIS_YAW_ERR), that is on the last turn as it comes to the tangent point,
+  and PX4 starts the next leg from the tangent point it computes from the centre, the plan's own
+  (the tangent from the circle to the target). Climbing at its limit the aircraft has the
+  altitude only on the last turn (a turn earlier, and the leg would have needed one turn less).
+  The target's waypoint follows directly (no arc waypoints). PX4 enforces the heading only
+  towards a waypoint farther than 1.2 radii from the centre; for a target closer than that (rare:
+  right beside the circle) the loiter covers the helix alone and the arc's waypoints follow.
 * At B a NAV_WAYPOINT on B, then the end action: MAV_CMD_NAV_LOITER_UNLIM about B whose radius is
   the turning radius (positive = clockwise, MAVLink's convention), RTL, or LAND at B at sea level.
 
