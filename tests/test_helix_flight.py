@@ -6,12 +6,14 @@ metres of its planned length and every correction point is overflown within the 
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 from test_mission_builder import make_plan, steep_scenario
 
 from gcs_planner.core.bnb import flown_route
 from gcs_planner.core.planner import plan
-from gcs_planner.mission.builder import build_mission
+from gcs_planner.geometry.airplane import airplane_leg
+from gcs_planner.mission.builder import build_mission, px4_leaves_on_heading
 from gcs_planner.plan_json import plan_to_dict
 from gcs_planner.scenario.readers import load_scenario
 from gcs_planner.vehicle import DEFAULT_CAPTURE_RADIUS_M
@@ -71,3 +73,15 @@ def test_dataset2_helix_legs_are_flown_within_tens_of_metres(ds2_route, flavour)
     assert any(turns > 0 for _, turns, _ in legs)
     for pid, turns, over in legs:
         assert -LEG_OVERRUN_M < over < LEG_OVERRUN_M, f"{flavour} leg to {pid} ({turns} turns)"
+
+
+@pytest.mark.parametrize(
+    "end, leaves_on_heading",
+    [((3000.0, 0.0, 1200.0), True), ((150.0, 10.0, 400.0), False), ((150.0, 10.0, -400.0), False)],
+)
+def test_px4_is_asked_for_the_exit_heading_only_where_it_enforces_it(end, leaves_on_heading):
+    """PX4 enforces a loiter's exit heading only towards a waypoint farther than 1.2 radii from
+    the centre: a target right beside the turning circle gets the helix-only loiter."""
+    leg = airplane_leg(np.zeros(3), np.array([1.0, 0.0, 0.0]), np.array(end), 200.0, 15.0, 15.0)
+    assert leg.helix_turns > 0
+    assert px4_leaves_on_heading(leg) is leaves_on_heading
