@@ -6,6 +6,8 @@ metres of its planned length and every correction point is overflown within the 
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 from test_mission_builder import make_plan, steep_scenario
@@ -13,8 +15,10 @@ from test_mission_builder import make_plan, steep_scenario
 from gcs_planner.core.bnb import flown_route
 from gcs_planner.core.planner import plan
 from gcs_planner.geometry.airplane import airplane_leg
-from gcs_planner.mission.builder import build_mission, px4_leaves_on_heading
+from gcs_planner.mission.builder import build_mission, px4_leaves_on_heading, route_legs
+from gcs_planner.mission.georef import LocalFrame
 from gcs_planner.plan_json import plan_to_dict
+from gcs_planner.scenario.model import Kind, Scenario
 from gcs_planner.scenario.readers import load_scenario
 from gcs_planner.vehicle import DEFAULT_CAPTURE_RADIUS_M
 from sim.replay import replay
@@ -85,3 +89,25 @@ def test_px4_is_asked_for_the_exit_heading_only_where_it_enforces_it(end, leaves
     leg = airplane_leg(np.zeros(3), np.array([1.0, 0.0, 0.0]), np.array(end), 200.0, 15.0, 15.0)
     assert leg.helix_turns > 0
     assert px4_leaves_on_heading(leg) is leaves_on_heading
+
+
+def test_px4_helix_beside_its_target_is_written_as_waypoints():
+    """A target right beside the turning circle: PX4 would leave a loiter wherever the altitude
+    came in, so the helix goes as waypoints 16 degrees apart at the plan's altitudes."""
+    s0 = steep_scenario()
+    xyz = np.array([[0, 0, 0], [10000, 0, 500], [10150, 10, 900], [20000, 0, 1000]], float)
+    kinds = np.array([Kind.A, Kind.V, Kind.H, Kind.B], dtype=np.uint8)
+    s = Scenario(ids=("A0", "1", "2", "B9"), xyz=xyz, kind=kinds, unreliable=np.zeros(4, bool),
+                 params=s0.params, name="beside", source="hand-made", origin=s0.origin)  # fmt: skip
+    plan_dict = make_plan(s, routes=([0, 1, 2, 3],), probability=False)
+    leg = route_legs(plan_dict["front"][0])[1]
+    assert leg.helix_turns == 5 and not px4_leaves_on_heading(leg)
+    m = build_mission(plan_dict, firmware="px4")
+    assert not [it for it in m.items if it.command in (18, 31)]
+    helix = [it for it in m.items if it.note.startswith("helix 1->2")]
+    assert len(helix) == math.ceil(5 * 360 / 16)
+    frame = LocalFrame(s.origin)
+    zs = [frame.to_local(it.lat, it.lon, it.z)[2] for it in helix]
+    assert all(a < b for a, b in zip(zs, zs[1:]))  # climbing all the way
+    x, y, _ = frame.to_local(helix[-1].lat, helix[-1].lon, helix[-1].z)
+    assert math.hypot(x - 10000.0, y) < 0.05  # whole turns: above the correction point it left

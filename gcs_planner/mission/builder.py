@@ -32,7 +32,9 @@ one route of its front into MAVLink mission items (MISSION_ITEM_INT semantics, c
   altitude only on the last turn (a turn earlier, and the leg would have needed one turn less).
   The target's waypoint follows directly (no arc waypoints). PX4 enforces the heading only
   towards a waypoint farther than 1.2 radii from the centre; for a target closer than that (rare:
-  right beside the circle) the loiter covers the helix alone and the arc's waypoints follow.
+  right beside the circle) PX4 gets the helix as waypoints 16 degrees apart, as an arc, then the
+  arc's: it overflies the target, but flies each turn some 120 m long (L1 lags on a polygon of
+  its own turning radius: it cannot catch up).
 * At B a NAV_WAYPOINT on B, then the end action: MAV_CMD_NAV_LOITER_UNLIM about B whose radius is
   the turning radius (positive = clockwise, MAVLink's convention), RTL, or LAND at B at sea level.
 
@@ -263,6 +265,19 @@ def arc_waypoints(leg: FlownLeg) -> np.ndarray:
     return pts
 
 
+def helix_waypoints(leg: FlownLeg) -> np.ndarray:
+    """(k, 3) points on the leg's helix after its start, evenly spaced in angle at most
+    ``arc_step`` apart, at the plan's altitudes there; the last one the helix's end, above or
+    below the start. Empty when the leg has no helix."""
+    if not isinstance(leg, AirplaneLeg) or leg.helix_turns <= 0 or leg.centre is None:
+        return np.empty((0, 3))
+    total = 2.0 * math.pi * leg.helix_turns
+    k = max(1, math.ceil(total / arc_step(leg.radius) - 1e-9))
+    pts = leg.points_at_horizontal(leg.radius * total * np.arange(1, k + 1) / k)
+    pts[-1, :2] = leg.start[:2]  # whole turns: the helix ends above or below its start
+    return pts
+
+
 def helix_loiter(leg: FlownLeg) -> tuple[np.ndarray, int, float] | None:
     """(centre at the altitude reached at the helix's end, whole turns, signed radius: positive
     clockwise) of the leg's helix, None when the leg has none."""
@@ -440,15 +455,13 @@ def build_mission(
                 )
                 arc = arc[:0]
             else:
-                note = f"helix {ids[i]}->{ids[i + 1]}: to {at(centre)['z']:.1f} m"
-                add(
-                    MAV_CMD_NAV_LOITER_TO_ALT,
-                    mav_frame,
-                    note,
-                    param2=signed,
-                    param4=1,
-                    **at(centre),
-                )
+                # A target beside the circle: no exit heading to ask for, so no loiter (it would
+                # end wherever the altitude comes in); the helix as waypoints, like an arc.
+                pts = helix_waypoints(leg)
+                accept = _arc_acceptance(leg, capture)
+                for j, p in enumerate(pts):
+                    note = f"helix {ids[i]}->{ids[i + 1]} {j + 1}/{len(pts)} ({turns} turn(s))"
+                    add(MAV_CMD_NAV_WAYPOINT, mav_frame, note, param2=accept, **at(p))
         arc_accept = _arc_acceptance(leg, capture)
         for j, p in enumerate(arc):
             note = f"arc {ids[i]}->{ids[i + 1]} {j + 1}/{len(arc)}"
