@@ -18,12 +18,13 @@ ArduPlane (ArduPlane/commands_logic.cpp, ArduPlane/navigation.cpp, libraries/AP_
   keeps climbing or sinking at its limit towards the next target.
 * The next leg starts at the reached waypoint, or at the aircraft when it is already past the
   new leg's finish line (set_next_WP).
-* Loiters circle the item's position on |param3| (0: WP_LOITER_RAD), clockwise when positive.
-  LOITER_TURNS counts param1 turns once on the circle; LOITER_TO_ALT circles until the altitude
-  is within 5 m; LOITER_TIME for param1 seconds. Each then waits until the course points at the
-  next waypoint within 10 degrees (plus 10 per extra lap) and leaves towards it
-  (verify_loiter_heading); with param4 (xtrack) > 0 the next leg is tracked from the exit point,
-  otherwise from the loiter's centre. LOITER_UNLIM circles for ever: the flight ends there.
+* Loiters circle the item's position on |param3| (LOITER_TO_ALT: |param2|; 0: WP_LOITER_RAD),
+  clockwise when positive. LOITER_TURNS counts param1 turns once on the circle; LOITER_TO_ALT
+  circles until the altitude is within 5 m; LOITER_TIME for param1 seconds. Each then waits
+  until the course points at the next waypoint within 10 degrees, plus 10 per lap flown
+  (verify_loiter_heading, mode_loiter.cpp isHeadingLinedUp_cd), and leaves towards it; with
+  param4 (xtrack) > 0 the next leg is tracked from the exit point, otherwise from the loiter's
+  centre. LOITER_UNLIM circles for ever: the flight ends there.
 
 PX4 (src/modules/navigator/mission_block.cpp, src/modules/fw_pos_control/
 FixedwingPositionControl.cpp):
@@ -37,10 +38,17 @@ FixedwingPositionControl.cpp):
   setpoint turned into a loiter), then leaves with its course on the next waypoint (12 degrees,
   MIS_YAW_ERR). The altitude target slides linearly to the waypoint's, reached at the acceptance
   radius (the "altitude first-order hold").
-* LOITER_TO_ALT keeps the current altitude until on the circle, then climbs or sinks to the
-  item's; reached within NAV_FW_ALT_RAD; param2 > 0 asks for the exit heading first; param4 > 0
-  leaves on the tangent towards the next waypoint. LOITER_TURNS is not a position item in PX4's
-  navigator (item_contains_position): it is skipped, as are DO items other than DO_CHANGE_SPEED.
+* LOITER_TO_ALT (mavlink_mission.cpp: param1 heading required, param2 the signed radius, param4
+  cross-track exit) keeps the current altitude until on the circle, then climbs or sinks to the
+  item's; reached within NAV_FW_ALT_RAD, wherever on the circle (no turns counted). With the
+  heading required, and the next waypoint farther than 1.2 radii from the centre, it then waits
+  for the course to point at the next waypoint (MIS_YAW_ERR). With param4 > 0 the next leg starts
+  at the tangent point PX4 computes from the centre towards the next waypoint, not where the
+  aircraft is. LOITER_TIME: param2 heading required, param3 the radius.
+* A leg whose previous and current setpoints coincide has no "passed" line on PX4 (it is checked
+  only for a segment longer than 1e-6 m): such a waypoint is reached within NAV_ACC_RAD only.
+* LOITER_TURNS is not a position item in PX4's navigator (item_contains_position): it is
+  skipped, as are DO items other than DO_CHANGE_SPEED.
 
 Both: DO_CHANGE_SPEED (param2 > 0) changes the airspeed from the next leg on; RTL and LAND end
 the flight (the route is over); unknown items are skipped. Not modelled: wind, roll and pitch
@@ -306,9 +314,11 @@ class _Autopilot:
         return None if j is None else self.cmds[j].pos
 
     def _loiter_geometry(self, c: NavCommand) -> tuple[float, int]:
-        """(radius, direction: +1 counter-clockwise, -1 clockwise) of a loiter item."""
-        p3 = c.params[2]
-        signed = p3 if abs(p3) > 0 and c.command != NAV_WAYPOINT else self.ap.loiter_radius
+        """(radius, direction: +1 counter-clockwise, -1 clockwise) of a loiter item. The signed
+        radius is param3 of the loiters, but param2 of LOITER_TO_ALT (common.xml; PX4's
+        mavlink_mission.cpp and ArduPilot's AP_Mission read it there)."""
+        p = c.params[1] if c.command == NAV_LOITER_TO_ALT else c.params[2]
+        signed = p if abs(p) > 0 and c.command != NAV_WAYPOINT else self.ap.loiter_radius
         radius = abs(signed)
         radius = max(radius, self.env.min_radius)
         return radius, (-1 if signed >= 0 else 1)
@@ -440,6 +450,14 @@ class _Autopilot:
         px, py = self.prev[0], self.prev[1]
         return (s.x - c.pos[0]) * (c.pos[0] - px) + (s.y - c.pos[1]) * (c.pos[1] - py)
 
+    def _px4_point_leg(self, c: NavCommand) -> bool:
+        """PX4 has no "passed" line when the leg starts on its waypoint (previous and current
+        setpoints the same: mission_block.cpp checks passing only for a segment longer than
+        1e-6 m); ArduPlane counts such a waypoint passed at once (Location::line_path_proportion
+        returns 1)."""
+        assert c.pos is not None
+        return self.px4 and math.hypot(c.pos[0] - self.prev[0], c.pos[1] - self.prev[1]) < 1e-3
+
     def _acceptance(self, c: NavCommand) -> float:
         if self.px4:
             return self.ap.acceptance_radius
@@ -459,7 +477,7 @@ class _Autopilot:
         s = self.s
         assert c.pos is not None
         dist = math.hypot(c.pos[0] - s.x, c.pos[1] - s.y)
-        passed = crossed or self._finish_line(s, c) >= 0
+        passed = crossed or (self._finish_line(s, c) >= 0 and not self._px4_point_leg(c))
         horizontal = dist <= acc or passed
         if not horizontal:
             return True
@@ -500,6 +518,23 @@ class _Autopilot:
         bearing = math.atan2(nxt[1] - self.s.y, nxt[0] - self.s.x)
         tol = math.radians(tolerance_deg * (1 + (int(laps) if not self.px4 else 0)))
         return abs(_wrap(bearing - self.s.course)) <= tol
+
+    def _px4_tangent_exit(self, c: NavCommand, radius: float, direction: int) -> tuple | None:
+        """Where PX4 starts the next leg after a loiter left with param4 (xtrack) set: the point
+        of the circle whose tangent, in the loiter's sense, passes through the next waypoint,
+        computed from the centre (mission_block.cpp, is_mission_item_reached), not where the
+        aircraft is. A next waypoint on or inside the circle gives the point of the circle
+        towards it."""
+        assert c.pos is not None
+        nxt = self._next_target()
+        if nxt is None:
+            return None
+        rng = math.hypot(nxt[0] - c.pos[0], nxt[1] - c.pos[1])
+        if rng < 1e-6:
+            return None
+        inner = math.acos(min(radius / rng, 1.0))
+        a = math.atan2(nxt[1] - c.pos[1], nxt[0] - c.pos[0]) - direction * inner
+        return (c.pos[0] + radius * math.cos(a), c.pos[1] + radius * math.sin(a), c.pos[2])
 
     def _tick_loiter(self, c: NavCommand, dist: float) -> bool:
         assert c.pos is not None
@@ -542,7 +577,8 @@ class _Autopilot:
             done = dz <= PX4_ALT_ACCEPTANCE_M and not (
                 c.command == NAV_LOITER_TIME and self.s.t - self.loiter_t0 < c.params[0]
             )
-            heading = c.params[1] > 0 or c.command == NAV_LOITER_TIME
+            # force_heading: param1 of LOITER_TO_ALT, param2 of LOITER_TIME (mavlink_mission.cpp)
+            heading = (c.params[0] if c.command == NAV_LOITER_TO_ALT else c.params[1]) > 0
             tol = PX4_EXIT_HEADING_DEG
         else:
             if c.command == NAV_LOITER_TURNS:
@@ -557,7 +593,13 @@ class _Autopilot:
             return True
         if heading and not self._exit_heading(c, tol, laps):
             return True
-        exit_from = (self.s.x, self.s.y, self.s.z) if c.params[3] > 0 else None
+        exit_from = None
+        if c.params[3] > 0:
+            exit_from = (
+                self._px4_tangent_exit(c, radius, direction)
+                if self.px4
+                else (self.s.x, self.s.y, self.s.z)
+            )
         how = f"after {laps:.2f} turns, {dz:.1f} m from its altitude"
         return self.reached(c, how, exit_from)
 
@@ -580,23 +622,20 @@ def fly(
     envelope, in fast-forward time with a fixed step ``dt``.
 
     ``course`` is the heading at the start (rad, counter-clockwise from east), by default
-    towards the first waypoint (loiter centres skipped). ``time_limit`` (s) stops an aircraft
-    that never finishes, by default three times the time to fly the items' chords plus ten
-    minutes.
+    towards the first item that is not a loiter. ``time_limit`` (s) stops an aircraft that never
+    finishes, by default three times the time to fly the items' chords plus ten minutes.
     """
     ap = params or AutopilotParams(flavour=flavour, loiter_radius=profile.turn_radius)
     base_alt = float(start[2] + frame.origin.alt) if home_alt is None else home_alt
     cmds = nav_commands(items, frame, base_alt, home_at_seq0=home_at_seq0)
     positions = [c.pos for c in cmds if c.pos is not None]
     if course is None:
-        # Heading for the first waypoint: a loiter's position is the centre of its circle, not
-        # a point on the track, so an aircraft that starts a helix at A is on its circle's
-        # tangent (the planner's free heading at A), not pointed at its centre.
+        # A loiter's position is its centre, off the path: aim at the first other item, so an
+        # aircraft that starts a helix at A is on its circle's tangent (the planner's free
+        # heading at A).
         course = 0.0
-        for c in cmds:
-            p = c.pos
-            if p is None or c.command in LOITERS:
-                continue
+        aims = [c.pos for c in cmds if c.pos is not None and c.command not in LOITERS]
+        for p in aims or positions:
             if math.hypot(p[0] - start[0], p[1] - start[1]) > 1.0:
                 course = math.atan2(p[1] - start[1], p[0] - start[0])
                 break

@@ -111,8 +111,10 @@ def test_arduplane_loiter_turns_counts_its_turns_and_leaves_towards_the_next_way
 
 @pytest.mark.parametrize("flavour", ["ardupilot", "px4"])
 def test_loiter_to_altitude_climbs_on_the_circle_then_leaves(flavour):
+    # LOITER_TO_ALT carries its signed radius in param2 (common.xml; PX4 and ArduPilot read it
+    # there), not in param3 as the other loiters.
     items = mission((16, (0, 0, 1000), {"param2": 1}),
-                    (31, (3000, 0, 2500), {"param2": 1, "param3": -250, "param4": 1}),
+                    (31, (3000, 0, 2500), {"param2": -250, "param3": 400, "param4": 1}),
                     (16, (8000, 0, 2500), {"param2": 1}))  # fmt: skip
     f = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour=flavour,
             params=AutopilotParams(flavour, acceptance_radius=1.0))  # fmt: skip
@@ -122,6 +124,8 @@ def test_loiter_to_altitude_climbs_on_the_circle_then_leaves(flavour):
     during = f.current == 1
     # Counter-clockwise (negative radius): the course increases.
     assert np.sum(np.diff(np.unwrap(f.course[during]))) > 2 * math.pi
+    r = np.linalg.norm(f.xyz[during, :2] - np.array([3000.0, 0.0]), axis=1)
+    assert np.median(r) == pytest.approx(250.0, rel=0.05)
 
 
 def test_px4_skips_loiter_turns_and_says_so():
@@ -152,3 +156,25 @@ def test_do_change_speed_changes_the_airspeed_and_widens_the_turns():
     assert f.airspeed.max() == pytest.approx(35.0)
     # Same bank limit, faster: R = V^2 / (g tan phi) grows by (35/25)^2.
     assert turn_radii(f).min() >= 200.0 * (35.0 / 25.0) ** 2 * (1 - 1e-6)
+
+
+@pytest.mark.parametrize("heading_required", [0.0, 1.0])
+def test_px4_loiter_to_altitude_leaves_on_the_heading_only_when_param1_asks(heading_required):
+    """PX4 reads LOITER_TO_ALT's "heading required" from param1 (mavlink_mission.cpp); with it,
+    the aircraft leaves once its course points at the next waypoint (MIS_YAW_ERR, 12 degrees),
+    without it as soon as the altitude is in."""
+    items = mission((16, (0, 0, 1000)),
+                    (31, (3000, 0, 1300), {"param1": heading_required, "param2": -250,
+                                           "param4": 1}),
+                    (16, (3000, 6000, 1300)))  # fmt: skip
+    f = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour="px4",
+            params=AutopilotParams("px4", acceptance_radius=1.0))  # fmt: skip
+    assert f.ended == "mission end"
+    left = [e for e in f.events if e.kind == "reached" and e.seq == 1][0].sample
+    bearing = math.atan2(6000.0 - f.xyz[left, 1], 3000.0 - f.xyz[left, 0])
+    error = abs((f.course[left] - bearing + math.pi) % (2 * math.pi) - math.pi)
+    assert abs(f.xyz[left, 2] - 1300.0) <= 10.0
+    if heading_required:
+        assert error <= math.radians(12.0)
+    else:
+        assert error > math.radians(30.0)  # it left where the altitude came in

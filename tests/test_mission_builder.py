@@ -389,8 +389,9 @@ def test_bad_plans_are_input_errors(mutate):
 @pytest.mark.parametrize("firmware", ["ardupilot", "px4"])
 def test_helices_become_loiters_at_the_turning_radius_where_the_plan_climbs(firmware):
     """Each helix of an airplane leg is one loiter on its turning circle: centre R from the
-    correction point it starts at, radius R signed by the turn's sense, altitude the one the plan
-    reaches at the end of the helix; ArduPilot counts the turns, PX4 loiters to the altitude."""
+    correction point it starts at, radius R signed by the turn's sense. ArduPilot counts the turns
+    to the altitude the plan reaches at the end of the helix; PX4, which counts no turns, loiters
+    helix and arc to the altitude of the arc's end and must leave on the heading to the target."""
     s = steep_scenario()
     plan = make_plan(s, routes=([0, 1, 2, 3, 4, 6],), probability=False)
     m = build_mission(plan, firmware=firmware)
@@ -413,9 +414,16 @@ def test_helices_become_loiters_at_the_turning_radius_where_the_plan_climbs(firm
         x, y, z = frame.to_local(item.lat, item.lon, item.z)
         start = np.array(geo["start"])
         assert math.hypot(x - start[0], y - start[1]) == pytest.approx(200.0, abs=0.01)
-        flat = geo["helix_length"] * math.cos(math.radians(leg["path_angle_deg"]))
-        climb = flat * math.tan(math.radians(leg["path_angle_deg"]))
-        assert z == pytest.approx(start[2] + climb, abs=0.01)
+        if firmware == "ardupilot":
+            flat = geo["helix_length"] * math.cos(math.radians(leg["path_angle_deg"]))
+            climb = flat * math.tan(math.radians(leg["path_angle_deg"]))
+            assert z == pytest.approx(start[2] + climb, abs=0.01)
+        else:
+            assert item.param1 == 1  # heading required: it leaves where the tangent starts
+            assert z == pytest.approx(geo["tangent_point"][2], abs=0.01)
+            # the loiter flies the arc too: the next item is the target's waypoint
+            target = m.items[item.seq + 1]
+            assert target.command == 16 and target.note.startswith(("correction", "B"))
     # every leg of the route is within the climb limits
     assert all(-5.0 - 1e-9 <= leg["path_angle_deg"] <= 4.0 + 1e-9 for leg in entry["legs"])
     # the correction points are still waypoints exactly on the landmarks

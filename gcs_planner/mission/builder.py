@@ -14,15 +14,27 @@ one route of its front into MAVLink mission items (MISSION_ITEM_INT semantics, c
   the planned turn and not its own shortcut. Straight legs need no intermediate item.
 * A helix (airplane legs: whole turns on the leg's turning circle to gain or lose height, MODEL.md)
   becomes a loiter at the circle's centre whose radius is the turning radius, signed by the turn's
-  sense (positive = clockwise, MAVLink's convention), at the altitude the plan reaches at the end
-  of the helix, with the exit cross-track flag set (param4 = 1: leave on the tangent towards the
-  next item, not through the centre). ArduPlane: NAV_LOITER_TURNS, param1 the number of turns,
-  counted from when it reaches the circle (ArduPlane's verify_loiter_turns sums the heading
-  change). PX4 has no loiter-turns item in missions; it gets NAV_LOITER_TO_ALT (param2 the signed
-  radius), which circles until the altitude is reached and then leaves towards the next item: at
-  the climb limit the plan counted, that is after the planned turns. The aircraft starts the
-  helix on the circle (it enters it from the correction point, tangent to its heading) and the
-  arc's waypoints continue on the same circle after it.
+  sense (positive = clockwise, MAVLink's convention), with the exit cross-track flag set (param4 =
+  1: leave on the tangent towards the next item, not through the centre). The aircraft starts the
+  helix on the circle (it enters it from the correction point, tangent to its heading).
+  ArduPlane: NAV_LOITER_TURNS at the altitude the plan reaches at the end of the helix, param1 the
+  number of turns, counted from when it reaches the circle (verify_loiter_turns sums the heading
+  change); the arc's waypoints continue on the same circle after it.
+  PX4 has no loiter-turns item in missions. Its NAV_LOITER_TO_ALT (param2 the signed radius)
+  counts no turns: TECS climbs or sinks at its limit and the loiter ends as soon as the altitude
+  is within NAV_FW_ALT_RAD, wherever the aircraft is on the circle (mission_block.cpp), while the
+  plan spreads the height over the whole leg; left there, the aircraft cuts across to the next
+  item. So PX4's loiter covers the helix AND the arc, to the altitude the plan reaches at the
+  arc's end (the tangent point), with param1 = 1 (heading required): it ends only once the course
+  points at the target (MIS_YAW_ERR), that is on the last turn as it comes to the tangent point,
+  and PX4 starts the next leg from the tangent point it computes from the centre, the plan's own
+  (the tangent from the circle to the target). Climbing at its limit the aircraft has the
+  altitude only on the last turn (a turn earlier, and the leg would have needed one turn less).
+  The target's waypoint follows directly (no arc waypoints). PX4 enforces the heading only
+  towards a waypoint farther than 1.2 radii from the centre; for a target closer than that (rare:
+  right beside the circle) PX4 gets the helix as waypoints 16 degrees apart, as an arc, then the
+  arc's: it overflies the target, but flies each turn some 120 m long (L1 lags on a polygon of
+  its own turning radius: it cannot catch up).
 * At B a NAV_WAYPOINT on B, then the end action: MAV_CMD_NAV_LOITER_UNLIM about B whose radius is
   the turning radius (positive = clockwise, MAVLink's convention), RTL, or LAND at B at sea level.
 
@@ -80,6 +92,12 @@ ALTITUDE_FRAMES = {"amsl": MAV_FRAME_GLOBAL, "relative": MAV_FRAME_GLOBAL_RELATI
 # mission feasibility checks). Both take both; the table is where a refusal would be stated.
 FRAMES_ACCEPTED = {"ardupilot": ("amsl", "relative"), "px4": ("amsl", "relative")}
 END_ACTIONS = ("loiter", "rtl", "land")
+
+# PX4 enforces a loiter's exit heading (param1) only when the next waypoint is farther than this
+# many loiter radii from the centre (mission_block.cpp, exit_heading_is_reachable); the exporter
+# asks for it only with this margin more.
+PX4_EXIT_HEADING_RANGE = 1.2
+PX4_EXIT_MARGIN = 1.05
 
 PLAN_FORMAT = "gcs-planner-plan"
 PLAN_VERSION = 1
@@ -247,6 +265,19 @@ def arc_waypoints(leg: FlownLeg) -> np.ndarray:
     return pts
 
 
+def helix_waypoints(leg: FlownLeg) -> np.ndarray:
+    """(k, 3) points on the leg's helix after its start, evenly spaced in angle at most
+    ``arc_step`` apart, at the plan's altitudes there; the last one the helix's end, above or
+    below the start. Empty when the leg has no helix."""
+    if not isinstance(leg, AirplaneLeg) or leg.helix_turns <= 0 or leg.centre is None:
+        return np.empty((0, 3))
+    total = 2.0 * math.pi * leg.helix_turns
+    k = max(1, math.ceil(total / arc_step(leg.radius) - 1e-9))
+    pts = leg.points_at_horizontal(leg.radius * total * np.arange(1, k + 1) / k)
+    pts[-1, :2] = leg.start[:2]  # whole turns: the helix ends above or below its start
+    return pts
+
+
 def helix_loiter(leg: FlownLeg) -> tuple[np.ndarray, int, float] | None:
     """(centre at the altitude reached at the helix's end, whole turns, signed radius: positive
     clockwise) of the leg's helix, None when the leg has none."""
@@ -255,6 +286,16 @@ def helix_loiter(leg: FlownLeg) -> tuple[np.ndarray, int, float] | None:
     end_of_helix = leg.point_at_horizontal(leg.helix_horizontal)
     centre = np.array([leg.centre[0], leg.centre[1], end_of_helix[2]])
     return centre, int(leg.helix_turns), float(-leg.sense * leg.radius)
+
+
+def px4_leaves_on_heading(leg: FlownLeg) -> bool:
+    """Whether PX4 can be told to leave the leg's turning circle on the heading to its target:
+    it enforces an exit heading only towards a waypoint farther than 1.2 turning radii from the
+    loiter's centre (mission_block.cpp); PX4_EXIT_MARGIN more keeps float rounding out of it."""
+    if leg.centre is None or leg.radius <= 0.0:
+        return False
+    far = math.hypot(leg.end[0] - leg.centre[0], leg.end[1] - leg.centre[1])
+    return far > PX4_EXIT_HEADING_RANGE * PX4_EXIT_MARGIN * leg.radius
 
 
 def last_turn_sense(legs: list[FlownLeg]) -> int:
@@ -378,10 +419,14 @@ def build_mission(
     n_legs = len(legs)
     for i, leg in enumerate(legs):
         helix = helix_loiter(leg)
+        arc = arc_waypoints(leg)
+        # A tangent point on the target itself (no straight part) is the target's own waypoint.
+        if len(arc) and np.linalg.norm(arc[-1] - xyz[i + 1]) < 1.0:
+            arc = arc[:-1]
         if helix is not None:
             centre, turns, signed = helix
-            note = f"helix {ids[i]}->{ids[i + 1]}: {turns} turn(s) to {at(centre)['z']:.1f} m"
             if firmware == "ardupilot":
+                note = f"helix {ids[i]}->{ids[i + 1]}: {turns} turn(s) to {at(centre)['z']:.1f} m"
                 add(
                     MAV_CMD_NAV_LOITER_TURNS,
                     mav_frame,
@@ -391,23 +436,33 @@ def build_mission(
                     param4=1,
                     **at(centre),
                 )
-            else:
+            elif px4_leaves_on_heading(leg):
+                # Helix and arc as one loiter to the altitude of the arc's end, left on the
+                # heading to the target: its tangent point is the arc's end (module docstring).
+                centre = np.array([centre[0], centre[1], leg.tangent_point[2]])
+                note = (
+                    f"helix and arc {ids[i]}->{ids[i + 1]}: {turns} turn(s) and "
+                    f"{math.degrees(leg.arc_angle):.0f} deg to {at(centre)['z']:.1f} m"
+                )
                 add(
                     MAV_CMD_NAV_LOITER_TO_ALT,
                     mav_frame,
                     note,
+                    param1=1,
                     param2=signed,
                     param4=1,
                     **at(centre),
                 )
-        arc = arc_waypoints(leg)
-        # A tangent point on the target itself (no straight part) is the target's own waypoint.
-        if len(arc) and np.linalg.norm(arc[-1] - xyz[i + 1]) < 1.0:
-            arc = arc[:-1]
-        # The autopilot must pass close to arc points, not cut inside the turn: their acceptance
-        # radius is at most a quarter of the spacing between them.
-        chord = 2.0 * leg.radius * math.sin(arc_step(leg.radius) / 2.0)
-        arc_accept = float(max(1, min(capture, math.floor(chord / 4.0))))
+                arc = arc[:0]
+            else:
+                # A target beside the circle: no exit heading to ask for, so no loiter (it would
+                # end wherever the altitude comes in); the helix as waypoints, like an arc.
+                pts = helix_waypoints(leg)
+                accept = _arc_acceptance(leg, capture)
+                for j, p in enumerate(pts):
+                    note = f"helix {ids[i]}->{ids[i + 1]} {j + 1}/{len(pts)} ({turns} turn(s))"
+                    add(MAV_CMD_NAV_WAYPOINT, mav_frame, note, param2=accept, **at(p))
+        arc_accept = _arc_acceptance(leg, capture)
         for j, p in enumerate(arc):
             note = f"arc {ids[i]}->{ids[i + 1]} {j + 1}/{len(arc)}"
             add(MAV_CMD_NAV_WAYPOINT, mav_frame, note, param2=arc_accept, **at(p))
@@ -443,6 +498,13 @@ def build_mission(
         route=tuple(ids),
         point_seqs=tuple(point_seqs),
     )
+
+
+def _arc_acceptance(leg: FlownLeg, capture: int) -> float:
+    """param2 of the waypoints on a leg's circle: the autopilot must pass close to them, not cut
+    inside the turn, so at most a quarter of the spacing between them."""
+    chord = 2.0 * leg.radius * math.sin(arc_step(leg.radius) / 2.0)
+    return float(max(1, min(capture, math.floor(chord / 4.0))))
 
 
 def _deg_e7(deg: float) -> int:

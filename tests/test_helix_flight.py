@@ -1,0 +1,113 @@
+"""Helices (airplane legs too steep for their length) flown by the mock vehicle as each autopilot
+flies the items the exporter writes for it: ArduPlane counts LOITER_TURNS, PX4 loiters to an
+altitude and leaves on the heading to the target. Either way each leg is flown within tens of
+metres of its planned length and every correction point is overflown within the capture radius.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from test_mission_builder import make_plan, steep_scenario
+
+from gcs_planner.core.bnb import flown_route
+from gcs_planner.core.planner import plan
+from gcs_planner.geometry.airplane import airplane_leg
+from gcs_planner.mission.builder import build_mission, px4_leaves_on_heading, route_legs
+from gcs_planner.mission.georef import LocalFrame
+from gcs_planner.plan_json import plan_to_dict
+from gcs_planner.scenario.model import Kind, Scenario
+from gcs_planner.scenario.readers import load_scenario
+from gcs_planner.vehicle import DEFAULT_CAPTURE_RADIUS_M
+from sim.replay import replay
+
+# Turn entry: the aircraft banks at most to its turning radius, so a turn it starts late is
+# never caught up; a leg's arc is flown up to this much longer than planned (both autopilots).
+LEG_OVERRUN_M = 60.0
+DS2 = {"alpha1": 20, "alpha2": 10, "beta1": 15, "beta2": 20, "theta": 20, "delta": 0.001}
+DS2_LIMITS = {"turn_radius": 200.0, "max_climb_angle": 20.0, "max_descent_angle": 25.0}
+
+
+def flown_against_planned(stops, items, scenario, flavour: str) -> list[tuple[str, int, float]]:
+    """(point, helix turns, flown minus planned length of the leg to it) for each correction
+    point of the route, after checking that the flight overflew it within the capture radius."""
+    report = replay(items, scenario, home_at_seq0=flavour == "ardupilot", flavour=flavour)
+    met = {e.id: e for e in report.encounters}
+    out = []
+    flown_before = planned_before = 0.0
+    for stop in stops[1:-1]:
+        assert stop.id in met, f"{flavour}: correction point {stop.id} missed"
+        e = met[stop.id]
+        assert e.miss <= DEFAULT_CAPTURE_RADIUS_M
+        turns = int(getattr(stop.leg, "helix_turns", 0))
+        over = (e.distance - flown_before) - (stop.cumulative - planned_before)
+        out.append((stop.id, turns, over))
+        flown_before, planned_before = e.distance, stop.cumulative
+    return out
+
+
+@pytest.mark.parametrize("flavour", ["ardupilot", "px4"])
+def test_helix_legs_are_flown_as_planned_on_a_small_steep_route(flavour):
+    """Legs of 5 to 22 turns at 4/5 degree limits, from A (free heading) on."""
+    s = steep_scenario()
+    points = [0, 1, 2, 3, 4, 5, 6]
+    route = flown_route(s, tuple(points))
+    m = build_mission(make_plan(s, routes=(points,), probability=False), firmware=flavour)
+    legs = flown_against_planned(route.stops, m.items, s, flavour)
+    assert sum(turns > 0 for _, turns, _ in legs) >= 4
+    for pid, turns, over in legs:
+        assert -LEG_OVERRUN_M < over < LEG_OVERRUN_M, f"{flavour} leg to {pid} ({turns} turns)"
+
+
+@pytest.fixture(scope="module")
+def ds2_route(dataset_paths):
+    scenario = load_scenario(dataset_paths[2], {**DS2, **DS2_LIMITS})
+    p = plan(scenario, objectives=("length", "corrections", "probability"), choice="most-reliable")
+    return scenario, p.route, plan_to_dict(p)
+
+
+@pytest.mark.parametrize("flavour", ["ardupilot", "px4"])
+def test_dataset2_helix_legs_are_flown_within_tens_of_metres(ds2_route, flavour):
+    """The certain route of dataset 2 at 20/25 degrees: six legs with helices of 1 to 4 turns."""
+    scenario, route, plan_dict = ds2_route
+    m = build_mission(plan_dict, firmware=flavour, acceptance_radius=1)
+    legs = flown_against_planned(route.stops, m.items, scenario, flavour)
+    assert any(turns > 0 for _, turns, _ in legs)
+    for pid, turns, over in legs:
+        assert -LEG_OVERRUN_M < over < LEG_OVERRUN_M, f"{flavour} leg to {pid} ({turns} turns)"
+
+
+@pytest.mark.parametrize(
+    "end, leaves_on_heading",
+    [((3000.0, 0.0, 1200.0), True), ((150.0, 10.0, 400.0), False), ((150.0, 10.0, -400.0), False)],
+)
+def test_px4_is_asked_for_the_exit_heading_only_where_it_enforces_it(end, leaves_on_heading):
+    """PX4 enforces a loiter's exit heading only towards a waypoint farther than 1.2 radii from
+    the centre: a target right beside the turning circle gets the helix-only loiter."""
+    leg = airplane_leg(np.zeros(3), np.array([1.0, 0.0, 0.0]), np.array(end), 200.0, 15.0, 15.0)
+    assert leg.helix_turns > 0
+    assert px4_leaves_on_heading(leg) is leaves_on_heading
+
+
+def test_px4_helix_beside_its_target_is_written_as_waypoints():
+    """A target right beside the turning circle: PX4 would leave a loiter wherever the altitude
+    came in, so the helix goes as waypoints 16 degrees apart at the plan's altitudes."""
+    s0 = steep_scenario()
+    xyz = np.array([[0, 0, 0], [10000, 0, 500], [10150, 10, 900], [20000, 0, 1000]], float)
+    kinds = np.array([Kind.A, Kind.V, Kind.H, Kind.B], dtype=np.uint8)
+    s = Scenario(ids=("A0", "1", "2", "B9"), xyz=xyz, kind=kinds, unreliable=np.zeros(4, bool),
+                 params=s0.params, name="beside", source="hand-made", origin=s0.origin)  # fmt: skip
+    plan_dict = make_plan(s, routes=([0, 1, 2, 3],), probability=False)
+    leg = route_legs(plan_dict["front"][0])[1]
+    assert leg.helix_turns == 5 and not px4_leaves_on_heading(leg)
+    m = build_mission(plan_dict, firmware="px4")
+    assert not [it for it in m.items if it.command in (18, 31)]
+    helix = [it for it in m.items if it.note.startswith("helix 1->2")]
+    assert len(helix) == math.ceil(5 * 360 / 16)
+    frame = LocalFrame(s.origin)
+    zs = [frame.to_local(it.lat, it.lon, it.z)[2] for it in helix]
+    assert all(a < b for a, b in zip(zs, zs[1:]))  # climbing all the way
+    x, y, _ = frame.to_local(helix[-1].lat, helix[-1].lon, helix[-1].z)
+    assert math.hypot(x - 10000.0, y) < 0.05  # whole turns: above the correction point it left
