@@ -21,6 +21,7 @@ from gcs_planner.errors import InputError
 from gcs_planner.scenario.generate import DATASET1
 from gcs_planner.scenario.model import PARAMETER_NAMES, Kind, Origin, Parameters, Scenario
 from gcs_planner.scenario.readers import load_scenario
+from gcs_planner.vehicle import DEFAULT_RESERVE_M, DEFAULT_RESERVE_MAX_SHARE
 
 REQUIRED = {k: getattr(DATASET1, k) for k in PARAMETER_NAMES}
 COLUMNS = ["id", "x", "y", "z", "kind", "unreliable"]
@@ -221,6 +222,18 @@ def toml_literal(value: object) -> str:
     return repr(value)
 
 
+def expected_value(key: str, values: dict[str, object]) -> float:
+    """What a scenario TOML without a [vehicle] table (airplane legs) loads for ``key``: the
+    file's value, else the default; the flight reserve's default is 200 m on airplane legs with
+    a turning radius, capped at 5 % of the tightest limit in metres."""
+    if key in values:
+        return values[key]  # type: ignore[return-value]
+    if key == "reserve" and float(values.get("turn_radius", DATASET1.turn_radius)) > 0:
+        tightest = min(float(values[k]) for k in PARAMETER_NAMES[:5]) / float(values["delta"])
+        return min(DEFAULT_RESERVE_M, DEFAULT_RESERVE_MAX_SHARE * tightest)
+    return getattr(DATASET1, key)
+
+
 def parameters_valid(values: dict[str, object]) -> bool:
     if not set(PARAMETER_NAMES) <= set(values) or not set(values) <= set(PARAMETER_KEYS):
         return False
@@ -274,7 +287,7 @@ def test_structured_toml_loads_exactly_when_valid(
         return
     assert valid
     for key in PARAMETER_KEYS:
-        assert getattr(scenario.params, key) == values.get(key, getattr(DATASET1, key))
+        assert getattr(scenario.params, key) == expected_value(key, values)
     assert scenario.origin == (None if origin is None else Origin(*origin))
     if heading is not None:
         norm = math.hypot(*heading)
