@@ -18,13 +18,14 @@ import heapq
 import itertools
 import math
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from gcs_planner.core.budget import DEFAULT_MAX_LABELS, Budget
 from gcs_planner.core.cost_to_go import cost_to_go
+from gcs_planner.core.failure_bounds import FailureBounds, failure_bounds
 from gcs_planner.core.prefilter import FanBound, covered_fan
 from gcs_planner.core.probability import propagate, success_probability
 from gcs_planner.core.proof import PROB_EPS, lower_bounds, settled
@@ -92,6 +93,7 @@ class _Incumbents:
         self.kmax = kmax
         self.found: list[Found] = []
         self._best: dict[float, np.ndarray] = {}
+        self._levels: list[float] | None = None
 
     def add(self, new: Found) -> None:
         self.found = [
@@ -99,6 +101,17 @@ class _Incumbents:
         ]
         self.found.append(new)
         self._best.clear()
+        self._levels = None
+
+    def levels(self) -> list[float]:
+        """The found routes' probabilities, largest first, equal ones (within PROB_EPS) once."""
+        if self._levels is None:
+            levels: list[float] = []
+            for p in sorted((f.probability for f in self.found), reverse=True):
+                if not levels or p < levels[-1] - PROB_EPS:
+                    levels.append(p)
+            self._levels = levels
+        return self._levels
 
     def best(self, mass: float) -> np.ndarray:
         """best[c] = the least length of a found route with <= c corrections and a probability
@@ -122,6 +135,74 @@ class _Incumbents:
         if m <= 0:
             return True
         return bool(np.all(length + to_go[:m] >= self.best(mass)[k : k + m]))
+
+    def covers_by_level(
+        self,
+        length: float,
+        k: int,
+        mass: float,
+        bound: Callable[[float], np.ndarray | None],
+        ceiling: Ceiling | None = None,
+    ) -> bool:
+        """``covers`` with a bound per probability level: ``bound(gap)`` bounds per m the
+        continuations that lose less than ``gap`` of the mass (None: there are none), and
+        ``ceiling`` bounds the whole length of a route by its corrections and probability.
+
+        A continuation ending with probability pi in (lo, hi] (lo, hi consecutive found
+        levels, pi measured with PROB_EPS) is matched only by found routes at least hi likely,
+        and it loses less than mass - lo: so each interval is tested with its own bound and its
+        own found routes. Above the likeliest found route nothing matches, so a partial route
+        that may still end there stays open unless the ceiling rules such routes out."""
+        levels = self.levels()
+        width = self.kmax - k + 1
+        if width <= 0:
+            return True
+        for hi, lo in zip([None, *levels], [*levels, None]):
+            floor = 0.0 if lo is None else lo + PROB_EPS
+            if floor >= mass:
+                continue  # every continuation ends at most lo + PROB_EPS likely: lower intervals
+            to_go = bound(mass - floor)
+            if to_go is None:
+                continue
+            reach = np.empty(width)
+            m = min(len(to_go), width)
+            reach[:m] = length + to_go[:m]
+            reach[m:] = length + to_go[-1]
+            if ceiling is not None:
+                above = -math.inf if lo is None else lo  # the last interval: every route
+                np.maximum(reach, ceiling.least_above(above)[k:], out=reach)
+            best = np.full(width, np.inf) if hi is None else self.best(hi)[k:]
+            if not np.all(reach >= best):
+                return False
+        return True
+
+
+class Ceiling:
+    """What the exact front of a relaxation says of every route: each route of the model is,
+    relaxed, weakly dominated by a point of that front, and relaxing a route shortens it and
+    raises its probability. So a route with c corrections and a probability above ``lo`` is at
+    least as long as the shortest front point of the relaxation with <= c corrections and a
+    probability of at least ``lo`` (inf: no such route)."""
+
+    def __init__(self, front: Sequence[Found], kmax: int) -> None:
+        self.front = list(front)
+        self.kmax = kmax
+        self._least: dict[float, np.ndarray] = {}
+
+    def least_above(self, lo: float) -> np.ndarray:
+        """Per number of corrections c = 0..kmax: the least length of a route with c
+        corrections whose probability exceeds ``lo`` + PROB_EPS. Probabilities reached in
+        different orders differ by far less than PROB_EPS / 2, so a relaxed front point counts
+        when it exceeds ``lo`` + PROB_EPS / 2: rounding can only weaken the bound."""
+        least = self._least.get(lo)
+        if least is None:
+            least = np.full(self.kmax + 1, np.inf)
+            for f in self.front:
+                if f.probability > lo + PROB_EPS / 2 and f.corrections <= self.kmax:
+                    least[f.corrections] = min(least[f.corrections], f.length)
+            np.minimum.accumulate(least, out=least)
+            self._least[lo] = least
+        return least
 
 
 def bnb_front(
@@ -168,6 +249,8 @@ def bnb_front(
         # ones). Both seed the search over simple routes, whose exhaustion, or gaps, is what is
         # reported.
         floor = _relaxed(ctx.relaxed(), budget.share(0.25, "heading-free floor"), ())
+        if floor.optimal and ctx.probability:
+            ctx.ceiling = Ceiling(floor.front, ctx.kmax)
         guide_budget = budget.share(0.25, "heading-free guide")
         guide = _relaxed(ctx, guide_budget, [*seeds, *(f.points for f in floor.front)])
         simple = [f.points for f in guide.front if len(set(f.points)) == len(f.points)]
@@ -219,6 +302,12 @@ class _Context:
         self.kmax = scenario.n - 2 if max_corrections is None else max_corrections
         self.kind_of = [Kind(int(c)) for c in scenario.kind]  # Enum() is slow in the loop
         self.unreliable = scenario.unreliable if probability else np.zeros(scenario.n, dtype=bool)
+        # Bounds that know how much probability a continuation can keep (``failure_bounds``).
+        self.failures: FailureBounds | None = (
+            failure_bounds(scenario, self.graph) if probability else None
+        )
+        # The proven front of the heading-free relaxation, once known (see ``Ceiling``).
+        self.ceiling: Ceiling | None = None
 
     def relaxed(self) -> _Context:
         """The same search over the heading-free relaxation of the leg model (each leg as long
@@ -295,6 +384,28 @@ def _search(
     archive: dict[tuple[int, frozenset[int]], list[tuple[float, int, dict, float]]] = {}
 
     inc = _Incumbents(kmax)
+    failures = ctx.failures
+
+    ceiling = ctx.ceiling
+
+    def by_level(length: float, k: int, j: int, states: dict, mass: float) -> bool:
+        """Whether found routes cover the partial route, tested per probability level."""
+        if (failures is None and ceiling is None) or j == start:
+            return False
+        if failures is None:
+            e_min = min(st[1] if is_v_point[j] else st[0] for st in states)
+            weak = G.by_corrections(j, e_min)
+            return inc.covers_by_level(length, k, mass, lambda gap: weak, ceiling)
+        memo: dict[tuple[int, ...], np.ndarray | None] = {}
+
+        def bound(gap: float) -> np.ndarray | None:
+            key = tuple(failures.forced(w, gap) for w in states.values())
+            if key not in memo:
+                memo[key] = failures.bound(j, states, gap)
+            return memo[key]
+
+        return inc.covers_by_level(length, k, mass, bound, ceiling)
+
     for points in seeds:
         seed = ctx.seed(points)
         if seed is not None and not _dominated(
@@ -324,7 +435,7 @@ def _search(
         f, _, L, node, k, states, heading, path, to_go = entry
         mass = sum(states.values())
         # Routes found since this label was queued may now cover it.
-        if inc.covers(L, k, to_go, mass):
+        if inc.covers(L, k, to_go, mass) or by_level(L, k, node, states, mass):
             continue
         if not budget.take():
             heapq.heappush(heap, entry)
@@ -369,7 +480,7 @@ def _search(
             # G is non-decreasing in e: the least carried error bounds every state.
             e_min = min(st[1] if is_v else st[0] for st in new_states)
             g = G.by_corrections(j, e_min)
-            if inc.covers(nL, k + 1, g, new_mass):
+            if inc.covers(nL, k + 1, g, new_mass) or by_level(nL, k + 1, j, new_states, new_mass):
                 continue
             if relaxed:
                 key = (j, frozenset(critical.intersection(path)) if critical else frozenset())
@@ -399,7 +510,12 @@ def _search(
                 ),
             )
     found = sorted(inc.found, key=lambda g: (g.corrections, g.length))
-    live = [e for e in heap if not inc.covers(e[2], e[4], e[8], sum(e[5].values()))]
+    live = [
+        e
+        for e in heap
+        if not inc.covers(e[2], e[4], e[8], sum(e[5].values()))
+        and not by_level(e[2], e[4], e[3], e[5], sum(e[5].values()))
+    ]
     open_bound = min((e[0] for e in live), default=math.inf)
     open_routes = [(e[2], e[4], e[8], sum(e[5].values())) for e in live]
     lower = lower_bounds(found, open_routes)
