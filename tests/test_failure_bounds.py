@@ -1,6 +1,7 @@
-"""The probability-aware bounds of the branch and bound against enumeration: the length still to
-fly of a continuation that keeps most of a partial route's mass (``failure_bounds``), and the
-relaxation front's floor under every route by corrections and probability (``Ceiling``)."""
+"""The bounds of the branch and bound against enumeration and independent flights: the length
+still to fly of a continuation that keeps most of a partial route's mass (``failure_bounds``),
+the relaxation front's floor under every route by corrections and probability (``Ceiling``),
+and the leg bounds that know the cone of headings at a point (``pair_bounds``)."""
 
 from __future__ import annotations
 
@@ -11,8 +12,11 @@ from test_bnb import all_routes, turning_scenario, uncertain_straight_scenario
 from gcs_planner.core.bnb import PROB_EPS, Ceiling, _Context, _relaxed, flown_route
 from gcs_planner.core.budget import Budget
 from gcs_planner.core.failure_bounds import failure_bounds
+from gcs_planner.core.pair_bounds import cone_half_angles, pair_leg_bounds
 from gcs_planner.core.probability import propagate
 from gcs_planner.core.reach import build_reach_graph
+from gcs_planner.geometry.airplane import airplane_leg
+from gcs_planner.geometry.legs import AirplaneLegs
 from gcs_planner.scenario.model import Kind
 
 
@@ -38,9 +42,7 @@ def prefixes(scenario, points):
         if not np.isfinite(leg):
             return [], route.length, 0.0
         j = points[i]
-        states, _ = propagate(
-            states, leg, kind[j], bool(scenario.unreliable[j]), scenario.params
-        )
+        states, _ = propagate(states, leg, kind[j], bool(scenario.unreliable[j]), scenario.params)
         length += leg
         if not states:
             return [], route.length, 0.0
@@ -102,3 +104,41 @@ def test_the_relaxation_front_floors_every_route_by_corrections_and_probability(
             assert probability <= max(f.probability for f in floor.front) + PROB_EPS
     print(checked)
     assert checked >= 200, checked
+
+
+def test_arrival_headings_lie_in_the_cone_and_pair_bounds_never_exceed_a_flown_leg() -> None:
+    """The heading an airplane leg arrives with is within asin(2R / h) of its horizontal chord,
+    whatever it started with; and lb(i, j, t) is no longer than the leg j -> t flown from any
+    such heading — steep legs (helices), several radii and climb limits."""
+    rng = np.random.default_rng(7)
+    checked = helices = 0
+    for _ in range(120):
+        radius = float(rng.choice([50.0, 200.0, 800.0]))
+        climb, descent = float(rng.choice([8.0, 15.0, 25.0, 90.0])), float(rng.uniform(5, 30))
+        model = AirplaneLegs(radius, climb, descent)
+        pts = rng.uniform([-6_000, -6_000, -2_500], [6_000, 6_000, 2_500], (3, 3))
+        i, j, t = pts
+        psi = rng.uniform(0, 2 * np.pi, 32)
+        starts = np.column_stack([np.cos(psi), np.sin(psi), np.zeros(32)])
+        arrive = [airplane_leg(i, u, j, radius, climb, descent) for u in starts]
+        chord = np.arctan2(j[1] - i[1], j[0] - i[0])
+        cone = cone_half_angles(np.array([np.hypot(*(j - i)[:2])]), radius)[0]
+        bound = pair_leg_bounds(
+            pts,
+            np.array([0]),
+            np.array([1]),
+            np.array([2]),
+            model,
+            model.lower_bounds(j, t[None, :]),
+        )[0]
+        for leg in arrive:
+            if not np.isfinite(leg.length):
+                continue
+            heading = leg.heading_out
+            off = abs((np.arctan2(heading[1], heading[0]) - chord + np.pi) % (2 * np.pi) - np.pi)
+            assert off <= cone + 1e-9
+            onward = airplane_leg(j, heading, t, radius, climb, descent)
+            assert bound <= onward.length + 1e-6
+            checked += 1
+            helices += onward.helix_turns > 0
+    assert checked >= 2_000 and helices >= 50, (checked, helices)

@@ -26,6 +26,7 @@ import numpy as np
 from gcs_planner.core.budget import DEFAULT_MAX_LABELS, Budget
 from gcs_planner.core.cost_to_go import cost_to_go
 from gcs_planner.core.failure_bounds import FailureBounds, failure_bounds
+from gcs_planner.core.pair_bounds import PairBounds, pair_bounds
 from gcs_planner.core.prefilter import FanBound, covered_fan
 from gcs_planner.core.probability import propagate, success_probability
 from gcs_planner.core.proof import PROB_EPS, lower_bounds, settled
@@ -248,7 +249,17 @@ def bnb_front(
         # heading: no proof, but it finds good routes fast (the certain one, the most reliable
         # ones). Both seed the search over simple routes, whose exhaustion, or gaps, is what is
         # reported.
-        floor = _relaxed(ctx.relaxed(), budget.share(0.25, "heading-free floor"), ())
+        # (With airplane legs the relaxation knows the cone of headings at each point: the
+        # pair relaxation of ``pair_bounds``, a floor within metres of the front.)
+        # It keeps more partial routes apart than the heading-free one; when the budget ends it
+        # first, the heading-free floor is the floor.
+        floor = None
+        if ctx.pairs is not None:
+            floor = _relaxed(ctx.pair_relaxed(), budget.share(0.25, "pair floor"), ())
+        if floor is None or not floor.optimal:
+            spent = 0 if floor is None else floor.labels
+            floor = _relaxed(ctx.relaxed(), budget.share(0.25, "heading-free floor"), ())
+            floor.labels += spent
         if floor.optimal and ctx.probability:
             ctx.ceiling = Ceiling(floor.front, ctx.kmax)
         guide_budget = budget.share(0.25, "heading-free guide")
@@ -303,11 +314,23 @@ class _Context:
         self.kind_of = [Kind(int(c)) for c in scenario.kind]  # Enum() is slow in the loop
         self.unreliable = scenario.unreliable if probability else np.zeros(scenario.n, dtype=bool)
         # Bounds that know how much probability a continuation can keep (``failure_bounds``).
+        # Only where a label is dear (legs flown from a heading, no dominance): with
+        # heading-free legs dominance already keeps the search small and the bounds cost more
+        # than they save.
         self.failures: FailureBounds | None = (
-            failure_bounds(scenario, self.graph) if probability else None
+            failure_bounds(scenario, self.graph)
+            if probability and self.model.carries_heading
+            else None
         )
         # The proven front of the heading-free relaxation, once known (see ``Ceiling``).
         self.ceiling: Ceiling | None = None
+        # Bounds that know the cone of headings a route arrives with (``pair_bounds``); only
+        # for this model's own legs, never for its relaxation's.
+        self.pairs: PairBounds | None = (
+            pair_bounds(scenario, self.graph, self.model) if self.model.carries_heading else None
+        )
+        # Set on the copy that searches the pair relaxation (``pair_relaxed``).
+        self.pair_floor: PairBounds | None = None
 
     def relaxed(self) -> _Context:
         """The same search over the heading-free relaxation of the leg model (each leg as long
@@ -315,6 +338,16 @@ class _Context:
         already: shared, not built again."""
         other = copy.copy(self)
         other.model = self.model.relaxation()
+        other.pairs = None
+        other.pair_floor = None
+        return other
+
+    def pair_relaxed(self) -> _Context:
+        """The search over the relaxation whose leg j -> t after i -> j is lb(i, j, t), the least
+        over the cone of headings a route from i arrives at j with (``pair_bounds``). Partial
+        routes that came to j from the same i continue alike: they compare by dominance."""
+        other = self.relaxed()
+        other.pair_floor = self.pairs
         return other
 
     def seed(self, points: Sequence[int]) -> Found | None:
@@ -328,6 +361,18 @@ class _Context:
             legs = [s.leg for s in route.stops[1:]]
             prob = success_probability(self.scenario, points, legs).probability
         return Found(route.length, route.corrections, min(1.0, prob), points) if prob > 0 else None
+
+
+def _larger(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The pointwise larger of two bounds per m (each carried on with its last entry)."""
+    width = max(len(a), len(b))
+    out = np.empty(width)
+    out[: len(a)] = a
+    out[len(a) :] = a[-1]
+    other = np.empty(width)
+    other[: len(b)] = b
+    other[len(b) :] = b[-1]
+    return np.maximum(out, other, out=out)
 
 
 def _stochastically_dominates(d1: dict, d2: dict) -> bool:
@@ -388,20 +433,27 @@ def _search(
 
     ceiling = ctx.ceiling
 
-    def by_level(length: float, k: int, j: int, states: dict, mass: float) -> bool:
-        """Whether found routes cover the partial route, tested per probability level."""
-        if (failures is None and ceiling is None) or j == start:
+    # G2: for this model's legs, or in the search over the pair relaxation, whose cost-to-go
+    # it is exactly (never in the heading-free relaxation, whose legs are shorter).
+    pairs = ctx.pair_floor if relaxed else ctx.pairs
+    pair_floor = ctx.pair_floor
+
+    def by_level(
+        length: float, k: int, j: int, states: dict, mass: float, to_go: np.ndarray | None
+    ) -> bool:
+        """Whether found routes cover the partial route, tested per probability level.
+        ``to_go``: the label's bound over every continuation (it holds for each level too)."""
+        if relaxed or (failures is None and ceiling is None) or j == start:
             return False
         if failures is None:
-            e_min = min(st[1] if is_v_point[j] else st[0] for st in states)
-            weak = G.by_corrections(j, e_min)
-            return inc.covers_by_level(length, k, mass, lambda gap: weak, ceiling)
+            return inc.covers_by_level(length, k, mass, lambda gap: to_go, ceiling)
         memo: dict[tuple[int, ...], np.ndarray | None] = {}
 
         def bound(gap: float) -> np.ndarray | None:
             key = tuple(failures.forced(w, gap) for w in states.values())
             if key not in memo:
-                memo[key] = failures.bound(j, states, gap)
+                rows = failures.bound(j, states, gap)
+                memo[key] = None if rows is None or to_go is None else _larger(rows, to_go)
             return memo[key]
 
         return inc.covers_by_level(length, k, mass, bound, ceiling)
@@ -435,7 +487,7 @@ def _search(
         f, _, L, node, k, states, heading, path, to_go = entry
         mass = sum(states.values())
         # Routes found since this label was queued may now cover it.
-        if inc.covers(L, k, to_go, mass) or by_level(L, k, node, states, mass):
+        if inc.covers(L, k, to_go, mass) or by_level(L, k, node, states, mass, to_go):
             continue
         if not budget.take():
             heapq.heappush(heap, entry)
@@ -447,7 +499,10 @@ def _search(
         lo, hi = graph.indptr[node], graph.indptr[node + 1]
         targets = graph.target[lo:hi].astype(np.int64)
         straight = graph.length[lo:hi]
-        if model.carries_heading:
+        if pair_floor is not None:  # the heading is the arc flown last (None at A)
+            flown = straight if heading is None else pair_floor.legs(heading)
+            headings = lo + np.arange(hi - lo)
+        elif model.carries_heading:
             flown, headings = model.lengths(xyz[node], heading, xyz[targets])
         else:  # heading-free legs are as long as the graph's arcs
             flown, headings = straight, None
@@ -480,10 +535,17 @@ def _search(
             # G is non-decreasing in e: the least carried error bounds every state.
             e_min = min(st[1] if is_v else st[0] for st in new_states)
             g = G.by_corrections(j, e_min)
-            if inc.covers(nL, k + 1, g, new_mass) or by_level(nL, k + 1, j, new_states, new_mass):
+            if pairs is not None and g is not None:
+                g2 = pairs.by_corrections(int(lo + idx), e_min)
+                g = None if g2 is None else _larger(g, g2)
+            # (The test per probability level is left to the pop: it costs more than the
+            # partial routes it would keep off the heap.)
+            if inc.covers(nL, k + 1, g, new_mass):
                 continue
             if relaxed:
-                key = (j, frozenset(critical.intersection(path)) if critical else frozenset())
+                # With the pair relaxation the arc flown to j says how the route goes on.
+                at = j if pair_floor is None else int(lo + idx)
+                key = (at, frozenset(critical.intersection(path)) if critical else frozenset())
                 kept = archive.setdefault(key, [])
                 if any(
                     aL <= nL
@@ -514,7 +576,7 @@ def _search(
         e
         for e in heap
         if not inc.covers(e[2], e[4], e[8], sum(e[5].values()))
-        and not by_level(e[2], e[4], e[3], e[5], sum(e[5].values()))
+        and not by_level(e[2], e[4], e[3], e[5], sum(e[5].values()), e[8])
     ]
     open_bound = min((e[0] for e in live), default=math.inf)
     open_routes = [(e[2], e[4], e[8], sum(e[5].values())) for e in live]

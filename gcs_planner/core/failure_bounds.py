@@ -44,8 +44,10 @@ from gcs_planner.scenario.model import Kind, Scenario
 # a branch failing three times weighs under 1/8 of its state.
 MAX_FAILURES = 3
 # Masses are sums of products: a branch set is taken to weigh at least ``gap`` only with this
-# much to spare, so rounding can never make the bound claim more than the model allows.
-_MASS_SLACK = 1e-9
+# much to spare, so rounding can never make the bound claim more than the model allows. Far
+# above rounding (1e-16 per operation), and below PROB_EPS, which separates the levels that
+# ``gap`` is measured from (a branch of exactly 1 - p must count against a level p lower).
+_MASS_SLACK = 1e-13
 
 
 @dataclass(frozen=True)
@@ -163,5 +165,6 @@ def failure_bounds(
         start,
         end,
     )
-    G = cost_to_go(scenario, expanded, is_v=is_v_pt[node_pt], own_start=own)
+    # Several copies of the graph: the compiled layer pays off from the size of one.
+    G = cost_to_go(scenario, expanded, compiled=True, is_v=is_v_pt[node_pt], own_start=own)
     return FailureBounds(G, n, failures, 1.0 - p, is_v_pt)

@@ -236,6 +236,8 @@ def _branch_and_bound(
         "search_seconds": res.seconds,
         "labels": res.labels,
         "open_labels": res.open_labels,
+        # Routes missing from an unproven front are at least this long (inf: none is missing).
+        "open_bound": res.open_bound,
         "relaxation_rounds": res.rounds,
         "critical_points": len(res.critical),
     }
