@@ -83,7 +83,7 @@ def run_flyable(
                         result.optimal,
                         max(result.gaps(), default=0.0),
                         len(result.routes) - sum(result.settled or (True,) * len(result.routes)),
-                        float(result.stats.get("open_bound", math.inf)),
+                        result.stats.get("open_bound") or math.inf,
                         (shortest.length, shortest.corrections),
                         None if certain is None else result.routes[certain].length,
                         max(abs(leg.path_angle) for leg in legs_all),

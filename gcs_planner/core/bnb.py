@@ -36,6 +36,9 @@ from gcs_planner.geometry.legs import FlownLeg, LegModel, path_angle_deg, scenar
 from gcs_planner.geometry.trajectory import route_trajectory
 from gcs_planner.scenario.model import Kind, Scenario
 
+# How many times the heading-free floor's labels the pair floor is expected to need at most.
+PAIR_FLOOR_COST = 4
+
 __all__ = ["DEFAULT_MAX_LABELS", "PROB_EPS", "BnbResult", "Found", "bnb_front", "flown_route"]
 
 
@@ -249,17 +252,18 @@ def bnb_front(
         # heading: no proof, but it finds good routes fast (the certain one, the most reliable
         # ones). Both seed the search over simple routes, whose exhaustion, or gaps, is what is
         # reported.
-        # (With airplane legs the relaxation knows the cone of headings at each point: the
-        # pair relaxation of ``pair_bounds``, a floor within metres of the front.)
-        # It keeps more partial routes apart than the heading-free one; when the budget ends it
-        # first, the heading-free floor is the floor.
-        floor = None
-        if ctx.pairs is not None:
-            floor = _relaxed(ctx.pair_relaxed(), budget.share(0.25, "pair floor"), ())
-        if floor is None or not floor.optimal:
-            spent = 0 if floor is None else floor.labels
-            floor = _relaxed(ctx.relaxed(), budget.share(0.25, "heading-free floor"), ())
-            floor.labels += spent
+        floor = _relaxed(ctx.relaxed(), budget.share(0.25, "heading-free floor"), ())
+        # With airplane legs (three objectives) a tighter floor: the relaxation that knows the
+        # cone of headings at each point (``pair_bounds``), within metres of the front. It
+        # keeps more partial routes apart, some 3 to 5 times the labels of the heading-free
+        # floor; it is tried when that fits the label budget, and used when it is proven.
+        limit = budget.max_labels
+        if ctx.pairs is not None and (limit is None or PAIR_FLOOR_COST * floor.labels <= limit):
+            pair = _relaxed(ctx.pair_relaxed(), budget.share(0.25, "pair floor"), ())
+            spent = floor.labels + pair.labels
+            if pair.optimal or not floor.optimal:
+                floor = pair
+            floor.labels = spent
         if floor.optimal and ctx.probability:
             ctx.ceiling = Ceiling(floor.front, ctx.kmax)
         guide_budget = budget.share(0.25, "heading-free guide")
@@ -317,18 +321,26 @@ class _Context:
         # Only where a label is dear (legs flown from a heading, no dominance): with
         # heading-free legs dominance already keeps the search small and the bounds cost more
         # than they save.
-        self.failures: FailureBounds | None = (
-            failure_bounds(scenario, self.graph)
+        # Bounds that know the cone of headings a route arrives with (``pair_bounds``); only
+        # for this model's own legs, never for its relaxation's.
+        # (Two objectives prove fast without them: there they cost more than they save.)
+        self.pairs: PairBounds | None = (
+            pair_bounds(scenario, self.graph, self.model)
             if probability and self.model.carries_heading
             else None
         )
+        # With pairs, the failure bounds are made over them too, and asked by the arc flown
+        # last (``failure_node``).
+        self.failures: FailureBounds | None = None
+        if probability and self.model.carries_heading:
+            if self.pairs is None:
+                self.failures = failure_bounds(scenario, self.graph)
+            else:
+                self.failures = failure_bounds(
+                    scenario, self.pairs.graph, point_of=self.pairs.point
+                )
         # The proven front of the heading-free relaxation, once known (see ``Ceiling``).
         self.ceiling: Ceiling | None = None
-        # Bounds that know the cone of headings a route arrives with (``pair_bounds``); only
-        # for this model's own legs, never for its relaxation's.
-        self.pairs: PairBounds | None = (
-            pair_bounds(scenario, self.graph, self.model) if self.model.carries_heading else None
-        )
         # Set on the copy that searches the pair relaxation (``pair_relaxed``).
         self.pair_floor: PairBounds | None = None
 
@@ -361,6 +373,25 @@ class _Context:
             legs = [s.leg for s in route.stops[1:]]
             prob = success_probability(self.scenario, points, legs).probability
         return Found(route.length, route.corrections, min(1.0, prob), points) if prob > 0 else None
+
+
+def _pair_margin(pairs: PairBounds | None, kept: int, new: int) -> float:
+    """How much longer the next leg can be for a partial route that came to j by arc ``kept``
+    than for one that came by arc ``new``, in the pair relaxation (0 without it). Only the
+    next leg depends on the arc (lb(i, j, t)); every leg after it is lb(j, t, u) for both. So
+    a partial route that is this much shorter, with errors this much smaller, than another
+    at j continues no worse whatever it does: its next leg is at most this much longer, every
+    later one the same."""
+    if pairs is None or kept == new:
+        return 0.0
+    return max(0.0, float(np.max(pairs.legs(kept) - pairs.legs(new), initial=0.0)))
+
+
+def _shifted(states: dict, shift: float) -> dict:
+    """Error states with ``shift`` metres more on both components."""
+    if shift == 0.0:
+        return states
+    return {(v + shift, h + shift): m for (v, h), m in states.items()}
 
 
 def _larger(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -425,8 +456,9 @@ def _search(
     relaxed = critical is not None
     fan = FanBound(G, scenario.n)
     is_v_point = scenario.kind == Kind.V
-    # Per (point, critical points visited): the partial routes kept, as (L, k, states, mass).
-    archive: dict[tuple[int, frozenset[int]], list[tuple[float, int, dict, float]]] = {}
+    # Per (point, critical points visited): the partial routes kept, as (L, k, states, mass,
+    # the arc they came by).
+    archive: dict[tuple[int, frozenset[int]], list[tuple[float, int, dict, float, int]]] = {}
 
     inc = _Incumbents(kmax)
     failures = ctx.failures
@@ -439,12 +471,20 @@ def _search(
     pair_floor = ctx.pair_floor
 
     def by_level(
-        length: float, k: int, j: int, states: dict, mass: float, to_go: np.ndarray | None
+        length: float,
+        k: int,
+        j: int,
+        states: dict,
+        mass: float,
+        to_go: np.ndarray | None,
+        arc: int,
     ) -> bool:
         """Whether found routes cover the partial route, tested per probability level.
-        ``to_go``: the label's bound over every continuation (it holds for each level too)."""
+        ``to_go``: the label's bound over every continuation (it holds for each level too);
+        ``arc``: the arc of the reach graph it flew last."""
         if relaxed or (failures is None and ceiling is None) or j == start:
             return False
+        at = j if ctx.pairs is None else int(ctx.pairs.node_of_arc[arc])
         if failures is None:
             return inc.covers_by_level(length, k, mass, lambda gap: to_go, ceiling)
         memo: dict[tuple[int, ...], np.ndarray | None] = {}
@@ -452,7 +492,7 @@ def _search(
         def bound(gap: float) -> np.ndarray | None:
             key = tuple(failures.forced(w, gap) for w in states.values())
             if key not in memo:
-                rows = failures.bound(j, states, gap)
+                rows = failures.bound(at, states, gap)
                 memo[key] = None if rows is None or to_go is None else _larger(rows, to_go)
             return memo[key]
 
@@ -465,8 +505,8 @@ def _search(
         ):
             inc.add(seed)
     counter = itertools.count()
-    # Entry: (f, tiebreak, L, node, k, states, heading, path, to_go). A carries no error and
-    # makes no correction: |A - B| bounds every route, whatever its corrections.
+    # Entry: (f, tiebreak, L, node, k, states, heading, path, to_go, last arc). A carries no
+    # error and makes no correction: |A - B| bounds every route, whatever its corrections.
     heap: list = [
         (
             float(graph.to_end[start]),
@@ -478,16 +518,17 @@ def _search(
             heading_a,
             (start,),
             np.array([graph.to_end[start]]),
+            -1,
         )
     ]
     labels = 0
     exhausted = True
     while heap:
         entry = heapq.heappop(heap)
-        f, _, L, node, k, states, heading, path, to_go = entry
+        f, _, L, node, k, states, heading, path, to_go, arc = entry
         mass = sum(states.values())
         # Routes found since this label was queued may now cover it.
-        if inc.covers(L, k, to_go, mass) or by_level(L, k, node, states, mass, to_go):
+        if inc.covers(L, k, to_go, mass) or by_level(L, k, node, states, mass, to_go, arc):
             continue
         if not budget.take():
             heapq.heappush(heap, entry)
@@ -543,19 +584,18 @@ def _search(
             if inc.covers(nL, k + 1, g, new_mass):
                 continue
             if relaxed:
-                # With the pair relaxation the arc flown to j says how the route goes on.
-                at = j if pair_floor is None else int(lo + idx)
-                key = (at, frozenset(critical.intersection(path)) if critical else frozenset())
+                key = (j, frozenset(critical.intersection(path)) if critical else frozenset())
                 kept = archive.setdefault(key, [])
+                arc_in = int(lo + idx)
                 if any(
-                    aL <= nL
+                    aL + (shift := _pair_margin(pair_floor, a_arc, arc_in)) <= nL
                     and ak <= k + 1
                     and am >= new_mass - PROB_EPS
-                    and _stochastically_dominates(ast, new_states)
-                    for aL, ak, ast, am in kept
+                    and _stochastically_dominates(_shifted(ast, shift), new_states)
+                    for aL, ak, ast, am, a_arc in kept
                 ):
                     continue
-                kept.append((nL, k + 1, new_states, new_mass))
+                kept.append((nL, k + 1, new_states, new_mass, arc_in))
             new_heading = None if headings is None else headings[idx]
             heapq.heappush(
                 heap,
@@ -569,6 +609,7 @@ def _search(
                     new_heading,
                     path + (j,),
                     g,
+                    int(lo + idx),
                 ),
             )
     found = sorted(inc.found, key=lambda g: (g.corrections, g.length))
@@ -576,7 +617,7 @@ def _search(
         e
         for e in heap
         if not inc.covers(e[2], e[4], e[8], sum(e[5].values()))
-        and not by_level(e[2], e[4], e[3], e[5], sum(e[5].values()), e[8])
+        and not by_level(e[2], e[4], e[3], e[5], sum(e[5].values()), e[8], e[9])
     ]
     open_bound = min((e[0] for e in live), default=math.inf)
     open_routes = [(e[2], e[4], e[8], sum(e[5].values())) for e in live]

@@ -53,10 +53,10 @@ _MASS_SLACK = 1e-13
 @dataclass(frozen=True)
 class FailureBounds:
     G: CostToGo  # over the expanded graph
-    n: int  # points of the scenario
+    n: int  # nodes of the graph it was made over (the scenario's points, or pairs)
     failures: int  # copies 0 .. failures
     q_fail: float  # 1 - p
-    is_v: np.ndarray  # per point
+    is_v: np.ndarray  # per node: its point is a V point
 
     def _node(self, j: int, q: int) -> int:
         return q * self.n + j
@@ -76,9 +76,9 @@ class FailureBounds:
         return q
 
     def bound(self, j: int, states: dict, gap: float) -> np.ndarray | None:
-        """A lower bound per m on the length from j of every continuation that loses less than
-        ``gap`` of the mass of ``states`` ((v, h) -> mass, just after j's correction), and
-        reaches B; None when there is no such continuation."""
+        """A lower bound per m on the length from node j of every continuation that loses less
+        than ``gap`` of the mass of ``states`` ((v, h) -> mass, just after the correction at
+        j's point), and reaches B; None when there is no such continuation."""
         carried = 1 if self.is_v[j] else 0  # a V point resets v: h is carried, and vice versa
         e_min = min(s[carried] for s in states)
         rows = [self.rows(j, e_min, 0)]
@@ -101,16 +101,21 @@ class FailureBounds:
 
 
 def failure_bounds(
-    scenario: Scenario, graph: ReachGraph, failures: int = MAX_FAILURES
+    scenario: Scenario,
+    graph: ReachGraph,
+    failures: int = MAX_FAILURES,
+    point_of: np.ndarray | None = None,
 ) -> FailureBounds | None:
     """The bounds G^0 .. G^failures of ``scenario`` over ``graph`` (None when no correction can
-    fail: every point reliable, or p = 1)."""
+    fail: every point reliable, or p = 1). ``point_of``: the scenario point of each node of
+    ``graph`` when its nodes are not the points (the pairs of ``pair_bounds``)."""
     p = scenario.params.p_success
-    unreliable = np.asarray(scenario.unreliable, dtype=bool)
+    point = np.arange(graph.n) if point_of is None else np.asarray(point_of)
+    unreliable = np.asarray(scenario.unreliable, dtype=bool)[point]
     if p >= 1.0 or not unreliable.any() or failures <= 0:
         return None
     n, end, start = graph.n, graph.end, graph.start
-    is_v_pt = scenario.kind == Kind.V
+    is_v_pt = scenario.kind[point] == Kind.V
     src = np.repeat(np.arange(n), graph.degree())
     dst = graph.target.astype(np.int64)
     length = graph.length

@@ -52,6 +52,8 @@ class PairBounds:
     # in the reach graph, each as long as lb(i, j, t).
     pair_ptr: np.ndarray
     pair_length: np.ndarray
+    graph: ReachGraph  # the pair graph itself, and the point of each of its nodes
+    point: np.ndarray
 
     def legs(self, arc: int) -> np.ndarray:
         """lb(i, j, t) for every arc j -> t of the reach graph, in its order, after ``arc`` =
@@ -183,4 +185,5 @@ def pair_bounds(scenario: Scenario, graph: ReachGraph, model: LegModel) -> PairB
         end_node,
     )
     is_v = scenario.kind[point] == Kind.V
-    return PairBounds(cost_to_go(scenario, pairs, is_v=is_v), node_of_arc, indptr, pairs.length)
+    G = cost_to_go(scenario, pairs, is_v=is_v)
+    return PairBounds(G, node_of_arc, indptr, pairs.length, pairs, point)

@@ -7,6 +7,7 @@ whether its front is proven optimal.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -236,8 +237,9 @@ def _branch_and_bound(
         "search_seconds": res.seconds,
         "labels": res.labels,
         "open_labels": res.open_labels,
-        # Routes missing from an unproven front are at least this long (inf: none is missing).
-        "open_bound": res.open_bound,
+        # Routes missing from an unproven front are at least this long (None: none is missing;
+        # JSON has no inf).
+        "open_bound": res.open_bound if math.isfinite(res.open_bound) else None,
         "relaxation_rounds": res.rounds,
         "critical_points": len(res.critical),
     }
