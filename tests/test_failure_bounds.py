@@ -6,9 +6,16 @@ and the leg bounds that know the cone of headings at a point (``pair_bounds``)."
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from test_airplane_legs import climbing_scenario
-from test_bnb import all_routes, turning_scenario, uncertain_straight_scenario
+from test_bnb import (
+    all_routes,
+    assert_front_equals_enumeration,
+    turning_scenario,
+    uncertain_straight_scenario,
+)
 
+from gcs_planner.core import bnb
 from gcs_planner.core.bnb import PROB_EPS, Ceiling, _Context, _relaxed, flown_route
 from gcs_planner.core.budget import Budget
 from gcs_planner.core.failure_bounds import failure_bounds
@@ -142,3 +149,20 @@ def test_arrival_headings_lie_in_the_cone_and_pair_bounds_never_exceed_a_flown_l
             checked += 1
             helices += onward.helix_turns > 0
     assert checked >= 2_000 and helices >= 50, (checked, helices)
+
+
+@pytest.mark.parametrize("make", [climbing_scenario, turning_scenario])
+def test_fronts_with_the_failure_bounds_from_the_first_label_equal_enumeration(
+    monkeypatch, make
+) -> None:
+    """The search makes the failure bounds only once it has expanded many labels, which small
+    scenarios never reach: here it makes them at once, and the fronts must stay exact."""
+    monkeypatch.setattr(bnb, "FAILURE_BOUNDS_FROM", 0)
+    nonempty = 0
+    for seed in range(24):
+        scenario = (
+            make(seed) if make is climbing_scenario else make(seed, [200.0, 1500.0][seed % 2])
+        )
+        _, want = assert_front_equals_enumeration(scenario, True, seed)
+        nonempty += bool(want)
+    assert nonempty >= 8

@@ -36,6 +36,8 @@ from gcs_planner.geometry.legs import FlownLeg, LegModel, path_angle_deg, scenar
 from gcs_planner.geometry.trajectory import route_trajectory
 from gcs_planner.scenario.model import Kind, Scenario
 
+# Labels a search over simple routes expands before it makes the failure bounds.
+FAILURE_BOUNDS_FROM = 1_000
 # How many times the heading-free floor's labels the pair floor is expected to need at most.
 PAIR_FLOOR_COST = 4
 
@@ -329,20 +331,27 @@ class _Context:
             if probability and self.model.carries_heading
             else None
         )
-        # With pairs, the failure bounds are made over them too, and asked by the arc flown
-        # last (``failure_node``).
-        self.failures: FailureBounds | None = None
-        if probability and self.model.carries_heading:
-            if self.pairs is None:
-                self.failures = failure_bounds(scenario, self.graph)
-            else:
-                self.failures = failure_bounds(
-                    scenario, self.pairs.graph, point_of=self.pairs.point
-                )
+        # Made on first need (``failures``): with pairs, over them too, and asked by the arc
+        # flown last.
+        self._failures: FailureBounds | None = None
+        self._failures_made = not (probability and self.model.carries_heading)
         # The proven front of the heading-free relaxation, once known (see ``Ceiling``).
         self.ceiling: Ceiling | None = None
         # Set on the copy that searches the pair relaxation (``pair_relaxed``).
         self.pair_floor: PairBounds | None = None
+
+    def failures(self) -> FailureBounds | None:
+        """The failure bounds (``failure_bounds``), made on the first call: a search that
+        proves its front in a few labels never pays for them."""
+        if not self._failures_made:
+            self._failures_made = True
+            if self.pairs is None:
+                self._failures = failure_bounds(self.scenario, self.graph)
+            else:
+                self._failures = failure_bounds(
+                    self.scenario, self.pairs.graph, point_of=self.pairs.point
+                )
+        return self._failures
 
     def relaxed(self) -> _Context:
         """The same search over the heading-free relaxation of the leg model (each leg as long
@@ -461,7 +470,6 @@ def _search(
     archive: dict[tuple[int, frozenset[int]], list[tuple[float, int, dict, float, int]]] = {}
 
     inc = _Incumbents(kmax)
-    failures = ctx.failures
 
     ceiling = ctx.ceiling
 
@@ -482,7 +490,11 @@ def _search(
         """Whether found routes cover the partial route, tested per probability level.
         ``to_go``: the label's bound over every continuation (it holds for each level too);
         ``arc``: the arc of the reach graph it flew last."""
-        if relaxed or (failures is None and ceiling is None) or j == start:
+        if relaxed or j == start:
+            return False
+        # The failure bounds only once the search proves long enough to need them.
+        failures = ctx.failures() if labels >= FAILURE_BOUNDS_FROM else None
+        if failures is None and ceiling is None:
             return False
         at = j if ctx.pairs is None else int(ctx.pairs.node_of_arc[arc])
         if failures is None:

@@ -170,6 +170,7 @@ def failure_bounds(
         start,
         end,
     )
-    # Several copies of the graph: the compiled layer pays off from the size of one.
-    G = cost_to_go(scenario, expanded, compiled=True, is_v=is_v_pt[node_pt], own_start=own)
+    # numpy or the compiled layer by the scenario's size, as the plain cost-to-go (loading the
+    # compiled kernels costs more than small maps save).
+    G = cost_to_go(scenario, expanded, is_v=is_v_pt[node_pt], own_start=own)
     return FailureBounds(G, n, failures, 1.0 - p, is_v_pt)
