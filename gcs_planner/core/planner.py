@@ -269,10 +269,15 @@ def _branch_and_bound(
             if heading_free
             else "over whole simple routes (headings make partial routes incomparable)"
         )
+        bound = "heading-free cost-to-go per number of further corrections"
+        if use_probability and not heading_free:
+            bound += (
+                " (for airplane legs also over the cone of arrival headings), tested per "
+                "probability level"
+            )
         statement = (
             f"exact: the Pareto front over all simple feasible routes with {model}, proven by "
-            f"exhaustive branch and bound ({res.labels} labels; bound: heading-free cost-to-go "
-            f"per number of further corrections; {how})"
+            f"exhaustive branch and bound ({res.labels} labels; bound: {bound}; {how})"
         )
     else:
         unsettled = len(res.front) - sum(res.proven or ())
