@@ -5,6 +5,8 @@ and the leg bounds that know the cone of headings at a point (``pair_bounds``)."
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 from test_airplane_legs import climbing_scenario
@@ -163,6 +165,18 @@ def test_fronts_with_the_failure_bounds_from_the_first_label_equal_enumeration(
         scenario = (
             make(seed) if make is climbing_scenario else make(seed, [200.0, 1500.0][seed % 2])
         )
+        _, want = assert_front_equals_enumeration(scenario, True, seed)
+        nonempty += bool(want)
+    assert nonempty >= 8
+
+
+def test_fronts_with_a_heading_at_a_equal_enumeration() -> None:
+    """A heading given at A: the first leg turns, and the pair relaxation starts without an arc."""
+    nonempty = 0
+    for seed in range(24):
+        scenario = climbing_scenario(seed)
+        psi = 0.7 * seed
+        scenario = dataclasses.replace(scenario, heading_at_a=(np.cos(psi), np.sin(psi), 0.0))
         _, want = assert_front_equals_enumeration(scenario, True, seed)
         nonempty += bool(want)
     assert nonempty >= 8

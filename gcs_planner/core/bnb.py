@@ -527,7 +527,7 @@ def _search(
             start,
             0,
             {(0.0, 0.0): 1.0},
-            heading_a,
+            heading_a if pair_floor is None else None,  # the pair relaxation: no arc flown yet
             (start,),
             np.array([graph.to_end[start]]),
             -1,
