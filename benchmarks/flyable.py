@@ -4,6 +4,8 @@ through the planner's public ``plan()``."""
 
 from __future__ import annotations
 
+import argparse
+import math
 import statistics
 import time
 from dataclasses import dataclass
@@ -26,6 +28,8 @@ class FlyRow:
     routes: int
     proven: bool
     largest_gap: float
+    unsettled: int  # front routes not proven to be on the front with nothing missing beside them
+    complete_below: float  # routes missing from the front are at least this long (inf: none)
     shortest: tuple[float, int]
     certain: float | None  # shortest route with P = 1, when the front has one
     steepest: float  # degrees, over every leg of the front
@@ -41,11 +45,20 @@ def _cases() -> list[tuple[str, float, dict]]:
     return cases
 
 
-def run_flyable(specs: list[str], runs: int) -> list[FlyRow]:
+def run_flyable(
+    specs: list[str],
+    runs: int,
+    objectives_counts: tuple[int, ...] = (2, 3),
+    legs_wanted: tuple[str, ...] | None = None,
+) -> list[FlyRow]:
     rows = []
     for spec in specs:
         for objectives in OBJECTIVES:
+            if len(objectives) not in objectives_counts:
+                continue
             for legs, radius, changes in _cases():
+                if legs_wanted is not None and not any(w in legs for w in legs_wanted):
+                    continue
                 base = load_case(spec, turn_radius=radius)
                 params = {k: v for k, v in changes.items() if k != "leg_model"}
                 scenario = base.with_params(**params) if params else base
@@ -69,6 +82,8 @@ def run_flyable(specs: list[str], runs: int) -> list[FlyRow]:
                         len(result.routes),
                         result.optimal,
                         max(result.gaps(), default=0.0),
+                        len(result.routes) - sum(result.settled or (True,) * len(result.routes)),
+                        result.stats.get("open_bound") or math.inf,
                         (shortest.length, shortest.corrections),
                         None if certain is None else result.routes[certain].length,
                         max(abs(leg.path_angle) for leg in legs_all),
@@ -76,6 +91,17 @@ def run_flyable(specs: list[str], runs: int) -> list[FlyRow]:
                     )
                 )
     return rows
+
+
+def _proof(r: FlyRow) -> str:
+    """'proven', or what is known: the largest gap, and (a gap of 0 alone would read as a
+    proof) how many routes are unsettled and below which length the front is complete."""
+    if r.proven:
+        return "proven"
+    text = f"not proven (gap ≤ {r.largest_gap:,.0f} m; {r.unsettled} of {r.routes} unsettled"
+    if math.isfinite(r.complete_below):
+        text += f"; complete below {r.complete_below:,.0f} m"
+    return text + ")"
 
 
 def render(rows: list[FlyRow]) -> str:
@@ -105,10 +131,33 @@ def render(rows: list[FlyRow]) -> str:
                 f"+{100 * (r.shortest[0] / ref - 1):.2f} %" if ref else "–",
                 f"{r.certain:,.1f}" if r.certain is not None else "none found",
                 r.routes,
-                "proven" if r.proven else f"not proven (gap ≤ {r.largest_gap:,.0f} m)",
+                _proof(r),
                 f"{r.steepest:.1f}°",
                 r.helices,
                 seconds(r.seconds),
             )
         )
     return table(header, body)
+
+
+def main(argv: list[str] | None = None) -> None:
+    """This section alone: ``python -m benchmarks.flyable [--scenarios ...] [--objectives ...]``."""
+    ap = argparse.ArgumentParser(prog="python -m benchmarks.flyable", description=__doc__)
+    ap.add_argument("--scenarios", nargs="+", default=["dataset1", "dataset2"])
+    ap.add_argument("--objectives", type=int, nargs="+", choices=(2, 3), default=[2, 3])
+    ap.add_argument(
+        "--legs",
+        nargs="+",
+        default=None,
+        help="rows whose 'legs' column contains one of these (e.g. cs3d 15°; default: all)",
+    )
+    ap.add_argument("--runs", type=int, default=1, help="runs per row (median time)")
+    args = ap.parse_args(argv)
+    if args.runs < 1:
+        ap.error("--runs must be >= 1")
+    legs = None if args.legs is None else tuple(args.legs)
+    print(render(run_flyable(args.scenarios, args.runs, tuple(args.objectives), legs)))
+
+
+if __name__ == "__main__":
+    main()

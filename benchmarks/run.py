@@ -221,7 +221,8 @@ def run(cfg: Config) -> str:
         "route of each front against the straight-leg front's, the shortest route certain to "
         "arrive, the steepest leg of any front route and the helix turns the front flies. "
         "Proof: 'proven' is an exhausted search; otherwise the largest gap between a front "
-        "route and its proven lower bound (default label budget).\n\n" + flyable.render(frows)
+        "route and its proven lower bound, how many routes are unsettled and below which length "
+        "the front is complete (default label budget).\n\n" + flyable.render(frows)
     )
     print(sections[-1], flush=True)
 

@@ -18,13 +18,15 @@ import heapq
 import itertools
 import math
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from gcs_planner.core.budget import DEFAULT_MAX_LABELS, Budget
 from gcs_planner.core.cost_to_go import cost_to_go
+from gcs_planner.core.failure_bounds import FailureBounds, failure_bounds
+from gcs_planner.core.pair_bounds import PairBounds, pair_bounds
 from gcs_planner.core.prefilter import FanBound, covered_fan
 from gcs_planner.core.probability import propagate, success_probability
 from gcs_planner.core.proof import PROB_EPS, lower_bounds, settled
@@ -33,6 +35,11 @@ from gcs_planner.core.route import Leg, Route, evaluate_route
 from gcs_planner.geometry.legs import FlownLeg, LegModel, path_angle_deg, scenario_leg_model
 from gcs_planner.geometry.trajectory import route_trajectory
 from gcs_planner.scenario.model import Kind, Scenario
+
+# Labels a search over simple routes expands before it makes the failure bounds.
+FAILURE_BOUNDS_FROM = 1_000
+# How many times the heading-free floor's labels the pair floor is expected to need at most.
+PAIR_FLOOR_COST = 4
 
 __all__ = ["DEFAULT_MAX_LABELS", "PROB_EPS", "BnbResult", "Found", "bnb_front", "flown_route"]
 
@@ -92,6 +99,7 @@ class _Incumbents:
         self.kmax = kmax
         self.found: list[Found] = []
         self._best: dict[float, np.ndarray] = {}
+        self._levels: list[float] | None = None
 
     def add(self, new: Found) -> None:
         self.found = [
@@ -99,6 +107,17 @@ class _Incumbents:
         ]
         self.found.append(new)
         self._best.clear()
+        self._levels = None
+
+    def levels(self) -> list[float]:
+        """The found routes' probabilities, largest first, equal ones (within PROB_EPS) once."""
+        if self._levels is None:
+            levels: list[float] = []
+            for p in sorted((f.probability for f in self.found), reverse=True):
+                if not levels or p < levels[-1] - PROB_EPS:
+                    levels.append(p)
+            self._levels = levels
+        return self._levels
 
     def best(self, mass: float) -> np.ndarray:
         """best[c] = the least length of a found route with <= c corrections and a probability
@@ -122,6 +141,74 @@ class _Incumbents:
         if m <= 0:
             return True
         return bool(np.all(length + to_go[:m] >= self.best(mass)[k : k + m]))
+
+    def covers_by_level(
+        self,
+        length: float,
+        k: int,
+        mass: float,
+        bound: Callable[[float], np.ndarray | None],
+        ceiling: Ceiling | None = None,
+    ) -> bool:
+        """``covers`` with a bound per probability level: ``bound(gap)`` bounds per m the
+        continuations that lose less than ``gap`` of the mass (None: there are none), and
+        ``ceiling`` bounds the whole length of a route by its corrections and probability.
+
+        A continuation ending with probability pi in (lo, hi] (lo, hi consecutive found
+        levels, pi measured with PROB_EPS) is matched only by found routes at least hi likely,
+        and it loses less than mass - lo: so each interval is tested with its own bound and its
+        own found routes. Above the likeliest found route nothing matches, so a partial route
+        that may still end there stays open unless the ceiling rules such routes out."""
+        levels = self.levels()
+        width = self.kmax - k + 1
+        if width <= 0:
+            return True
+        for hi, lo in zip([None, *levels], [*levels, None]):
+            floor = 0.0 if lo is None else lo + PROB_EPS
+            if floor >= mass:
+                continue  # every continuation ends at most lo + PROB_EPS likely: lower intervals
+            to_go = bound(mass - floor)
+            if to_go is None:
+                continue
+            reach = np.empty(width)
+            m = min(len(to_go), width)
+            reach[:m] = length + to_go[:m]
+            reach[m:] = length + to_go[-1]
+            if ceiling is not None:
+                above = -math.inf if lo is None else lo  # the last interval: every route
+                np.maximum(reach, ceiling.least_above(above)[k:], out=reach)
+            best = np.full(width, np.inf) if hi is None else self.best(hi)[k:]
+            if not np.all(reach >= best):
+                return False
+        return True
+
+
+class Ceiling:
+    """What the exact front of a relaxation says of every route: each route of the model is,
+    relaxed, weakly dominated by a point of that front, and relaxing a route shortens it and
+    raises its probability. So a route with c corrections and a probability above ``lo`` is at
+    least as long as the shortest front point of the relaxation with <= c corrections and a
+    probability of at least ``lo`` (inf: no such route)."""
+
+    def __init__(self, front: Sequence[Found], kmax: int) -> None:
+        self.front = list(front)
+        self.kmax = kmax
+        self._least: dict[float, np.ndarray] = {}
+
+    def least_above(self, lo: float) -> np.ndarray:
+        """Per number of corrections c = 0..kmax: the least length of a route with c
+        corrections whose probability exceeds ``lo`` + PROB_EPS. Probabilities reached in
+        different orders differ by far less than PROB_EPS / 2, so a relaxed front point counts
+        when it exceeds ``lo`` + PROB_EPS / 2: rounding can only weaken the bound."""
+        least = self._least.get(lo)
+        if least is None:
+            least = np.full(self.kmax + 1, np.inf)
+            for f in self.front:
+                if f.probability > lo + PROB_EPS / 2 and f.corrections <= self.kmax:
+                    least[f.corrections] = min(least[f.corrections], f.length)
+            np.minimum.accumulate(least, out=least)
+            self._least[lo] = least
+        return least
 
 
 def bnb_front(
@@ -168,6 +255,19 @@ def bnb_front(
         # ones). Both seed the search over simple routes, whose exhaustion, or gaps, is what is
         # reported.
         floor = _relaxed(ctx.relaxed(), budget.share(0.25, "heading-free floor"), ())
+        # With airplane legs (three objectives) a tighter floor: the relaxation that knows the
+        # cone of headings at each point (``pair_bounds``), within metres of the front. It
+        # keeps more partial routes apart, some 3 to 5 times the labels of the heading-free
+        # floor; it is tried when that fits the label budget, and used when it is proven.
+        limit = budget.max_labels
+        if ctx.pairs is not None and (limit is None or PAIR_FLOOR_COST * floor.labels <= limit):
+            pair = _relaxed(ctx.pair_relaxed(), budget.share(0.25, "pair floor"), ())
+            spent = floor.labels + pair.labels
+            if pair.optimal or not floor.optimal:
+                floor = pair
+            floor.labels = spent
+        if floor.optimal and ctx.probability:
+            ctx.ceiling = Ceiling(floor.front, ctx.kmax)
         guide_budget = budget.share(0.25, "heading-free guide")
         guide = _relaxed(ctx, guide_budget, [*seeds, *(f.points for f in floor.front)])
         simple = [f.points for f in guide.front if len(set(f.points)) == len(f.points)]
@@ -219,6 +319,39 @@ class _Context:
         self.kmax = scenario.n - 2 if max_corrections is None else max_corrections
         self.kind_of = [Kind(int(c)) for c in scenario.kind]  # Enum() is slow in the loop
         self.unreliable = scenario.unreliable if probability else np.zeros(scenario.n, dtype=bool)
+        # Bounds that know how much probability a continuation can keep (``failure_bounds``).
+        # Only where a label is dear (legs flown from a heading, no dominance): with
+        # heading-free legs dominance already keeps the search small and the bounds cost more
+        # than they save.
+        # Bounds that know the cone of headings a route arrives with (``pair_bounds``); only
+        # for this model's own legs, never for its relaxation's.
+        # (Two objectives prove fast without them: there they cost more than they save.)
+        self.pairs: PairBounds | None = (
+            pair_bounds(scenario, self.graph, self.model)
+            if probability and self.model.carries_heading
+            else None
+        )
+        # Made on first need (``failures``): with pairs, over them too, and asked by the arc
+        # flown last.
+        self._failures: FailureBounds | None = None
+        self._failures_made = not (probability and self.model.carries_heading)
+        # The proven front of the heading-free relaxation, once known (see ``Ceiling``).
+        self.ceiling: Ceiling | None = None
+        # Set on the copy that searches the pair relaxation (``pair_relaxed``).
+        self.pair_floor: PairBounds | None = None
+
+    def failures(self) -> FailureBounds | None:
+        """The failure bounds (``failure_bounds``), made on the first call: a search that
+        proves its front in a few labels never pays for them."""
+        if not self._failures_made:
+            self._failures_made = True
+            if self.pairs is None:
+                self._failures = failure_bounds(self.scenario, self.graph)
+            else:
+                self._failures = failure_bounds(
+                    self.scenario, self.pairs.graph, point_of=self.pairs.point
+                )
+        return self._failures
 
     def relaxed(self) -> _Context:
         """The same search over the heading-free relaxation of the leg model (each leg as long
@@ -226,6 +359,16 @@ class _Context:
         already: shared, not built again."""
         other = copy.copy(self)
         other.model = self.model.relaxation()
+        other.pairs = None
+        other.pair_floor = None
+        return other
+
+    def pair_relaxed(self) -> _Context:
+        """The search over the relaxation whose leg j -> t after i -> j is lb(i, j, t), the least
+        over the cone of headings a route from i arrives at j with (``pair_bounds``). Partial
+        routes that came to j from the same i continue alike: they compare by dominance."""
+        other = self.relaxed()
+        other.pair_floor = self.pairs
         return other
 
     def seed(self, points: Sequence[int]) -> Found | None:
@@ -239,6 +382,37 @@ class _Context:
             legs = [s.leg for s in route.stops[1:]]
             prob = success_probability(self.scenario, points, legs).probability
         return Found(route.length, route.corrections, min(1.0, prob), points) if prob > 0 else None
+
+
+def _pair_margin(pairs: PairBounds | None, kept: int, new: int) -> float:
+    """How much longer the next leg can be for a partial route that came to j by arc ``kept``
+    than for one that came by arc ``new``, in the pair relaxation (0 without it). Only the
+    next leg depends on the arc (lb(i, j, t)); every leg after it is lb(j, t, u) for both. So
+    a partial route that is this much shorter, with errors this much smaller, than another
+    at j continues no worse whatever it does: its next leg is at most this much longer, every
+    later one the same."""
+    if pairs is None or kept == new:
+        return 0.0
+    return max(0.0, float(np.max(pairs.legs(kept) - pairs.legs(new), initial=0.0)))
+
+
+def _shifted(states: dict, shift: float) -> dict:
+    """Error states with ``shift`` metres more on both components."""
+    if shift == 0.0:
+        return states
+    return {(v + shift, h + shift): m for (v, h), m in states.items()}
+
+
+def _larger(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The pointwise larger of two bounds per m (each carried on with its last entry)."""
+    width = max(len(a), len(b))
+    out = np.empty(width)
+    out[: len(a)] = a
+    out[len(a) :] = a[-1]
+    other = np.empty(width)
+    other[: len(b)] = b
+    other[len(b) :] = b[-1]
+    return np.maximum(out, other, out=out)
 
 
 def _stochastically_dominates(d1: dict, d2: dict) -> bool:
@@ -291,10 +465,51 @@ def _search(
     relaxed = critical is not None
     fan = FanBound(G, scenario.n)
     is_v_point = scenario.kind == Kind.V
-    # Per (point, critical points visited): the partial routes kept, as (L, k, states, mass).
-    archive: dict[tuple[int, frozenset[int]], list[tuple[float, int, dict, float]]] = {}
+    # Per (point, critical points visited): the partial routes kept, as (L, k, states, mass,
+    # the arc they came by).
+    archive: dict[tuple[int, frozenset[int]], list[tuple[float, int, dict, float, int]]] = {}
 
     inc = _Incumbents(kmax)
+
+    ceiling = ctx.ceiling
+
+    # G2: for this model's legs, or in the search over the pair relaxation, whose cost-to-go
+    # it is exactly (never in the heading-free relaxation, whose legs are shorter).
+    pairs = ctx.pair_floor if relaxed else ctx.pairs
+    pair_floor = ctx.pair_floor
+
+    def by_level(
+        length: float,
+        k: int,
+        j: int,
+        states: dict,
+        mass: float,
+        to_go: np.ndarray | None,
+        arc: int,
+    ) -> bool:
+        """Whether found routes cover the partial route, tested per probability level.
+        ``to_go``: the label's bound over every continuation (it holds for each level too);
+        ``arc``: the arc of the reach graph it flew last."""
+        if relaxed or j == start:
+            return False
+        # The failure bounds only once the search proves long enough to need them.
+        failures = ctx.failures() if labels >= FAILURE_BOUNDS_FROM else None
+        if failures is None and ceiling is None:
+            return False
+        at = j if ctx.pairs is None else int(ctx.pairs.node_of_arc[arc])
+        if failures is None:
+            return inc.covers_by_level(length, k, mass, lambda gap: to_go, ceiling)
+        memo: dict[tuple[int, ...], np.ndarray | None] = {}
+
+        def bound(gap: float) -> np.ndarray | None:
+            key = tuple(failures.forced(w, gap) for w in states.values())
+            if key not in memo:
+                rows = failures.bound(at, states, gap)
+                memo[key] = None if rows is None or to_go is None else _larger(rows, to_go)
+            return memo[key]
+
+        return inc.covers_by_level(length, k, mass, bound, ceiling)
+
     for points in seeds:
         seed = ctx.seed(points)
         if seed is not None and not _dominated(
@@ -302,8 +517,8 @@ def _search(
         ):
             inc.add(seed)
     counter = itertools.count()
-    # Entry: (f, tiebreak, L, node, k, states, heading, path, to_go). A carries no error and
-    # makes no correction: |A - B| bounds every route, whatever its corrections.
+    # Entry: (f, tiebreak, L, node, k, states, heading, path, to_go, last arc). A carries no
+    # error and makes no correction: |A - B| bounds every route, whatever its corrections.
     heap: list = [
         (
             float(graph.to_end[start]),
@@ -312,19 +527,20 @@ def _search(
             start,
             0,
             {(0.0, 0.0): 1.0},
-            heading_a,
+            heading_a if pair_floor is None else None,  # the pair relaxation: no arc flown yet
             (start,),
             np.array([graph.to_end[start]]),
+            -1,
         )
     ]
     labels = 0
     exhausted = True
     while heap:
         entry = heapq.heappop(heap)
-        f, _, L, node, k, states, heading, path, to_go = entry
+        f, _, L, node, k, states, heading, path, to_go, arc = entry
         mass = sum(states.values())
         # Routes found since this label was queued may now cover it.
-        if inc.covers(L, k, to_go, mass):
+        if inc.covers(L, k, to_go, mass) or by_level(L, k, node, states, mass, to_go, arc):
             continue
         if not budget.take():
             heapq.heappush(heap, entry)
@@ -336,7 +552,10 @@ def _search(
         lo, hi = graph.indptr[node], graph.indptr[node + 1]
         targets = graph.target[lo:hi].astype(np.int64)
         straight = graph.length[lo:hi]
-        if model.carries_heading:
+        if pair_floor is not None:  # the heading is the arc flown last (None at A)
+            flown = straight if heading is None else pair_floor.legs(heading)
+            headings = lo + np.arange(hi - lo)
+        elif model.carries_heading:
             flown, headings = model.lengths(xyz[node], heading, xyz[targets])
         else:  # heading-free legs are as long as the graph's arcs
             flown, headings = straight, None
@@ -369,20 +588,26 @@ def _search(
             # G is non-decreasing in e: the least carried error bounds every state.
             e_min = min(st[1] if is_v else st[0] for st in new_states)
             g = G.by_corrections(j, e_min)
+            if pairs is not None and g is not None:
+                g2 = pairs.by_corrections(int(lo + idx), e_min)
+                g = None if g2 is None else _larger(g, g2)
+            # (The test per probability level is left to the pop: it costs more than the
+            # partial routes it would keep off the heap.)
             if inc.covers(nL, k + 1, g, new_mass):
                 continue
             if relaxed:
                 key = (j, frozenset(critical.intersection(path)) if critical else frozenset())
                 kept = archive.setdefault(key, [])
+                arc_in = int(lo + idx)
                 if any(
-                    aL <= nL
+                    aL + (shift := _pair_margin(pair_floor, a_arc, arc_in)) <= nL
                     and ak <= k + 1
                     and am >= new_mass - PROB_EPS
-                    and _stochastically_dominates(ast, new_states)
-                    for aL, ak, ast, am in kept
+                    and _stochastically_dominates(_shifted(ast, shift), new_states)
+                    for aL, ak, ast, am, a_arc in kept
                 ):
                     continue
-                kept.append((nL, k + 1, new_states, new_mass))
+                kept.append((nL, k + 1, new_states, new_mass, arc_in))
             new_heading = None if headings is None else headings[idx]
             heapq.heappush(
                 heap,
@@ -396,10 +621,16 @@ def _search(
                     new_heading,
                     path + (j,),
                     g,
+                    int(lo + idx),
                 ),
             )
     found = sorted(inc.found, key=lambda g: (g.corrections, g.length))
-    live = [e for e in heap if not inc.covers(e[2], e[4], e[8], sum(e[5].values()))]
+    live = [
+        e
+        for e in heap
+        if not inc.covers(e[2], e[4], e[8], sum(e[5].values()))
+        and not by_level(e[2], e[4], e[3], e[5], sum(e[5].values()), e[8], e[9])
+    ]
     open_bound = min((e[0] for e in live), default=math.inf)
     open_routes = [(e[2], e[4], e[8], sum(e[5].values())) for e in live]
     lower = lower_bounds(found, open_routes)

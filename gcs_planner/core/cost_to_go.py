@@ -59,15 +59,29 @@ class CostToGo:
         return self.table[i] if i >= 0 else None
 
 
-def cost_to_go(scenario: Scenario, graph: ReachGraph, compiled: bool | None = None) -> CostToGo:
+def cost_to_go(
+    scenario: Scenario,
+    graph: ReachGraph,
+    compiled: bool | None = None,
+    *,
+    is_v: np.ndarray | None = None,
+    own_start: np.ndarray | None = None,
+) -> CostToGo:
     """G of the scenario over ``graph``. ``compiled``: expand layers with the numba kernel
-    (True), numpy (False) or by size (None); the same table either way."""
+    (True), numpy (False) or by size (None); the same table either way.
+
+    ``is_v`` and ``own_start`` serve graphs whose nodes are not the scenario's points (see
+    ``failure_bounds``): per node, whether it is a V point, and the metres the component it
+    corrects already carries right after its correction (0 for a correction that succeeds; the
+    default)."""
     compiled = use_compiled(scenario.n, compiled)
     if compiled:
         from gcs_planner.core.cost_to_go_kernel import backward_fan
     n = graph.n
     end = graph.end
-    is_v = scenario.kind == Kind.V
+    if is_v is None:
+        is_v = scenario.kind == Kind.V
+    own = np.zeros(n) if own_start is None else np.asarray(own_start, dtype=float)
     # Reverse arcs: pred -> j, excluding arcs into B (the base case) and out of A.
     src = np.repeat(np.arange(n), graph.degree())
     tgt = graph.target.astype(np.int64)
@@ -78,7 +92,7 @@ def cost_to_go(scenario: Scenario, graph: ReachGraph, compiled: bool | None = No
     node = src[into_b]
     R = dist[into_b]
     E = lim_b - R
-    ok = E >= 0
+    ok = (E >= 0) & (R + own[node] <= lim_b)
     node, R, E = node[ok], R[ok], E[ok]
     # Archive for dominance: "e" of the generic filter is -E (smaller is better).
     keep = not_dominated(
@@ -125,10 +139,11 @@ def cost_to_go(scenario: Scenario, graph: ReachGraph, compiled: bool | None = No
                 is_v,
                 graph.lim_v,
                 graph.lim_h,
+                own,
                 *(a.copy() for a in summary),
             )
         else:
-            j, newR, newE = _fan(node, R, E, r_ptr, r_src, r_len, is_v, graph, summary)
+            j, newR, newE = _fan(node, R, E, r_ptr, r_src, r_len, is_v, own, graph, summary)
         empty = np.zeros((len(j), 0), np.uint64)
         keep = not_dominated(
             j,
@@ -174,6 +189,7 @@ def _fan(
     r_src: np.ndarray,
     r_len: np.ndarray,
     is_v: np.ndarray,
+    own: np.ndarray,
     graph: ReachGraph,
     summary: tuple[np.ndarray, ...],
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -194,7 +210,9 @@ def _fan(
     lim_own = np.where(is_v[j], graph.lim_v[j1], graph.lim_h[j1])
     lim_other = np.where(is_v[j], graph.lim_h[j1], graph.lim_v[j1])
     E1 = E[lab]
-    feasible = (d <= lim_own) & (same | (d <= E1))
+    # The component j corrects starts at own[j] (0 unless j's correction failed).
+    d_own = d + own[j]
+    feasible = (d_own <= lim_own) & (same | (d_own <= E1))
     newE = np.where(same, np.minimum(lim_other, E1) - d, lim_other - d)
     newR = R[lab] + d
     feasible &= newE >= 0

@@ -30,6 +30,7 @@ def backward_fan(
     is_v: np.ndarray,
     lim_v: np.ndarray,
     lim_h: np.ndarray,
+    own: np.ndarray,
     near_R: np.ndarray,
     near_e: np.ndarray,
     wide_R: np.ndarray,
@@ -37,7 +38,8 @@ def backward_fan(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The candidates (predecessor, R, E) of one layer that pass the cheap tests, in the order
     the numpy layer makes them (labels in order, each label's reverse arcs in order). Updates
-    the four summary arrays in place."""
+    the four summary arrays in place. ``own[j]``: the metres j's own component carries right
+    after its correction."""
     cap = 1024
     out_j = np.empty(cap, np.int64)
     out_R = np.empty(cap)
@@ -57,9 +59,10 @@ def backward_fan(
             else:
                 lim_own = lim_h[j1]
                 lim_other = lim_v[j1]
-            if not (d <= lim_own):
+            d_own = d + own[j]
+            if not (d_own <= lim_own):
                 continue
-            if not same and not (d <= E1):
+            if not same and not (d_own <= E1):
                 continue
             if same:
                 new_E = min(lim_other, E1) - d

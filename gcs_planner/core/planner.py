@@ -7,6 +7,7 @@ whether its front is proven optimal.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -236,6 +237,9 @@ def _branch_and_bound(
         "search_seconds": res.seconds,
         "labels": res.labels,
         "open_labels": res.open_labels,
+        # Routes missing from an unproven front are at least this long (None: none is missing;
+        # JSON has no inf).
+        "open_bound": res.open_bound if math.isfinite(res.open_bound) else None,
         "relaxation_rounds": res.rounds,
         "critical_points": len(res.critical),
     }
@@ -265,10 +269,15 @@ def _branch_and_bound(
             if heading_free
             else "over whole simple routes (headings make partial routes incomparable)"
         )
+        bound = "heading-free cost-to-go per number of further corrections"
+        if use_probability and not heading_free:
+            bound += (
+                " (for airplane legs also over the cone of arrival headings), tested per "
+                "probability level"
+            )
         statement = (
             f"exact: the Pareto front over all simple feasible routes with {model}, proven by "
-            f"exhaustive branch and bound ({res.labels} labels; bound: heading-free cost-to-go "
-            f"per number of further corrections; {how})"
+            f"exhaustive branch and bound ({res.labels} labels; bound: {bound}; {how})"
         )
     else:
         unsettled = len(res.front) - sum(res.proven or ())
