@@ -96,6 +96,30 @@ def test_airplane_legs_within_the_limits_are_flown_as_planned_and_arrive(
     assert report.ok and [r.point for r in report.rows] == list(report.route[1:-1])
 
 
+def test_the_certain_route_of_dataset_2_within_realistic_limits_arrives(dataset_paths):
+    """Climb 20 and descent 25 degrees: dataset 2's routes certain to arrive have at most ~60 m
+    to spare (no route through reliable points only exists with 80 m), so this plans with a
+    60 m reserve; the planner's certain route, flown by both autopilots, overflies every planned
+    correction in order and arrives, a little longer than planned."""
+    limits = {"turn_radius": 200.0, "max_climb_angle": 20.0, "max_descent_angle": 25.0}
+    scenario = load_scenario(dataset_paths[2], {**DS2, **limits, "reserve": 60.0})
+    certain = plan(
+        scenario,
+        objectives=("length", "corrections", "probability"),
+        choice="most-reliable",
+        max_labels=30_000,
+    )
+    assert certain.route.probability == 1.0 and certain.route.feasible
+    assert all(-25.0 - 1e-9 <= s.leg.path_angle <= 20.0 + 1e-9 for s in certain.route.stops[1:])
+    landmarks = load_scenario(dataset_paths[2], {**DS2, **limits})
+    for flavour in ("ardupilot", "px4"):
+        report = dry_run(certain, landmarks, flavour=flavour)
+        assert report.ok and report.corrections_as_planned, (flavour, report.why)
+        assert not report.missed and all(r.miss <= 5.0 for r in report.rows)
+        assert 0 < report.flown_difference < 0.005 * report.planned_length
+        assert report.max_overrun is not None and report.max_overrun > 0
+
+
 def test_steep_cs3d_mission_is_caught_through_mock_vehicle_and_upload_processes(
     tmp_path, capsys, dataset_paths
 ):
