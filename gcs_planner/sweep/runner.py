@@ -208,7 +208,11 @@ def _connect(scheduler: str | None, workers: int, threads: int, dashboard_addres
                 processes=True,
                 host="127.0.0.1",
                 dashboard_address=dashboard_address,
-                silence_logs=logging.ERROR,
+                # Not even Dask's errors: stopping the cluster races with the workers'
+                # heartbeats, which then print a traceback on Ctrl-C or at the end (Dask logs a
+                # failed heartbeat as an error). A cell's failure is a row; the dashboard shows
+                # the workers.
+                silence_logs=logging.CRITICAL,
             )
         return Client(cluster), cluster
     try:
