@@ -19,7 +19,10 @@ plan` uses by default (length, corrections, and probability since there are unre
 Each run writes its results into a fresh folder; the fronts of the three are checked equal, so
 the ratio compares equal work. The load average before and after each run is reported: on a
 shared machine other users' processes take cores from whichever run is going, and two workers
-gain least when fewer than two cores are free.
+gain least when fewer than two cores are free. Besides the planning processes' CPU seconds the
+table gives those of the processes that only coordinate (this process as client, scheduler and
+nannies for the local cluster; the client, `dask scheduler` and `dask worker`'s nanny process
+for the separate one): on two cores every one of them is taken from the workers.
 """
 
 from __future__ import annotations
@@ -33,6 +36,7 @@ import sys
 import tempfile
 import time
 from dataclasses import dataclass
+from datetime import datetime, timezone
 from pathlib import Path
 
 from gcs_planner.sweep import expand, read_results, read_spec, run_cell, run_sweep
@@ -48,6 +52,8 @@ class Timing:
     cpu_seconds: float  # of the process(es) that planned: this one, or the workers
     cells: int
     load: tuple[float, float]  # lowest and highest 1-minute load average seen around the run
+    start_stop: float = 0.0  # of ``seconds``: starting and stopping the cluster
+    coordinating_cpu: float = 0.0  # CPU s of the client, scheduler and nannies
 
 
 def spec_text(scenarios: int, corrections: int, turn_radius: float, first: int = 1) -> str:
@@ -79,12 +85,22 @@ def _serial(spec_path: Path) -> tuple[float, float, dict]:
     return time.perf_counter() - start, time.process_time() - cpu, fronts
 
 
-def _on_cluster(spec_path: Path, out: Path, client, address: str) -> tuple[float, float, dict]:
+def _on_cluster(
+    spec_path: Path, out: Path, client, address: str, others: tuple = ()
+) -> tuple[float, float, float, dict]:
+    """Wall time, the workers' CPU s, the coordinating processes' CPU s (this one and
+    ``others``, psutil processes) and the fronts of one sweep on the cluster at ``address``."""
     cpu = _worker_cpu(client)
+    mine, theirs = time.process_time(), _cpu_of(others)
     start = time.perf_counter()
     run_sweep(spec_path, out, scheduler=address)
     seconds = time.perf_counter() - start
-    return seconds, _worker_cpu(client) - cpu, _fronts(out)
+    coordinating = time.process_time() - mine + _cpu_of(others) - theirs
+    return seconds, _worker_cpu(client) - cpu, coordinating, _fronts(out)
+
+
+def _cpu_of(processes: tuple) -> float:
+    return sum(sum(p.cpu_times()[:2]) for p in processes)
 
 
 def run_interleaved(
@@ -102,7 +118,7 @@ def run_interleaved(
     client.wait_for_workers(workers, timeout=DEADLINE_S)
     startup = time.perf_counter() - start
     serial = [0.0, 0.0]
-    local = [0.0, 0.0]
+    local = [0.0, 0.0, 0.0]
     ratios: list[float] = []
     fronts: dict = {}
     try:
@@ -113,12 +129,14 @@ def run_interleaved(
             spec_path.write_text(spec_text(count, corrections, turn_radius, first), "utf-8")
             s_wall, s_cpu, s_fronts = _serial(spec_path)
             address = cluster.scheduler_address
-            c_wall, c_cpu, c_fronts = _on_cluster(spec_path, folder / f"local{r}", client, address)
+            c_wall, c_cpu, c_coord, c_fronts = _on_cluster(
+                spec_path, folder / f"local{r}", client, address
+            )
             if c_fronts != s_fronts:
                 raise RuntimeError(f"round {r}: the sweep's fronts differ from the serial loop's")
             fronts.update(s_fronts)
             serial = [serial[0] + s_wall, serial[1] + s_cpu]
-            local = [local[0] + c_wall, local[1] + c_cpu]
+            local = [local[0] + c_wall, local[1] + c_cpu, local[2] + c_coord]
             ratios.append(s_wall / c_wall)
             loads.append(_load())
             print(
@@ -135,11 +153,13 @@ def run_interleaved(
     timings = [
         Timing("serial loop (1 process)", serial[0], serial[1], scenarios, load),
         Timing(
-            f"local cluster, {workers} workers × 1 thread (incl. {startup:.1f} s start + stop)",
+            f"local cluster, {workers} workers × 1 thread (incl. start + stop)",
             local[0] + startup,
             local[1],
             scenarios,
             load,
+            start_stop=startup,
+            coordinating_cpu=local[2],
         ),
     ]
     return timings, ratios, fronts
@@ -147,6 +167,7 @@ def run_interleaved(
 
 def run_separate(spec_path: Path, out: Path, workers: int) -> tuple[Timing, dict]:
     """A scheduler and workers started as their own processes with the `dask` command."""
+    import psutil
     from distributed import Client
 
     dask = str(Path(sys.executable).parent / "dask")
@@ -172,7 +193,10 @@ def run_separate(spec_path: Path, out: Path, workers: int) -> tuple[Timing, dict
             with Client(address) as client:
                 client.wait_for_workers(workers, timeout=DEADLINE_S)
                 before = _load()
-                seconds, cpu, fronts = _on_cluster(spec_path, out, client, address)
+                others = tuple(psutil.Process(p.pid) for p in procs)  # scheduler, nannies
+                seconds, cpu, coordinating, fronts = _on_cluster(
+                    spec_path, out, client, address, others
+                )
             after = _load()
         finally:
             for p in reversed(procs):
@@ -184,7 +208,8 @@ def run_separate(spec_path: Path, out: Path, workers: int) -> tuple[Timing, dict
                     p.kill()
     name = f"`dask scheduler` + `dask worker --nworkers {workers} --nthreads 1`"
     cells = len(fronts)
-    return Timing(name, seconds, cpu, cells, (min(before, after), max(before, after))), fronts
+    load = (min(before, after), max(before, after))
+    return Timing(name, seconds, cpu, cells, load, coordinating_cpu=coordinating), fronts
 
 
 def _wait(condition) -> None:
@@ -228,6 +253,7 @@ def run_benchmark(
 ) -> tuple[list[Timing], list[float]]:
     """The timings (serial, local cluster[, separate scheduler]) and the per-round ratios."""
     rounds = max(1, min(rounds, scenarios))
+    print(f"  started {_utc()}", flush=True)
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
         timings, ratios, fronts = run_interleaved(
@@ -243,29 +269,46 @@ def run_benchmark(
                 raise RuntimeError("the separate cluster's fronts differ from the serial loop's")
             print(f"  {t.name}: {t.seconds:.1f} s", flush=True)
             timings.append(t)
+    print(f"  ended {_utc()}", flush=True)
     return timings, ratios
 
 
+def _utc() -> str:
+    return datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+
+
 def render(
-    timings: list[Timing], ratios: list[float], scenarios: int, corrections: int, radius: float
+    timings: list[Timing],
+    ratios: list[float],
+    scenarios: int,
+    corrections: int,
+    radius: float,
+    when: str = "",
 ) -> str:
     serial = timings[0]
     lines = [
-        f"{scenarios} scenarios `random_scenario({corrections}, seed)` "
+        (f"Measured {when}. " if when else "")
+        + f"{scenarios} scenarios `random_scenario({corrections}, seed)` "
         f"({corrections + 2} points), turning radius {radius:g} m, the default objectives; "
         "identical fronts from every run. Serial and local cluster alternate in "
         f"{len(ratios)} rounds of seeds (per-round speed-up "
         f"{min(ratios):.2f}–{max(ratios):.2f}×, median {statistics.median(ratios):.2f}×); "
-        "the separate scheduler runs all cells at once after them. CPU s: of the planning "
-        "process(es) — this one for the loop, the workers for a cluster.",
+        "the separate scheduler runs all cells at once after them (its processes' start and "
+        "stop not timed). Planning CPU s: of the process(es) that planned — this one for the "
+        "loop, the workers for a cluster; coordinating CPU s: of the client, the scheduler and "
+        "the nannies.",
         "",
-        "| run | cells | wall time s | speed-up vs serial | CPU s | load avg (1 min) |",
-        "|---|---:|---:|---:|---:|---|",
+        "| run | cells | wall time s | of which start + stop s | speed-up vs serial "
+        "| without start + stop | planning CPU s | coordinating CPU s | load avg (1 min) |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|---|",
     ]
     for t in timings:
+        work = t.seconds - t.start_stop
         lines.append(
-            f"| {t.name} | {t.cells} | {t.seconds:,.1f} | {serial.seconds / t.seconds:.2f}× | "
-            f"{t.cpu_seconds:,.1f} | {t.load[0]:.1f}–{t.load[1]:.1f} |"
+            f"| {t.name} | {t.cells} | {t.seconds:,.1f} | {t.start_stop:.1f} | "
+            f"{serial.seconds / t.seconds:.2f}× | {serial.seconds / work:.2f}× | "
+            f"{t.cpu_seconds:,.1f} | {t.coordinating_cpu:.1f} | "
+            f"{t.load[0]:.1f}–{t.load[1]:.1f} |"
         )
     lines.append("")
     lines.append(f"CPUs seen by this process: {os.cpu_count()}.")
@@ -287,6 +330,7 @@ def main(argv: list[str] | None = None) -> None:
     args = ap.parse_args(argv)
     if min(args.scenarios, args.corrections, args.workers, args.rounds) < 1 or args.turn_radius < 0:
         ap.error("--scenarios, --corrections and --workers must be >= 1, --turn-radius >= 0")
+    started = _utc()
     timings, ratios = run_benchmark(
         args.scenarios,
         args.corrections,
@@ -295,7 +339,10 @@ def main(argv: list[str] | None = None) -> None:
         not args.no_separate,
         args.rounds,
     )
-    print(render(timings, ratios, args.scenarios, args.corrections, args.turn_radius))
+    when = (
+        f"{started} – {_utc()[-9:]}, `python -m benchmarks.sweep {' '.join(argv or sys.argv[1:])}`"
+    )
+    print(render(timings, ratios, args.scenarios, args.corrections, args.turn_radius, when))
 
 
 if __name__ == "__main__":

@@ -28,3 +28,14 @@ def killing_once(cell: Cell, *, victim: int, marker: str, log: str) -> list[dict
         Path(marker).write_text(str(os.getpid()), encoding="utf-8")
         os.kill(os.getpid(), signal.SIGKILL)
     return logged(cell, log=log)
+
+
+def with_dask_settings(cell: Cell, *, log: str) -> list[dict]:
+    """run_cell, then the Dask settings its worker process runs with, one line in ``log``."""
+    import dask
+
+    rows = run_cell(cell)
+    keys = ("distributed.worker.profile.interval", "distributed.admin.tick.interval")
+    with open(log, "a", encoding="utf-8") as f:
+        f.write(" ".join(str(dask.config.get(k)) for k in keys) + "\n")
+    return rows

@@ -242,6 +242,25 @@ def test_more_cells_than_the_in_flight_window_all_finish(
     assert set(logged_keys(log).values()) == {1} and len(logged_keys(log)) == 12
 
 
+def test_own_local_cluster_runs_with_the_lean_dask_settings(tmp_path: Path) -> None:
+    # The cluster the sweep starts itself samples stacks and ticks its loop less often than
+    # Dask's defaults; this process's own configuration is left as it was.
+    import dask
+
+    before = {k: dask.config.get(k) for k in runner.LEAN_CLUSTER}
+    log = tmp_path / "settings.log"
+    task = functools.partial(sweep_tasks.with_dask_settings, log=str(log))
+    spec_path = small_spec(tmp_path, seeds=1, deltas="[0.001]")  # 2 cells
+    result = run_sweep(spec_path, tmp_path / "out", task=task)
+    assert (result.ran, result.failed) == (2, 0)
+    lean = runner.LEAN_CLUSTER
+    expected = (
+        f"{lean['distributed.worker.profile.interval']} {lean['distributed.admin.tick.interval']}"
+    )
+    assert log.read_text().splitlines() == [expected, expected]
+    assert {k: dask.config.get(k) for k in runner.LEAN_CLUSTER} == before
+
+
 def wait_for(condition, what: str, proc: subprocess.Popen | None = None) -> None:
     deadline = time.monotonic() + DEADLINE_S
     while not condition():
