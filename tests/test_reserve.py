@@ -12,7 +12,8 @@ from test_bnb import assert_front_equals_enumeration
 
 from gcs_planner.core.bnb import bnb_front, flown_route
 from gcs_planner.core.probability import success_probability
-from gcs_planner.scenario.model import PARAMETER_NAMES
+from gcs_planner.scenario.generate import random_scenario
+from gcs_planner.scenario.model import PARAMETER_NAMES, Parameters
 
 LIMIT_NAMES = PARAMETER_NAMES[:5]
 
@@ -101,3 +102,55 @@ def test_every_route_of_a_reserved_front_survives_a_flight_that_much_longer() ->
                 assert p_flown >= f.probability - 1e-12, (seed, i)
             checked += 1
     assert checked >= 20
+
+
+def unreliable_scenario(seed: int):
+    """Mostly unreliable points with a small failure residual: a failed correction there still
+    cuts the error to the residual, so routes through them can be certain to arrive."""
+    rng = np.random.default_rng(seed)
+    share = float(rng.uniform(0.3, 0.6))
+    params = Parameters(
+        *(limit * share for limit in (25, 15, 20, 25, 30)),
+        0.001,
+        turn_radius=float(rng.choice([0.0, 200.0])),
+        fail_residual=float(rng.uniform(0.5, 3.0)),
+        max_climb_angle=15.0,
+        max_descent_angle=15.0,
+    )
+    return random_scenario(
+        int(rng.integers(4, 7)), seed, params=params, box=(20_000, 5_000, 1_000),
+        unreliable_fraction=0.7,
+    )  # fmt: skip
+
+
+def test_planning_with_every_unreliable_correction_failing_gives_the_certain_front() -> None:
+    """A route arrives surely exactly when it survives every unreliable correction failing
+    (a failure only leaves errors larger), so the front planned with p_success = 0 is the
+    (length, corrections) front of the routes whose exact probability is 1, by enumeration."""
+    from test_bnb import all_routes, pareto
+
+    nonempty = through_unreliable = 0
+    for seed in range(40):
+        scenario = tight_scenario(seed) if seed % 2 else unreliable_scenario(seed)
+        certain = []
+        for pts in all_routes(scenario):
+            route = flown_route(scenario, pts)
+            legs = [s.leg for s in route.stops[1:]]
+            if success_probability(scenario, pts, legs).probability == 1.0:
+                certain.append((round(route.length, 6), route.corrections, 0.0))
+        want = pareto(certain)
+        failing = dataclasses.replace(
+            scenario, params=dataclasses.replace(scenario.params, p_success=0.0)
+        )
+        result = bnb_front(failing, probability=True, max_labels=10**6)
+        assert result.optimal
+        got = [(round(f.length, 6), f.corrections, 0.0) for f in result.front]
+        assert all(f.probability == 1.0 for f in result.front)
+        assert [g[1] for g in got] == [w[1] for w in want], seed
+        np.testing.assert_allclose([g[0] for g in got], [w[0] for w in want], atol=1e-6)
+        nonempty += bool(want)
+        through_unreliable += sum(
+            any(scenario.unreliable[i] for i in f.points[1:-1]) for f in result.front
+        )
+    assert nonempty >= 10
+    assert through_unreliable >= 4  # certain although an unreliable correction may fail
