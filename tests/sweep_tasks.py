@@ -36,6 +36,7 @@ def with_dask_settings(cell: Cell, *, log: str) -> list[dict]:
 
     rows = run_cell(cell)
     keys = ("distributed.worker.profile.interval", "distributed.admin.tick.interval")
+    trim = os.environ.get("MALLOC_TRIM_THRESHOLD_", "unset")
     with open(log, "a", encoding="utf-8") as f:
-        f.write(" ".join(str(dask.config.get(k)) for k in keys) + "\n")
+        f.write(" ".join(str(dask.config.get(k)) for k in keys) + f" trim={trim}\n")
     return rows
