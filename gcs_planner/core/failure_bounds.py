@@ -157,19 +157,7 @@ def failure_bounds(
     e_src = np.concatenate(out_src)
     e_dst = np.concatenate(out_dst)
     e_len = np.concatenate(out_len)
-    order = np.argsort(e_src, kind="stable")
-    indptr = np.zeros(total + 1, dtype=np.int64)
-    np.cumsum(np.bincount(e_src, minlength=total), out=indptr[1:])
-    expanded = ReachGraph(
-        indptr,
-        e_dst[order].astype(np.int32),
-        e_len[order],
-        graph.lim_v[node_pt],
-        graph.lim_h[node_pt],
-        graph.to_end[node_pt],
-        start,
-        end,
-    )
+    expanded = graph.expanded(e_src, e_dst, e_len, node_pt, start, end)
     # numpy or the compiled layer by the scenario's size, as the plain cost-to-go (loading the
     # compiled kernels costs more than small maps save).
     G = cost_to_go(scenario, expanded, is_v=is_v_pt[node_pt], own_start=own)

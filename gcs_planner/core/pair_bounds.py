@@ -170,20 +170,8 @@ def pair_bounds(scenario: Scenario, graph: ReachGraph, model: LegModel) -> PairB
     lb = pair_leg_bounds(scenario.xyz, src[a], dst[a], dst[b], model, graph.length[b])
     head = np.where(dst[b] == end, end_node, node_of_arc[b])
     tail = node_of_arc[a]
-    order = np.argsort(tail, kind="stable")
-    indptr = np.zeros(nodes + 3, dtype=np.int64)
-    np.cumsum(np.bincount(tail, minlength=nodes + 2), out=indptr[1:])
     point = np.concatenate([dst[first], [end, start]])
-    pairs = ReachGraph(
-        indptr,
-        head[order].astype(np.int32),
-        lb[order],
-        graph.lim_v[point],
-        graph.lim_h[point],
-        graph.to_end[point],
-        start_node,
-        end_node,
-    )
+    pairs = graph.expanded(tail, head, lb, point, start_node, end_node)
     is_v = scenario.kind[point] == Kind.V
     G = cost_to_go(scenario, pairs, is_v=is_v)
-    return PairBounds(G, node_of_arc, indptr, pairs.length, pairs, point)
+    return PairBounds(G, node_of_arc, pairs.indptr, pairs.length, pairs, point)

@@ -45,6 +45,32 @@ class ReachGraph:
     def degree(self) -> np.ndarray:
         return np.diff(self.indptr)
 
+    def expanded(
+        self,
+        source: np.ndarray,
+        target: np.ndarray,
+        length: np.ndarray,
+        point_of_node: np.ndarray,
+        start: int,
+        end: int,
+    ) -> ReachGraph:
+        """A graph over nodes that each stand for one of this graph's points (copies of a
+        point, or (previous point, point) pairs), from its arcs given as edge lists: the
+        nodes keep their points' limits and distances to B."""
+        order = np.argsort(source, kind="stable")
+        indptr = np.zeros(len(point_of_node) + 1, dtype=np.int64)
+        np.cumsum(np.bincount(source, minlength=len(point_of_node)), out=indptr[1:])
+        return ReachGraph(
+            indptr,
+            target[order].astype(np.int32),
+            length[order],
+            self.lim_v[point_of_node],
+            self.lim_h[point_of_node],
+            self.to_end[point_of_node],
+            start,
+            end,
+        )
+
 
 def arrival_limits_m(scenario: Scenario) -> tuple[np.ndarray, np.ndarray]:
     """Per point, the (vertical, horizontal) arrival limits in metres flown."""
