@@ -242,10 +242,16 @@ def test_more_cells_than_the_in_flight_window_all_finish(
     assert set(logged_keys(log).values()) == {1} and len(logged_keys(log)) == 12
 
 
-def test_own_local_cluster_runs_with_the_lean_dask_settings(tmp_path: Path) -> None:
+def test_own_local_cluster_runs_with_the_lean_dask_settings(tmp_path: Path, monkeypatch) -> None:
     # The cluster the sweep starts itself samples stacks and ticks its loop less often than
-    # Dask's defaults; this process's own configuration is left as it was.
+    # Dask's defaults, and its workers run without Dask's malloc trimming even when an earlier
+    # Dask nanny in this process left MALLOC_TRIM_THRESHOLD_ in its environment (as one with
+    # Dask's defaults does); this process's own configuration and environment are left as
+    # they were.
     import dask
+
+    monkeypatch.setattr(runner, "_USER_MALLOC_TRIM", None)
+    monkeypatch.setenv("MALLOC_TRIM_THRESHOLD_", "65536")
 
     before = {k: dask.config.get(k) for k in runner.LEAN_CLUSTER}
     log = tmp_path / "settings.log"
@@ -260,6 +266,7 @@ def test_own_local_cluster_runs_with_the_lean_dask_settings(tmp_path: Path) -> N
     )
     assert log.read_text().splitlines() == [expected, expected]
     assert {k: dask.config.get(k) for k in runner.LEAN_CLUSTER} == before
+    assert os.environ["MALLOC_TRIM_THRESHOLD_"] == "65536"
 
 
 def wait_for(condition, what: str, proc: subprocess.Popen | None = None) -> None:

@@ -20,12 +20,14 @@ given by address keeps its own configuration.
 
 from __future__ import annotations
 
+import contextlib
 import itertools
 import logging
+import os
 import threading
 import time
 import uuid
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TextIO
@@ -53,15 +55,15 @@ LEAN_CLUSTER = {
     "distributed.admin.system-monitor.interval": "2s",
     "distributed.worker.memory.monitor-interval": "500ms",
     # Dask starts its workers with MALLOC_TRIM_THRESHOLD_=65536 so that freed memory goes back
-    # to the system at once; the planner allocates and frees arrays of a few hundred kB per
-    # layer, and trimming them cost 6-10 % more CPU per cell (measured: 15 contest-like
-    # scenarios, 6.8 s against 7.3 s). Its cells are small; glibc's own threshold serves.
-    "distributed.nanny.pre-spawn-environ": {
-        "OMP_NUM_THREADS": 1,
-        "MKL_NUM_THREADS": 1,
-        "OPENBLAS_NUM_THREADS": 1,
-    },
+    # to the system at once; fixing it also stops glibc from raising its mmap threshold, so
+    # every array of the planner above 128 kB is mapped and unmapped afresh: 6-10 % more CPU
+    # per cell (measured: 15 contest-like scenarios, 6.8 s against 7.3 s). Its cells are small;
+    # glibc's own adaptive thresholds serve. (None: Dask leaves the variable out.)
+    "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,
 }
+# What the user's environment said before any Dask nanny of this process wrote Dask's value
+# into it (a nanny sets its pre-spawn variables in its own process, for good).
+_USER_MALLOC_TRIM = os.environ.get("MALLOC_TRIM_THRESHOLD_")
 
 
 @dataclass(frozen=True)
@@ -203,6 +205,24 @@ def run_sweep(
     )
 
 
+@contextlib.contextmanager
+def _malloc_trim(value: str | None) -> Iterator[None]:
+    """MALLOC_TRIM_THRESHOLD_ as ``value`` (None: unset) while the workers are spawned (they
+    inherit this process's environment), then as it was."""
+    before = os.environ.get("MALLOC_TRIM_THRESHOLD_")
+    if value is None:
+        os.environ.pop("MALLOC_TRIM_THRESHOLD_", None)
+    else:
+        os.environ["MALLOC_TRIM_THRESHOLD_"] = value
+    try:
+        yield
+    finally:
+        if before is None:
+            os.environ.pop("MALLOC_TRIM_THRESHOLD_", None)
+        else:
+            os.environ["MALLOC_TRIM_THRESHOLD_"] = before
+
+
 def _connect(scheduler: str | None, workers: int, threads: int, dashboard_address: str):
     import dask
     from distributed import Client, LocalCluster
@@ -210,7 +230,7 @@ def _connect(scheduler: str | None, workers: int, threads: int, dashboard_addres
     if scheduler is None:
         # The scheduler reads these when it starts, each nanny hands them to its worker
         # process (and to a worker it restarts).
-        with dask.config.set(LEAN_CLUSTER):
+        with dask.config.set(LEAN_CLUSTER), _malloc_trim(_USER_MALLOC_TRIM):
             cluster = LocalCluster(
                 n_workers=workers,
                 threads_per_worker=threads,
