@@ -36,7 +36,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from gcs_planner.core.cost_to_go import CostToGo, cost_to_go
-from gcs_planner.core.probability import _residual_m
 from gcs_planner.core.reach import ReachGraph
 from gcs_planner.scenario.model import Kind, Scenario
 
@@ -122,7 +121,7 @@ def failure_bounds(
     # Shortest arc into each point (the least error its corrected component can arrive with).
     shortest_in = np.full(n, np.inf)
     np.minimum.at(shortest_in, dst, length)
-    start_failed = np.minimum(shortest_in, _residual_m(scenario.params))
+    start_failed = np.minimum(shortest_in, scenario.params.residual_m)
     fail_pts = np.flatnonzero(unreliable)
     fail_pts = fail_pts[(fail_pts != end) & (fail_pts != start)]
     # Nodes: (q, point) at q * n + point for q = 0..failures (corrected as usual), then one failed

@@ -78,11 +78,6 @@ class MonteCarloResult:
     confidence: float
 
 
-def _residual_m(params: Parameters) -> float:
-    # Computed in one place so every failed correction clips to the very same float.
-    return params.residual_m
-
-
 def propagate(
     states: dict[State, float],
     leg: float,
@@ -102,7 +97,7 @@ def propagate(
     fails = bool(unreliable) and kind in (Kind.V, Kind.H)
     p = params.p_success if fails else 1.0
     q = 1.0 - p
-    residual_m = _residual_m(params)
+    residual_m = params.residual_m
     out: dict[State, float] = {}
     arrived = 0.0
     for (v0, h0), mass in states.items():
@@ -191,7 +186,7 @@ def monte_carlo_success(
     points = _check_route(scenario, points)
     legs = _leg_lengths(scenario, points, leg_lengths)
     params = scenario.params
-    residual_m = _residual_m(params)
+    residual_m = params.residual_m
     rng = np.random.default_rng(seed)
     v = np.zeros(runs)
     h = np.zeros(runs)
@@ -229,7 +224,7 @@ def brute_force_success(
     points = _check_route(scenario, points)
     legs = _leg_lengths(scenario, points, leg_lengths)
     params = scenario.params
-    residual_m = _residual_m(params)
+    residual_m = params.residual_m
     kinds = [Kind(int(scenario.kind[j])) for j in points]
     risky = [
         i for i, j in enumerate(points) if scenario.unreliable[j] and kinds[i] in (Kind.V, Kind.H)

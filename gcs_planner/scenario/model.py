@@ -100,7 +100,8 @@ class Parameters:
 
     @property
     def residual_m(self) -> float:
-        """The residual after a failed correction, in metres flown."""
+        """The residual after a failed correction, in metres flown: one place, so every failed
+        correction clips to the very same float."""
         return self.fail_residual / self.delta
 
     def flown(self) -> Parameters:
