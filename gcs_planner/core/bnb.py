@@ -40,6 +40,10 @@ from gcs_planner.scenario.model import Kind, Scenario
 FAILURE_BOUNDS_FROM = 1_000
 # How many times the heading-free floor's labels the pair floor is expected to need at most.
 PAIR_FLOOR_COST = 4
+# A probe (``_Prober``) gives up after this many labels: the partial route then stays open.
+PROBE_LABELS = 1000
+# Labels a search over simple routes expands before it probes.
+PROBE_FROM = 0
 
 __all__ = ["DEFAULT_MAX_LABELS", "PROB_EPS", "BnbResult", "Found", "bnb_front", "flown_route"]
 
@@ -71,6 +75,8 @@ class BnbResult:
     # can still lead to a front route with no more corrections (or, with the probability
     # objective, at least its probability). See ``settled``.
     proven: list[bool] | None = None
+    # Labels the probes of this search expanded (``_Prober``).
+    probe_labels: int = 0
 
 
 def _least_length(front: Sequence[Found], corrections: int, probability: float) -> float:
@@ -268,11 +274,14 @@ def bnb_front(
             floor.labels = spent
         if floor.optimal and ctx.probability:
             ctx.ceiling = Ceiling(floor.front, ctx.kmax)
+        if floor.optimal:
+            ctx.prober = _Prober(ctx, floor.critical)
         guide_budget = budget.share(0.25, "heading-free guide")
         guide = _relaxed(ctx, guide_budget, [*seeds, *(f.points for f in floor.front)])
         simple = [f.points for f in guide.front if len(set(f.points)) == len(f.points)]
         res = _search(ctx, None, budget.share(stage="search"), [*seeds, *simple])
         res.labels += guide.labels + floor.labels
+        ctx.prober = None
         if floor.optimal:
             res.lower_bounds = [
                 max(lb, _least_length(floor.front, g.corrections, g.probability))
@@ -339,6 +348,8 @@ class _Context:
         self.ceiling: Ceiling | None = None
         # Set on the copy that searches the pair relaxation (``pair_relaxed``).
         self.pair_floor: PairBounds | None = None
+        # Set once the floor is proven: the search over simple routes probes with it.
+        self.prober: _Prober | None = None
 
     def failures(self) -> FailureBounds | None:
         """The failure bounds (``failure_bounds``), made on the first call: a search that
@@ -384,6 +395,65 @@ class _Context:
         return Found(route.length, route.corrections, min(1.0, prob), points) if prob > 0 else None
 
 
+class _Prober:
+    """Whether a partial route of the search over simple routes can still lead anywhere, asked
+    of the relaxation that proved the floor: the exact relaxed completions of the partial route,
+    searched with dominance, each compared with the routes found so far.
+
+    Relaxing a completion only shortens its legs and raises its probability, and the partial
+    route's own past is exact (its length, corrections and error states): so if every relaxed
+    completion is dominated by a found route, every flown one is too, and the partial route is
+    covered. The relaxation's search is small where the simple routes' search is not: partial
+    routes at one point that came by one arc compare by dominance there (``pair_relaxed``)."""
+
+    def __init__(self, ctx: _Context, critical: Sequence[int]) -> None:
+        probe = ctx.pair_relaxed() if ctx.pairs is not None else ctx.relaxed()
+        probe.ceiling = ctx.ceiling
+        probe.failures = ctx.failures  # type: ignore[method-assign]  # the same bounds, made once
+        probe.prober = None
+        self.ctx = probe
+        # Walks that revisit none of these points: the floor's, under which it was exact.
+        self.critical = frozenset(critical)
+        # Partial routes of the relaxation proven covered, by ``_key``; the found routes only
+        # grow, so they stay covered.
+        self.nogoods: dict[tuple, list[tuple]] = {}
+        # Prefixes of relaxed completions that escaped a probe: a partial route along one is
+        # likely to escape too, so it is expanded unprobed (skipping a probe is always sound).
+        self.hopeful: set[tuple[int, ...]] = set()
+
+    def __call__(self, entry: tuple, inc: _Incumbents, budget: Budget) -> tuple[bool, int]:
+        """(covered, labels spent) for the heap ``entry`` of the search whose routes are
+        ``inc``."""
+        f, _, L, node, k, states, _heading, path, to_go, arc = entry
+        if path in self.hopeful:
+            return False, 0
+        key = _key(self.critical, node, path[:-1])
+        state = (L, k, states, sum(states.values()), arc)
+        if _dominated_by(self.nogoods.get(key, ()), state, self.ctx.pair_floor):
+            return True, 0
+        # The pair relaxation's heading is the arc flown last.
+        first = arc if self.ctx.pair_floor is not None else None
+        origin = (f, 0, L, node, k, states, first, path, to_go, arc)
+        res = _search(
+            self.ctx,
+            self.critical,
+            budget.probe(PROBE_LABELS),
+            (),
+            origin=origin,
+            incumbents=inc,
+            nogoods=self.nogoods,
+        )
+        for w in res.front:
+            self.hopeful.update(w.points[:n] for n in range(len(path) + 1, len(w.points)))
+        return res.optimal, res.labels
+
+
+def _key(critical: frozenset[int] | None, j: int, before: tuple[int, ...]) -> tuple:
+    """Where a partial route at j that visited ``before`` is compared with others: j and the
+    critical points it visited (their revisits are barred)."""
+    return (j, frozenset(critical.intersection(before)) if critical else frozenset())
+
+
 def _pair_margin(pairs: PairBounds | None, kept: int, new: int) -> float:
     """How much longer the next leg can be for a partial route that came to j by arc ``kept``
     than for one that came by arc ``new``, in the pair relaxation (0 without it). Only the
@@ -394,6 +464,21 @@ def _pair_margin(pairs: PairBounds | None, kept: int, new: int) -> float:
     if pairs is None or kept == new:
         return 0.0
     return max(0.0, float(np.max(pairs.legs(kept) - pairs.legs(new), initial=0.0)))
+
+
+def _dominated_by(kept: Sequence[tuple], state: tuple, pairs: PairBounds | None) -> bool:
+    """Whether a partial route at a point, ``state`` = (L, k, error states, mass, arc flown
+    last), continues no better than one of ``kept`` (at the same point, having visited the same
+    critical points) whatever it does next, in a relaxation whose legs depend on the arc flown
+    last only through ``pairs`` (``_pair_margin``)."""
+    L, k, states, mass, arc = state
+    return any(
+        aL + (shift := _pair_margin(pairs, a_arc, arc)) <= L
+        and ak <= k
+        and am >= mass - PROB_EPS
+        and _stochastically_dominates(_shifted(ast, shift), states)
+        for aL, ak, ast, am, a_arc in kept
+    )
 
 
 def _shifted(states: dict, shift: float) -> dict:
@@ -452,10 +537,20 @@ def _search(
     critical: frozenset[int] | None,
     budget: Budget,
     seeds: Sequence[Sequence[int]],
+    *,
+    origin: tuple | None = None,
+    incumbents: _Incumbents | None = None,
+    nogoods: dict | None = None,
 ) -> BnbResult:
     """One best-first search. ``critical`` None: whole simple routes, no dominance (turns, or
     the sound fallback). Otherwise walks that may not revisit a critical point, with dominance
-    among partial routes at the same point that visited the same critical points."""
+    among partial routes at the same point that visited the same critical points.
+
+    A probe (``origin``, a heap entry of another search, and that search's ``incumbents``)
+    searches the completions of one partial route and stops at the first that no incumbent
+    dominates; it adds no route. Its result is ``optimal`` when it proved that none exists;
+    then every partial route it expanded is covered too and joins ``nogoods`` (by ``_key``),
+    which prune the partial routes of later probes that continue no better."""
     t0 = time.perf_counter()
     scenario, params, model, graph, G = ctx.scenario, ctx.params, ctx.model, ctx.graph, ctx.G
     kmax, kind_of, unreliable = ctx.kmax, ctx.kind_of, ctx.unreliable
@@ -469,7 +564,13 @@ def _search(
     # the arc they came by).
     archive: dict[tuple[int, frozenset[int]], list[tuple[float, int, dict, float, int]]] = {}
 
-    inc = _Incumbents(kmax)
+    probe = origin is not None
+    inc = incumbents if incumbents is not None else _Incumbents(kmax)
+    prober = None if relaxed else ctx.prober
+    probe_labels = 0
+    expanded: list[tuple[tuple, tuple]] = []
+    if nogoods is None:
+        nogoods = {}
 
     ceiling = ctx.ceiling
 
@@ -490,13 +591,14 @@ def _search(
         """Whether found routes cover the partial route, tested per probability level.
         ``to_go``: the label's bound over every continuation (it holds for each level too);
         ``arc``: the arc of the reach graph it flew last."""
-        if relaxed or j == start:
+        if (relaxed and not probe) or j == start:
             return False
         # The failure bounds only once the search proves long enough to need them.
-        failures = ctx.failures() if labels >= FAILURE_BOUNDS_FROM else None
+        failures = ctx.failures() if probe or labels >= FAILURE_BOUNDS_FROM else None
         if failures is None and ceiling is None:
             return False
-        at = j if ctx.pairs is None else int(ctx.pairs.node_of_arc[arc])
+        cones = ctx.pairs if ctx.pairs is not None else ctx.pair_floor
+        at = j if cones is None else int(cones.node_of_arc[arc])
         if failures is None:
             return inc.covers_by_level(length, k, mass, lambda gap: to_go, ceiling)
         memo: dict[tuple[int, ...], np.ndarray | None] = {}
@@ -520,7 +622,8 @@ def _search(
     # Entry: (f, tiebreak, L, node, k, states, heading, path, to_go, last arc). A carries no
     # error and makes no correction: |A - B| bounds every route, whatever its corrections.
     heap: list = [
-        (
+        origin
+        or (
             float(graph.to_end[start]),
             next(counter),
             0.0,
@@ -535,6 +638,7 @@ def _search(
     ]
     labels = 0
     exhausted = True
+    escaped: Found | None = None  # a probe's relaxed completion that no incumbent dominates
     while heap:
         entry = heapq.heappop(heap)
         f, _, L, node, k, states, heading, path, to_go, arc = entry
@@ -542,11 +646,18 @@ def _search(
         # Routes found since this label was queued may now cover it.
         if inc.covers(L, k, to_go, mass) or by_level(L, k, node, states, mass, to_go, arc):
             continue
+        if prober is not None and node != start and labels >= PROBE_FROM:
+            covered, spent = prober(entry, inc, budget)
+            probe_labels += spent
+            if covered:
+                continue
         if not budget.take():
             heapq.heappush(heap, entry)
             exhausted = False
             break
         labels += 1
+        if probe:
+            expanded.append((_key(critical, node, path[:-1]), (L, k, states, mass, arc)))
         if budget.due():
             budget.report(labels, len(heap), len(inc.found), f)
         lo, hi = graph.indptr[node], graph.indptr[node + 1]
@@ -582,6 +693,9 @@ def _search(
             if is_end:
                 new_mass = min(1.0, new_mass)
                 if not _dominated(inc.found, nL, k, new_mass):
+                    if probe:
+                        escaped = Found(nL, k, new_mass, path + (j,))
+                        break
                     inc.add(Found(nL, k, new_mass, path + (j,)))
                 continue
             is_v = kind_of[j] == Kind.V
@@ -596,18 +710,15 @@ def _search(
             if inc.covers(nL, k + 1, g, new_mass):
                 continue
             if relaxed:
-                key = (j, frozenset(critical.intersection(path)) if critical else frozenset())
+                key = _key(critical, j, path)
                 kept = archive.setdefault(key, [])
                 arc_in = int(lo + idx)
-                if any(
-                    aL + (shift := _pair_margin(pair_floor, a_arc, arc_in)) <= nL
-                    and ak <= k + 1
-                    and am >= new_mass - PROB_EPS
-                    and _stochastically_dominates(_shifted(ast, shift), new_states)
-                    for aL, ak, ast, am, a_arc in kept
+                state = (nL, k + 1, new_states, new_mass, arc_in)
+                if _dominated_by(kept, state, pair_floor) or (
+                    probe and _dominated_by(nogoods.get(key, ()), state, pair_floor)
                 ):
                     continue
-                kept.append((nL, k + 1, new_states, new_mass, arc_in))
+                kept.append(state)
             new_heading = None if headings is None else headings[idx]
             heapq.heappush(
                 heap,
@@ -624,6 +735,15 @@ def _search(
                     int(lo + idx),
                 ),
             )
+        if escaped is not None:
+            break
+    if probe:
+        covered = exhausted and escaped is None
+        if covered:  # so is every partial route the probe expanded
+            for key, state in expanded:
+                nogoods.setdefault(key, []).append(state)
+        witness = [] if escaped is None else [escaped]
+        return BnbResult(witness, [], covered, labels, time.perf_counter() - t0, exhausted)
     found = sorted(inc.found, key=lambda g: (g.corrections, g.length))
     live = [
         e
@@ -652,6 +772,7 @@ def _search(
         len(live),
         open_bound,
         proven=proven,
+        probe_labels=probe_labels,
     )
 
 

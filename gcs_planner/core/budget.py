@@ -83,6 +83,13 @@ class Budget:
         child.stage = stage
         return child
 
+    def probe(self, max_labels: int) -> Budget:
+        """A budget for a probe inside a search: its own label count, this budget's deadline,
+        and no progress; running out stops the probe, not the search."""
+        child = Budget(max_labels)
+        child.deadline = self.deadline
+        return child
+
     def elapsed(self) -> float:
         return time.monotonic() - self.start
 
