@@ -428,7 +428,7 @@ class _Prober:
         if path in self.hopeful:
             return False, 0
         key = _key(self.critical, node, path[:-1])
-        state = (L, k, states, sum(states.values()), arc)
+        state = _kept(L, k, states, sum(states.values()), arc)
         if _dominated_by(self.nogoods.get(key, ()), state, self.ctx.pair_floor):
             return True, 0
         # The pair relaxation's heading is the arc flown last.
@@ -463,22 +463,34 @@ def _pair_margin(pairs: PairBounds | None, kept: int, new: int) -> float:
     later one the same."""
     if pairs is None or kept == new:
         return 0.0
-    return max(0.0, float(np.max(pairs.legs(kept) - pairs.legs(new), initial=0.0)))
+    return pairs.margin(kept, new)
+
+
+def _kept(L: float, k: int, states: dict, mass: float, arc: int) -> tuple:
+    """A partial route as the dominance tests keep it: (L, k, error states, mass, arc flown
+    last, least vertical error, least horizontal error)."""
+    return (L, k, states, mass, arc, min(v for v, _ in states), min(h for _, h in states))
 
 
 def _dominated_by(kept: Sequence[tuple], state: tuple, pairs: PairBounds | None) -> bool:
-    """Whether a partial route at a point, ``state`` = (L, k, error states, mass, arc flown
-    last), continues no better than one of ``kept`` (at the same point, having visited the same
-    critical points) whatever it does next, in a relaxation whose legs depend on the arc flown
-    last only through ``pairs`` (``_pair_margin``)."""
-    L, k, states, mass, arc = state
-    return any(
-        aL + (shift := _pair_margin(pairs, a_arc, arc)) <= L
-        and ak <= k
-        and am >= mass - PROB_EPS
-        and _stochastically_dominates(_shifted(ast, shift), states)
-        for aL, ak, ast, am, a_arc in kept
-    )
+    """Whether a partial route at a point, ``state`` (``_kept``), continues no better than one
+    of ``kept`` (at the same point, having visited the same critical points) whatever it does
+    next, in a relaxation whose legs depend on the arc flown last only through ``pairs``
+    (``_pair_margin``)."""
+    L, k, states, mass, arc, v, h = state
+    for aL, ak, ast, am, a_arc, av, ah in kept:
+        # The cheap tests first; the least errors of a dominating distribution are no larger.
+        if aL > L or ak > k or am < mass - PROB_EPS or av > v or ah > h:
+            continue
+        shift = _pair_margin(pairs, a_arc, arc)
+        if (
+            aL + shift <= L
+            and av + shift <= v
+            and ah + shift <= h
+            and _stochastically_dominates(_shifted(ast, shift), states)
+        ):
+            return True
+    return False
 
 
 def _shifted(states: dict, shift: float) -> dict:
@@ -508,6 +520,12 @@ def _stochastically_dominates(d1: dict, d2: dict) -> bool:
     below some state of S. Large supports are not compared (False is always safe)."""
     if len(d2) > 8:
         return False
+    if len(d1) == 1:  # one state: it must lie below every state of d2 and weigh as much
+        (((v1, h1), m1),) = d1.items()
+        return all(v1 <= v2 and h1 <= h2 for v2, h2 in d2) and m1 >= sum(d2.values()) - PROB_EPS
+    if len(d2) == 1:  # one state: the states of d1 below it must weigh as much
+        (((v2, h2), m2),) = d2.items()
+        return sum(m for (v1, h1), m in d1.items() if v1 <= v2 and h1 <= h2) >= m2 - PROB_EPS
     s1 = list(d1.items())
     s2 = list(d2.items())
     below = []
@@ -657,7 +675,7 @@ def _search(
             break
         labels += 1
         if probe:
-            expanded.append((_key(critical, node, path[:-1]), (L, k, states, mass, arc)))
+            expanded.append((_key(critical, node, path[:-1]), _kept(L, k, states, mass, arc)))
         if budget.due():
             budget.report(labels, len(heap), len(inc.found), f)
         lo, hi = graph.indptr[node], graph.indptr[node + 1]
@@ -713,7 +731,7 @@ def _search(
                 key = _key(critical, j, path)
                 kept = archive.setdefault(key, [])
                 arc_in = int(lo + idx)
-                state = (nL, k + 1, new_states, new_mass, arc_in)
+                state = _kept(nL, k + 1, new_states, new_mass, arc_in)
                 if _dominated_by(kept, state, pair_floor) or (
                     probe and _dominated_by(nogoods.get(key, ()), state, pair_floor)
                 ):

@@ -26,7 +26,7 @@ over a graph whose nodes are the arcs of the reach graph.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -54,12 +54,23 @@ class PairBounds:
     pair_length: np.ndarray
     graph: ReachGraph  # the pair graph itself, and the point of each of its nodes
     point: np.ndarray
+    _margins: dict[tuple[int, int], float] = field(default_factory=dict, repr=False, compare=False)
 
     def legs(self, arc: int) -> np.ndarray:
         """lb(i, j, t) for every arc j -> t of the reach graph, in its order, after ``arc`` =
         (i -> j)."""
         node = int(self.node_of_arc[arc])
         return self.pair_length[self.pair_ptr[node] : self.pair_ptr[node + 1]]
+
+    def margin(self, kept: int, new: int) -> float:
+        """max over t of lb(kept, t) - lb(new, t), at least 0, for two arcs into the same point
+        (remembered: the dominance tests ask for the same pairs many times)."""
+        key = (kept, new)
+        m = self._margins.get(key)
+        if m is None:
+            m = max(0.0, float(np.max(self.legs(kept) - self.legs(new), initial=0.0)))
+            self._margins[key] = m
+        return m
 
     def by_corrections(self, arc: int, e: float) -> np.ndarray | None:
         """G2 over m for a partial route that has just flown ``arc`` (an index into the reach
