@@ -207,6 +207,32 @@ def test_contest_fronts_within_15_degrees_are_proven_and_flyable(dataset_paths, 
 
 
 @pytest.mark.parametrize("dataset", [1, 2])
+def test_contest_three_objective_fronts_within_15_degrees_are_proven(dataset_paths, dataset):
+    """The issue's bar, with the default budget: every route settled (nothing missing beside
+    it), within the limits, and re-flown at its planned length and probability."""
+    from gcs_planner.scenario.readers import load_scenario
+
+    limits = {"max_climb_angle": 15.0, "max_descent_angle": 15.0}
+    scenario = load_scenario(dataset_paths[dataset], {**CONTEST[dataset], **limits})
+    result = plan(scenario, objectives=("length", "corrections", "probability"))
+    assert result.optimal and all(result.proven()), result.statement
+    assert len(result.routes) >= 2
+    for route in result.routes:
+        assert all(abs(s.leg.path_angle) <= 15.0 + 1e-9 for s in route.stops[1:])
+        again = flown_route(scenario, route.points)
+        assert again.feasible and again.length == pytest.approx(route.length, abs=1e-6)
+    # a front: no route is dominated by another
+    for a in result.routes:
+        assert not any(
+            b is not a
+            and b.length <= a.length
+            and b.corrections <= a.corrections
+            and b.probability >= a.probability
+            for b in result.routes
+        )
+
+
+@pytest.mark.parametrize("dataset", [1, 2])
 def test_cs3d_reproduces_the_earlier_turned_fronts(dataset_paths, dataset) -> None:
     """The tilted-plane leg of earlier releases, R = 200: README's figures of that model."""
     from gcs_planner.scenario.readers import load_scenario

@@ -113,6 +113,7 @@ def probe_outcomes(monkeypatch) -> collections.Counter:
     """Counts what the probes answered: covered (and of those, from nogoods alone) or open."""
     outcomes: collections.Counter[str] = collections.Counter()
     probe = bnb._Prober.__call__
+    monkeypatch.setattr(bnb, "PROBE_FROM", 0)  # small searches probe from their first label
 
     def counted(self, entry, inc, budget):
         covered, spent = probe(self, entry, inc, budget)

@@ -42,8 +42,9 @@ FAILURE_BOUNDS_FROM = 1_000
 PAIR_FLOOR_COST = 4
 # A probe (``_Prober``) gives up after this many labels: the partial route then stays open.
 PROBE_LABELS = 1000
-# Labels a search over simple routes expands before it probes.
-PROBE_FROM = 0
+# Labels a search over simple routes expands before it probes: a search that proves its front
+# in fewer never pays for the probes (random 5,000 points, default mode: 4 s, 14 s probing).
+PROBE_FROM = 200
 
 __all__ = ["DEFAULT_MAX_LABELS", "PROB_EPS", "BnbResult", "Found", "bnb_front", "flown_route"]
 
