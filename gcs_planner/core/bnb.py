@@ -9,6 +9,14 @@ objective it can still reach: length <= f, corrections <= k, probability >= the 
 alive. When the queue empties, the routes found are exactly the Pareto front under the model —
 the proof is the exhausted search. If a label budget stops it earlier, every front point gets
 the lower bound that the open labels still allow, and the gap is reported, never hidden.
+
+With turns, partial routes of different headings are incomparable, and the search over whole
+simple routes grows too fast where the front spans long routes (dataset 2, three objectives).
+So each partial route the search pops is first *probed* (``_Prober``): the exact completions of
+it in the relaxation that proved the floor (legs bounded over the cone of headings the route
+can arrive with, where partial routes do compare by dominance) are searched, and if every one is
+dominated by a route already found, so is every flown completion, and the partial route is
+dropped. The states such a probe expanded are covered too and prune later probes (nogoods).
 """
 
 from __future__ import annotations

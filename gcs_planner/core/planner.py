@@ -267,7 +267,11 @@ def _branch_and_bound(
             "dominance on length, corrections and error-state distribution, made exact over "
             "simple routes by decremental state-space relaxation"
             if heading_free
-            else "over whole simple routes (headings make partial routes incomparable)"
+            else (
+                "over whole simple routes (headings make partial routes incomparable), each "
+                "partial route dropped once every completion of it in the floor's relaxation is "
+                "dominated by a route found"
+            )
         )
         bound = "heading-free cost-to-go per number of further corrections"
         if use_probability and not heading_free:
