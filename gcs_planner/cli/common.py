@@ -140,7 +140,8 @@ def add_plan_arguments(parser: argparse.ArgumentParser) -> None:
         type=_labels,
         metavar="N",
         help=f"partial routes each search may expand (default {DEFAULT_MAX_LABELS:,}; "
-        "0: no limit, then --time-limit bounds the search)",
+        "0: no limit, then --time-limit bounds the search); with turns each expanded route may "
+        "first be probed, up to 1,000 labels of the floor's relaxation, counted apart",
     )
     budget.add_argument(
         "--progress",

@@ -241,6 +241,8 @@ def _branch_and_bound(
         # JSON has no inf).
         "open_bound": res.open_bound if math.isfinite(res.open_bound) else None,
         "relaxation_rounds": res.rounds,
+        # Labels the probes expanded (turns): outside the label budget, within the time limit.
+        "probe_labels": res.probe_labels,
         "critical_points": len(res.critical),
     }
     model = scenario.vehicle.describe() + (", uncertain corrections" if use_probability else "")
