@@ -25,11 +25,33 @@ def grid_arcs(
     other than B through a grid of cells of side ``radius`` (>= every reach_to of a point other
     than B), and into B from the distances ``to_end``."""
     n = xyz.shape[0]
+    lo, side, dims, first, order = _cells(xyz, radius)
+    # Two passes over the neighbouring cells: count, then fill.
+    indptr = np.zeros(n + 1, np.int64)
+    _scan(xyz, reach_to, start, end, to_end, lo, side, dims, first, order, indptr[1:],
+          np.empty(0, np.int32), np.empty(0, np.float64), True)  # fmt: skip
+    for i in range(n):
+        indptr[i + 1] += indptr[i]
+    target = np.empty(indptr[n], np.int32)
+    length = np.empty(indptr[n], np.float64)
+    fill = indptr[:-1].copy()
+    _scan(xyz, reach_to, start, end, to_end, lo, side, dims, first, order, fill, target, length,
+          False)  # fmt: skip
+    return indptr, target, length
+
+
+@njit(cache=True)
+def _cells(
+    xyz: np.ndarray, radius: float
+) -> tuple[np.ndarray, float, np.ndarray, np.ndarray, np.ndarray]:
+    """A uniform grid over the points: (lower corner, cell side, cells per axis, CSR start of
+    each cell's points in ``order``, the points sorted by cell). Cells are at least ``radius``
+    wide (``grid_arcs``: a point's neighbours within it lie in its 27 neighbouring cells)."""
+    n = xyz.shape[0]
     lo = np.empty(3)
     for c in range(3):
         lo[c] = xyz[:, c].min()
-    # Cells at least one radius wide, so that a point's arcs lie in its 27 neighbouring cells;
-    # wider when the map spans too many radii (a few cells per point are plenty).
+    # Wider than the radius when the map spans too many radii (a few cells per point are plenty).
     span = 0.0
     for c in range(3):
         span = max(span, xyz[:, c].max() - lo[c])
@@ -54,18 +76,7 @@ def grid_arcs(
         first[cell[i] + 1] += 1
     for c in range(ncell):
         first[c + 1] += first[c]
-    # Two passes over the neighbouring cells: count, then fill.
-    indptr = np.zeros(n + 1, np.int64)
-    _scan(xyz, reach_to, start, end, to_end, lo, side, dims, first, order, indptr[1:],
-          np.empty(0, np.int32), np.empty(0, np.float64), True)  # fmt: skip
-    for i in range(n):
-        indptr[i + 1] += indptr[i]
-    target = np.empty(indptr[n], np.int32)
-    length = np.empty(indptr[n], np.float64)
-    fill = indptr[:-1].copy()
-    _scan(xyz, reach_to, start, end, to_end, lo, side, dims, first, order, fill, target, length,
-          False)  # fmt: skip
-    return indptr, target, length
+    return lo, side, dims, first, order
 
 
 @njit(cache=True)
@@ -107,6 +118,158 @@ def _scan(xyz, reach_to, start, end, to_end, lo, side, dims, first, order, slot,
                 length[slot[i]] = to_end[i]
                 slot[i] += 1
 
+
+
+@njit(cache=True)
+def fewest_corrections(
+    xyz: np.ndarray,
+    lim_v: np.ndarray,
+    lim_h: np.ndarray,
+    is_v: np.ndarray,
+    to_end: np.ndarray,
+    start: int,
+    end: int,
+    radius: float,
+) -> tuple[int, float, np.ndarray]:
+    """The fewest corrections of any feasible walk from A to B with chord legs, -1 if there is
+    none, with one such walk's length and points (A first, B last).
+
+    Walks include the simple routes and no leg model's leg is shorter than its chord, so this
+    bounds every route's corrections from below. ``radius`` is at least every reach of a point
+    other than B. A breadth-first search in layers of corrections over labels (point, carried
+    error), straight from a grid of the points (no arc is stored): a label is kept only if it
+    carries less error than every label that reached its point in the same or an earlier layer,
+    so a point holds few labels over the whole search."""
+    n = xyz.shape[0]
+    # Cells a third of the reach wide: a label scans only the cells its reach can touch.
+    lo, side, dims, first, order = _cells(xyz, radius / 3.0)
+    # The search runs over the points in cell order (index q: point order[q]), so that a cell's
+    # points are contiguous in memory: the scans below are most of the time.
+    sx = np.empty((n, 3))
+    slv = np.empty(n)
+    slh = np.empty(n)
+    sv = np.empty(n, np.bool_)
+    ste = np.empty(n)
+    r2 = np.empty(n)
+    top_v = 0.0  # the largest limits of points other than A and B
+    top_h = 0.0
+    for q in range(n):
+        p = order[q]
+        sx[q] = xyz[p]
+        slv[q] = lim_v[p]
+        slh[q] = lim_h[p]
+        sv[q] = is_v[p]
+        ste[q] = to_end[p]
+        r2[q] = min(lim_v[p], lim_h[p]) ** 2
+        if p != start and p != end:
+            top_v = max(top_v, lim_v[p])
+            top_h = max(top_h, lim_h[p])
+        if p == start:
+            s_start = q
+        if p == end:
+            s_end = q
+    lim_b = lim_v[end]
+    cap = 1 << 16
+    node = np.empty(cap, np.int64)
+    es = np.empty(cap, np.float64)
+    Ls = np.empty(cap, np.float64)
+    parent = np.empty(cap, np.int64)
+    least = np.full(n, np.inf)  # least error carried into each point so far
+    slot = np.full(n, -1, np.int64)  # the point's label in the layer being made
+    node[0] = s_start
+    es[0] = 0.0
+    Ls[0] = 0.0
+    parent[0] = -1
+    least[s_start] = 0.0
+    size = 1
+    lo_i, hi_i = 0, 1
+    k = 0
+    while lo_i < hi_i:
+        done = -1
+        done_L = np.inf
+        for i in range(lo_i, hi_i):
+            u = node[i]
+            if es[i] + ste[u] <= lim_b and Ls[i] + ste[u] < done_L:
+                done = i
+                done_L = Ls[i] + ste[u]
+        if done >= 0:
+            hops = 1
+            g = done
+            while parent[g] >= 0:
+                hops += 1
+                g = parent[g]
+            walk = np.empty(hops + 1, np.int64)
+            walk[hops] = end
+            g = done
+            for h in range(hops - 1, -1, -1):
+                walk[h] = order[node[g]]
+                g = parent[g]
+            return k, done_L, walk
+        new_lo = size
+        for i in range(lo_i, hi_i):
+            u = node[i]
+            if u == s_start:
+                dv = 0.0
+                dh = 0.0
+            elif sv[u]:
+                dv = 0.0
+                dh = es[i]
+            else:
+                dv = es[i]
+                dh = 0.0
+            # A leg into j must keep both errors within j's limits, so none is longer than the
+            # largest limit less the error this label carries: the cells scanned shrink with it.
+            rad = min(radius, top_v - dv, top_h - dh)
+            if rad < 0.0:
+                continue
+            ux, uy, uz = sx[u, 0], sx[u, 1], sx[u, 2]
+            x0 = max(int((ux - rad - lo[0]) / side), 0)
+            x1 = min(int((ux + rad - lo[0]) / side), dims[0] - 1)
+            y0 = max(int((uy - rad - lo[1]) / side), 0)
+            y1 = min(int((uy + rad - lo[1]) / side), dims[1] - 1)
+            z0 = max(int((uz - rad - lo[2]) / side), 0)
+            z1 = min(int((uz + rad - lo[2]) / side), dims[2] - 1)
+            for ax in range(x0, x1 + 1):
+                gx = _gap(ux, lo[0] + ax * side, side)
+                for ay in range(y0, y1 + 1):
+                    gy = _gap(uy, lo[1] + ay * side, side)
+                    for az in range(z0, z1 + 1):
+                        gz = _gap(uz, lo[2] + az * side, side)
+                        if gx * gx + gy * gy + gz * gz > rad * rad:
+                            continue  # the whole cell lies beyond reach
+                        c = (ax * dims[1] + ay) * dims[2] + az
+                        for j in range(first[c], first[c + 1]):
+                            dx = ux - sx[j, 0]
+                            dy = uy - sx[j, 1]
+                            dz = uz - sx[j, 2]
+                            d2 = dx * dx + dy * dy + dz * dz
+                            # Beyond the point's reach (most of the scan), or no leg at all.
+                            if d2 > r2[j] or j == u or j == s_start or j == s_end:
+                                continue
+                            d = np.sqrt(d2)
+                            if dv + d > slv[j] or dh + d > slh[j]:
+                                continue
+                            ne = dh + d if sv[j] else dv + d
+                            if ne >= least[j]:
+                                continue
+                            least[j] = ne
+                            if slot[j] < new_lo:  # no label at j in this layer yet
+                                if size == cap:
+                                    cap *= 2
+                                    node = _grow(node, cap)
+                                    es = _grow(es, cap)
+                                    Ls = _grow(Ls, cap)
+                                    parent = _grow(parent, cap)
+                                slot[j] = size
+                                node[size] = j
+                                size += 1
+                            g = slot[j]
+                            es[g] = ne
+                            Ls[g] = Ls[i] + d
+                            parent[g] = i
+        lo_i, hi_i = new_lo, size
+        k += 1
+    return -1, np.inf, np.empty(0, np.int64)
 
 @njit(cache=True)
 def layered_search(
@@ -248,6 +411,16 @@ def layered_search(
         f_k[:nfound], f_L[:nfound], f_label[:nfound], node[:size], parent[:size], alive, k + 1,
         closest,
     )  # fmt: skip
+
+
+@njit(cache=True)
+def _gap(u: float, cell_lo: float, side: float) -> float:
+    """Distance along one axis from ``u`` to the cell [cell_lo, cell_lo + side]."""
+    if u < cell_lo:
+        return cell_lo - u
+    if u > cell_lo + side:
+        return u - cell_lo - side
+    return 0.0
 
 
 @njit(cache=True)

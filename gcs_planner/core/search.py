@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from gcs_planner.core.reach import ReachGraph, build_reach_graph, use_compiled
+from gcs_planner.core.reach import ReachGraph, arrival_limits_m, build_reach_graph, use_compiled
 from gcs_planner.scenario.model import Kind, Scenario
 
 
@@ -48,6 +48,9 @@ class SearchStats:
     seconds: float = 0.0
     graph_seconds: float = 0.0
     arcs: int = 0
+    # Points the search ran over: fewer than the scenario's when it was focused on the
+    # ellipsoid of the fewest-corrections route (see ``_focused``).
+    points: int = 0
 
 
 @dataclass(frozen=True)
@@ -64,16 +67,24 @@ def straight_front(
     max_corrections: int | None = None,
     compiled: bool | None = None,
     max_rounds: int | None = None,
+    focus: bool | None = None,
 ) -> FrontResult:
     """Exact Pareto front of (length, corrections) over simple feasible routes, straight legs.
 
     ``compiled``: run the numba kernels (True), numpy (False), or decide by size (None).
     ``max_rounds``: stop the relaxation after this many rounds; the front may then hold walks
     that revisit points, and each of its lengths bounds the simple routes' from below.
+    ``focus``: first search only the points that can lie on a front route (``_focused``) and
+    fall back to all of them where that cannot be proven; None: when the kernels run.
     """
     t0 = time.perf_counter()
-    stats = SearchStats()
     compiled = use_compiled(scenario.n, compiled)
+    if graph is None and (compiled if focus is None else focus):
+        focused = _focused(scenario, max_corrections, max_rounds)
+        if focused is not None:
+            focused.stats.seconds = time.perf_counter() - t0
+            return focused
+    stats = SearchStats(points=scenario.n)
     if graph is None:
         graph = build_reach_graph(scenario, compiled)
     stats.graph_seconds = time.perf_counter() - t0
@@ -97,6 +108,72 @@ def straight_front(
     stats.seconds = time.perf_counter() - t0
     why = None if front else explain_infeasible(scenario, graph, closest)
     return FrontResult(tuple(front), stats, why)
+
+
+# Focusing: the first ellipsoid's slack over |AB|, and how much it grows when that one does not
+# hold a route with the fewest corrections.
+FOCUS_SLACK = 2e-3
+FOCUS_GROWTH = 4.0
+
+
+def _focused(
+    scenario: Scenario, max_corrections: int | None, max_rounds: int | None
+) -> FrontResult | None:
+    """The front searched over the points that can lie on a front route, or None where that
+    cannot be proven (the caller then searches all points).
+
+    Every front route is at most as long as the shortest route with the fewest corrections,
+    and a route of length U only passes points p with |AP| + |PB| <= U (legs are at least their
+    chords): an ellipsoid with foci A and B. The length is not known beforehand, so ellipsoids of
+    growing bound U over |AB| are tried: the front searched inside one is the whole front once
+    it holds a route no longer than U with as few corrections as any walk in the whole scenario
+    has (``kernel.fewest_corrections``, a lower bound for every route), because every route
+    through a point outside is longer than U and has at least as many corrections. On dense
+    maps the ellipsoid holds a few per cent of the points (random 20,000 points: 375)."""
+    from gcs_planner.core.kernel import fewest_corrections
+
+    xyz = scenario.xyz
+    start, end = scenario.start, scenario.end
+    lim_v, lim_h = arrival_limits_m(scenario)
+    reach_to = np.minimum(lim_v, lim_h)
+    inner = reach_to[(np.arange(scenario.n) != end) & np.isfinite(reach_to)]
+    if not len(inner):
+        return None
+    to_end = np.linalg.norm(xyz - xyz[end], axis=1)
+    fewest, _, _ = fewest_corrections(
+        xyz, lim_v, lim_h, scenario.kind == Kind.V, to_end, start, end, float(inner.max())
+    )
+    kmax = scenario.n - 2 if max_corrections is None else max_corrections
+    if fewest < 0 or fewest > kmax:
+        return None  # no route: the whole search says why
+    through = np.linalg.norm(xyz - xyz[start], axis=1) + to_end
+    ab = float(to_end[start])
+    slack = FOCUS_SLACK * ab + 1.0
+    labels = 0  # over every ellipsoid tried
+    while True:
+        # The rounding slack keeps a point on the ellipsoid's surface (a straight route) inside.
+        bound = ab + slack
+        inside = np.flatnonzero(through <= bound * (1.0 + 1e-12))
+        if 2 * len(inside) > scenario.n:
+            return None  # no faster than the whole search
+        res = straight_front(
+            scenario.subset(inside),
+            max_corrections=max_corrections,
+            max_rounds=max_rounds,
+            focus=False,
+        )
+        labels += res.stats.labels
+        # Proven when the search inside found a route with the fewest corrections no longer
+        # than the ellipsoid's bound (a route through points inside can be longer).
+        if res.front and res.front[0].corrections == fewest and res.front[0].length <= bound:
+            front = tuple(
+                FrontPoint(fp.length, fp.corrections, tuple(int(inside[p]) for p in fp.points))
+                for fp in res.front
+            )
+            res.stats.critical = [int(inside[p]) for p in res.stats.critical]
+            res.stats.labels = labels
+            return FrontResult(front, res.stats, None)
+        slack *= FOCUS_GROWTH
 
 
 def _compiled_search(

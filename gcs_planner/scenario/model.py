@@ -197,6 +197,17 @@ class Scenario:
         """Index of the point with identifier ``point_id`` (KeyError if unknown)."""
         return self._index[str(point_id)]
 
+    def subset(self, indices: np.ndarray) -> Scenario:
+        """The scenario over the points at ``indices`` (in that order; A and B among them)."""
+        idx = np.asarray(indices, dtype=np.int64)
+        return replace(
+            self,
+            ids=tuple(self.ids[i] for i in idx),
+            xyz=self.xyz[idx],
+            kind=self.kind[idx],
+            unreliable=self.unreliable[idx],
+        )
+
     def with_params(self, **changes: float) -> Scenario:
         """A copy with some parameters changed (flags override file values this way)."""
         return replace(self, params=replace(self.params, **changes))
