@@ -195,6 +195,9 @@ def _straight(scenario: Scenario, max_corrections: int | None):
         "graph_seconds": res.stats.graph_seconds,
         "labels": res.stats.labels,
         "arcs": res.stats.arcs,
+        # Fewer than the scenario's points when the search was focused on the ellipsoid that
+        # holds every front route.
+        "points": res.stats.points,
         "relaxation_rounds": res.stats.rounds,
         "critical_points": len(res.stats.critical),
     }

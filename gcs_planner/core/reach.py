@@ -102,6 +102,8 @@ def build_reach_graph(scenario: Scenario, compiled: bool | None = None) -> Reach
     model = scenario_leg_model(scenario)
     if isinstance(model, (StraightLegs, CS3DLegs)):
         return graph
+    if model.max_climb_angle >= 90.0 and model.max_descent_angle >= 90.0:
+        return graph  # unlimited climb: no altitude change needs more path, the bound is the chord
     return _bounded(graph, scenario.xyz, model)
 
 
