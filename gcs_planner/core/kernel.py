@@ -283,8 +283,10 @@ def layered_search(
     start: int,
     end: int,
     kmax: int,
+    bound: float,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, int, int, int]:
-    """The layered label search of ``search._layered_search`` without critical points.
+    """The layered label search of ``search._layered_search`` without critical points; labels
+    that cannot stay below ``bound`` (inf: none known) are dropped.
 
     Returns, per improvement of the best complete length at layer k: (k, length, last label);
     the label store (point, parent) to rebuild routes; the labels kept, the layers searched and
@@ -308,7 +310,7 @@ def layered_search(
     head[start] = 0
     size = 1
     lo, hi = 0, 1
-    best = np.inf
+    best = bound
     f_k = np.empty(kmax + 1, np.int64)
     f_L = np.empty(kmax + 1, np.float64)
     f_label = np.empty(kmax + 1, np.int64)

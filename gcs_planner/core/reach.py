@@ -99,12 +99,18 @@ def build_reach_graph(scenario: Scenario, compiled: bool | None = None) -> Reach
     the leg is too steep. Every bound built on the graph is then admissible for that model.
     """
     graph = _chord_graph(scenario, compiled)
+    if bounds_are_chords(scenario):
+        return graph
+    return _bounded(graph, scenario.xyz, scenario_leg_model(scenario))
+
+
+def bounds_are_chords(scenario: Scenario) -> bool:
+    """Whether the scenario's legs' heading-free lower bounds are their chords: straight and
+    cs3d legs, and airplane legs with unlimited climb (no altitude change needs more path)."""
     model = scenario_leg_model(scenario)
     if isinstance(model, (StraightLegs, CS3DLegs)):
-        return graph
-    if model.max_climb_angle >= 90.0 and model.max_descent_angle >= 90.0:
-        return graph  # unlimited climb: no altitude change needs more path, the bound is the chord
-    return _bounded(graph, scenario.xyz, model)
+        return True
+    return model.max_climb_angle >= 90.0 and model.max_descent_angle >= 90.0
 
 
 def _bounded(graph: ReachGraph, xyz: np.ndarray, model: AirplaneLegs) -> ReachGraph:

@@ -22,12 +22,19 @@ walk, it is the front over simple routes.
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from gcs_planner.core.reach import ReachGraph, arrival_limits_m, build_reach_graph, use_compiled
+from gcs_planner.core.reach import (
+    ReachGraph,
+    arrival_limits_m,
+    bounds_are_chords,
+    build_reach_graph,
+    use_compiled,
+)
 from gcs_planner.scenario.model import Kind, Scenario
 
 
@@ -68,6 +75,7 @@ def straight_front(
     compiled: bool | None = None,
     max_rounds: int | None = None,
     focus: bool | None = None,
+    upper_bound: float = math.inf,
 ) -> FrontResult:
     """Exact Pareto front of (length, corrections) over simple feasible routes, straight legs.
 
@@ -76,6 +84,9 @@ def straight_front(
     that revisit points, and each of its lengths bounds the simple routes' from below.
     ``focus``: first search only the points that can lie on a front route (``_focused``) and
     fall back to all of them where that cannot be proven; None: when the kernels run.
+    ``upper_bound``: the length of a simple route with the fewest corrections any walk has, if
+    one is known (no front route is longer, so partial routes that cannot stay within it are
+    dropped from the start).
     """
     t0 = time.perf_counter()
     compiled = use_compiled(scenario.n, compiled)
@@ -95,9 +106,9 @@ def straight_front(
     while True:
         stats.rounds += 1
         if compiled and not critical:
-            front, closest = _compiled_search(graph, is_v, kmax, stats)
+            front, closest = _compiled_search(graph, is_v, kmax, stats, upper_bound)
         else:
-            front, closest = _layered_search(graph, is_v, critical, kmax, stats)
+            front, closest = _layered_search(graph, is_v, critical, kmax, stats, upper_bound)
         repeated = sorted(
             {p for fp in front for p in fp.points if fp.points.count(p) > 1} - set(critical)
         )
@@ -122,14 +133,15 @@ def _focused(
     """The front searched over the points that can lie on a front route, or None where that
     cannot be proven (the caller then searches all points).
 
-    Every front route is at most as long as the shortest route with the fewest corrections,
-    and a route of length U only passes points p with |AP| + |PB| <= U (legs are at least their
-    chords): an ellipsoid with foci A and B. The length is not known beforehand, so ellipsoids of
-    growing bound U over |AB| are tried: the front searched inside one is the whole front once
-    it holds a route no longer than U with as few corrections as any walk in the whole scenario
-    has (``kernel.fewest_corrections``, a lower bound for every route), because every route
-    through a point outside is longer than U and has at least as many corrections. On dense
-    maps the ellipsoid holds a few per cent of the points (random 20,000 points: 375)."""
+    Every front route is at most as long as any route U with the fewest corrections, and a
+    route of length U only passes points p with |AP| + |PB| <= U (legs are at least their
+    chords): an ellipsoid with foci A and B. ``kernel.fewest_corrections`` finds the fewest
+    corrections any walk has (a lower bound for every route) and one such walk: if that walk is
+    a route, its length is U. Otherwise ellipsoids of growing bound U over |AB| are tried: the
+    front searched inside one is the whole front once it holds a route no longer than U with
+    those fewest corrections, because every route through a point outside is longer than U
+    and has at least as many corrections. On dense maps the ellipsoid holds a few per cent of
+    the points (random 20,000 points: under a thousand)."""
     from gcs_planner.core.kernel import fewest_corrections
 
     xyz = scenario.xyz
@@ -140,13 +152,35 @@ def _focused(
     if not len(inner):
         return None
     to_end = np.linalg.norm(xyz - xyz[end], axis=1)
-    fewest, _, _ = fewest_corrections(
+    fewest, walk_length, walk = fewest_corrections(
         xyz, lim_v, lim_h, scenario.kind == Kind.V, to_end, start, end, float(inner.max())
     )
     kmax = scenario.n - 2 if max_corrections is None else max_corrections
     if fewest < 0 or fewest > kmax:
         return None  # no route: the whole search says why
     through = np.linalg.norm(xyz - xyz[start], axis=1) + to_end
+    if len(set(walk.tolist())) == len(walk) and bounds_are_chords(scenario):
+        # The walk is a route (simple, and its legs are the graph's): it has the fewest
+        # corrections, so no front route is longer. Its ellipsoid holds them all, and its
+        # length bounds the search from the start (what helps where the ellipsoid cannot: long
+        # thin corridors, whose every point lies inside).
+        inside = np.flatnonzero(through <= walk_length * (1.0 + 1e-12))
+        if 2 * len(inside) > scenario.n:
+            return straight_front(
+                scenario,
+                max_corrections=max_corrections,
+                max_rounds=max_rounds,
+                focus=False,
+                upper_bound=walk_length,
+            )
+        res = straight_front(
+            scenario.subset(inside),
+            max_corrections=max_corrections,
+            max_rounds=max_rounds,
+            focus=False,
+            upper_bound=walk_length,
+        )
+        return _mapped(res, inside)
     ab = float(to_end[start])
     slack = FOCUS_SLACK * ab + 1.0
     labels = 0  # over every ellipsoid tried
@@ -166,18 +200,29 @@ def _focused(
         # Proven when the search inside found a route with the fewest corrections no longer
         # than the ellipsoid's bound (a route through points inside can be longer).
         if res.front and res.front[0].corrections == fewest and res.front[0].length <= bound:
-            front = tuple(
-                FrontPoint(fp.length, fp.corrections, tuple(int(inside[p]) for p in fp.points))
-                for fp in res.front
-            )
-            res.stats.critical = [int(inside[p]) for p in res.stats.critical]
             res.stats.labels = labels
-            return FrontResult(front, res.stats, None)
+            return _mapped(res, inside)
         slack *= FOCUS_GROWTH
 
 
+def _mapped(res: FrontResult, inside: np.ndarray) -> FrontResult:
+    """A front searched over the points ``inside`` in the indices of the whole scenario."""
+    front = tuple(
+        FrontPoint(fp.length, fp.corrections, tuple(int(inside[p]) for p in fp.points))
+        for fp in res.front
+    )
+    res.stats.critical = [int(inside[p]) for p in res.stats.critical]
+    return FrontResult(front, res.stats, res.why_infeasible)
+
+
+def _inclusive(bound: float) -> float:
+    """A known route's length as the searches' initial best length: a hair above it, so that
+    the route itself (or one as long) is still found, whatever the rounding of its sum."""
+    return bound * (1.0 + 1e-12) if math.isfinite(bound) else math.inf
+
+
 def _compiled_search(
-    graph: ReachGraph, is_v: np.ndarray, kmax: int, stats: SearchStats
+    graph: ReachGraph, is_v: np.ndarray, kmax: int, stats: SearchStats, bound: float
 ) -> tuple[list[FrontPoint], int]:
     """The first round (no critical points) by the streaming kernel of ``kernel``."""
     from gcs_planner.core.kernel import layered_search
@@ -193,6 +238,7 @@ def _compiled_search(
         graph.start,
         graph.end,
         kmax,
+        _inclusive(bound),
     )
     stats.labels += int(alive)
     stats.layers += int(layers)
@@ -212,6 +258,7 @@ def _layered_search(
     critical: list[int],
     kmax: int,
     stats: SearchStats,
+    bound: float,
 ) -> tuple[list[FrontPoint], int]:
     n = graph.n
     start, end = graph.start, graph.end
@@ -251,7 +298,7 @@ def _layered_search(
     low_e = np.full(n, np.inf)
     _summarise(node, L, np.zeros(1), short_L, short_e, low_L, low_e)
 
-    best = np.inf
+    best = _inclusive(bound)
     found: list[tuple[int, float, int, int]] = []  # (k, length, parent gid, end)
     closest = start
     closest_d = graph.to_end[start]
