@@ -84,9 +84,8 @@ def straight_front(
     that revisit points, and each of its lengths bounds the simple routes' from below.
     ``focus``: first search only the points that can lie on a front route (``_focused``) and
     fall back to all of them where that cannot be proven; None: when the kernels run.
-    ``upper_bound``: the length of a simple route with the fewest corrections any walk has, if
-    one is known (no front route is longer, so partial routes that cannot stay within it are
-    dropped from the start).
+    ``upper_bound``: search only the routes no longer than this (the front returned is theirs);
+    partial routes that cannot stay within it are dropped from the start.
     """
     t0 = time.perf_counter()
     compiled = use_compiled(scenario.n, compiled)
@@ -121,10 +120,10 @@ def straight_front(
     return FrontResult(tuple(front), stats, why)
 
 
-# Focusing: the first ellipsoid's slack over |AB|, and how much it grows when that one does not
-# hold a route with the fewest corrections.
-FOCUS_SLACK = 2e-3
-FOCUS_GROWTH = 4.0
+# Focusing: the first bound's slack over |AB|, and how much it grows while the routes within
+# the bound have more corrections than the fewest any walk has.
+FOCUS_SLACK = 1e-4
+FOCUS_GROWTH = 2.0
 
 
 def _focused(
@@ -133,15 +132,15 @@ def _focused(
     """The front searched over the points that can lie on a front route, or None where that
     cannot be proven (the caller then searches all points).
 
-    Every front route is at most as long as any route U with the fewest corrections, and a
-    route of length U only passes points p with |AP| + |PB| <= U (legs are at least their
-    chords): an ellipsoid with foci A and B. ``kernel.fewest_corrections`` finds the fewest
-    corrections any walk has (a lower bound for every route) and one such walk: if that walk is
-    a route, its length is U. Otherwise ellipsoids of growing bound U over |AB| are tried: the
-    front searched inside one is the whole front once it holds a route no longer than U with
-    those fewest corrections, because every route through a point outside is longer than U
-    and has at least as many corrections. On dense maps the ellipsoid holds a few per cent of
-    the points (random 20,000 points: under a thousand)."""
+    Every front route is at most as long as the shortest route with the fewest corrections.
+    ``kernel.fewest_corrections`` finds the fewest corrections any walk has (a lower bound for
+    every route). So the front of the routes no longer than a bound U is the whole front once
+    it holds a route with those fewest corrections: every route longer than U has at least as
+    many corrections and is longer. Bounds of growing slack over |AB| are tried until that
+    holds, up to the length of the fewest-corrections walk where that walk is a route. A route
+    within U only passes points p with |AP| + |PB| <= U (legs are at least their chords): an
+    ellipsoid with foci A and B, which on dense maps holds a few per cent of the points (random
+    20,000 points: a few hundred); elsewhere the bound prunes the search over all points."""
     from gcs_planner.core.kernel import fewest_corrections
 
     xyz = scenario.xyz
@@ -159,49 +158,34 @@ def _focused(
     if fewest < 0 or fewest > kmax:
         return None  # no route: the whole search says why
     through = np.linalg.norm(xyz - xyz[start], axis=1) + to_end
-    if len(set(walk.tolist())) == len(walk) and bounds_are_chords(scenario):
-        # The walk is a route (simple, and its legs are the graph's): it has the fewest
-        # corrections, so no front route is longer. Its ellipsoid holds them all, and its
-        # length bounds the search from the start (what helps where the ellipsoid cannot: long
-        # thin corridors, whose every point lies inside).
-        inside = np.flatnonzero(through <= walk_length * (1.0 + 1e-12))
-        if 2 * len(inside) > scenario.n:
-            return straight_front(
-                scenario,
-                max_corrections=max_corrections,
-                max_rounds=max_rounds,
-                focus=False,
-                upper_bound=walk_length,
-            )
-        res = straight_front(
-            scenario.subset(inside),
-            max_corrections=max_corrections,
-            max_rounds=max_rounds,
-            focus=False,
-            upper_bound=walk_length,
-        )
-        return _mapped(res, inside)
+    # A fewest-corrections walk that is a route (simple, its legs the graph's): no front route
+    # is longer, so the last bound tried is its length, and that one holds the front.
+    route = len(set(walk.tolist())) == len(walk) and bounds_are_chords(scenario)
+    last = walk_length if route else math.inf
     ab = float(to_end[start])
     slack = FOCUS_SLACK * ab + 1.0
-    labels = 0  # over every ellipsoid tried
+    labels = 0  # over every bound tried
+    whole: ReachGraph | None = None
     while True:
+        bound = min(ab + slack, last)
         # The rounding slack keeps a point on the ellipsoid's surface (a straight route) inside.
-        bound = ab + slack
         inside = np.flatnonzero(through <= bound * (1.0 + 1e-12))
-        if 2 * len(inside) > scenario.n:
-            return None  # no faster than the whole search
-        res = straight_front(
-            scenario.subset(inside),
-            max_corrections=max_corrections,
-            max_rounds=max_rounds,
-            focus=False,
-        )
+        kw = {"max_corrections": max_corrections, "max_rounds": max_rounds, "upper_bound": bound}
+        if 2 * len(inside) <= scenario.n:
+            res = _mapped(straight_front(scenario.subset(inside), focus=False, **kw), inside)
+        elif route:
+            # Long thin corridors: every point lies in the ellipsoid, but the bound still
+            # prunes the search. The graph over all points is made once.
+            whole = whole or build_reach_graph(scenario, compiled=True)
+            res = straight_front(scenario, whole, focus=False, **kw)
+        else:
+            return None  # no faster than the whole search, and no bound known to hold
         labels += res.stats.labels
-        # Proven when the search inside found a route with the fewest corrections no longer
-        # than the ellipsoid's bound (a route through points inside can be longer).
-        if res.front and res.front[0].corrections == fewest and res.front[0].length <= bound:
+        # Proven when the search found a route with the fewest corrections no longer than the
+        # bound (searched for routes within it, it finds no longer ones).
+        if (res.front and res.front[0].corrections == fewest) or bound >= last:
             res.stats.labels = labels
-            return _mapped(res, inside)
+            return res
         slack *= FOCUS_GROWTH
 
 
@@ -216,8 +200,8 @@ def _mapped(res: FrontResult, inside: np.ndarray) -> FrontResult:
 
 
 def _inclusive(bound: float) -> float:
-    """A known route's length as the searches' initial best length: a hair above it, so that
-    the route itself (or one as long) is still found, whatever the rounding of its sum."""
+    """A bound on the routes' length as the searches' initial best length: a hair above it, so
+    that a route as long as the bound is still found, whatever the rounding of its sum."""
     return bound * (1.0 + 1e-12) if math.isfinite(bound) else math.inf
 
 
