@@ -75,8 +75,6 @@ def cost_to_go(
     corrects already carries right after its correction (0 for a correction that succeeds; the
     default)."""
     compiled = use_compiled(scenario.n, compiled)
-    if compiled:
-        from gcs_planner.core.cost_to_go_kernel import backward_fan
     n = graph.n
     end = graph.end
     if is_v is None:
@@ -125,25 +123,16 @@ def cost_to_go(
     np.add.at(r_ptr, r_tgt + 1, 1)
     np.cumsum(r_ptr, out=r_ptr)
 
-    for layer in range(1, n):
+    if compiled:
+        from gcs_planner.core.cost_to_go_kernel import backward_layers
+
+        arch_node, arch_R, arch_E, arch_layer = backward_layers(
+            node, R, E, r_ptr, r_src, r_len, is_v, graph.lim_v, graph.lim_h, own, n - 1
+        )
+    for layer in range(1, 1 if compiled else n):
         if not len(node):
             break
-        if compiled:
-            j, newR, newE = backward_fan(
-                node,
-                R,
-                E,
-                r_ptr,
-                r_src,
-                r_len,
-                is_v,
-                graph.lim_v,
-                graph.lim_h,
-                own,
-                *(a.copy() for a in summary),
-            )
-        else:
-            j, newR, newE = _fan(node, R, E, r_ptr, r_src, r_len, is_v, own, graph, summary)
+        j, newR, newE = _fan(node, R, E, r_ptr, r_src, r_len, is_v, own, graph, summary)
         empty = np.zeros((len(j), 0), np.uint64)
         keep = not_dominated(
             j,
