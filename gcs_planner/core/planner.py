@@ -17,7 +17,7 @@ from gcs_planner.core.choose import choose as choose_route
 from gcs_planner.core.probability import success_probability
 from gcs_planner.core.route import Route, evaluate_route
 from gcs_planner.core.search import straight_front
-from gcs_planner.core.seeding import certain_front
+from gcs_planner.core.seeding import certain_front, reliable_seeds
 from gcs_planner.errors import InfeasibleError
 from gcs_planner.geometry.legs import scenario_leg_model
 from gcs_planner.policy import DEFAULT_MIN_PROBABILITY, choose_index, default_objectives
@@ -220,14 +220,16 @@ def _branch_and_bound(
     scenario: Scenario, use_probability: bool, max_corrections: int | None, budget: Budget
 ):
     # With the probability objective, the two-objective straight-leg front seeds the search
-    # (its fewest-corrections end first of all) and bounds each route from below.
+    # (its fewest-corrections end first of all) and bounds each route from below; the front
+    # without the unreliable points seeds it with routes certain to arrive (``seeding``).
     certain = certain_front(scenario, max_corrections) if use_probability else None
+    seeds = (*certain.seeds, *reliable_seeds(scenario, max_corrections)) if certain else ()
     res = bnb_front(
         scenario,
         probability=use_probability,
         max_corrections=max_corrections,
         budget=budget,
-        seeds=certain.seeds if certain else (),
+        seeds=seeds,
     )
     if certain is not None:
         res.lower_bounds = [
