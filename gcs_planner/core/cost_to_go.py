@@ -76,7 +76,7 @@ def cost_to_go(
     default)."""
     compiled = use_compiled(scenario.n, compiled)
     if compiled:
-        from gcs_planner.core.cost_to_go_kernel import backward_fan
+        from gcs_planner.core.cost_to_go_kernel import backward_fan, off_frontier
     n = graph.n
     end = graph.end
     if is_v is None:
@@ -146,6 +146,15 @@ def cost_to_go(
             )
         else:
             j, newR, newE = _fan(node, R, E, r_ptr, r_src, r_len, is_v, own, graph, summary)
+        if compiled:
+            # Most candidates lie behind the frontier: drop them by bisection, and sort only
+            # the rest with the frontier (the same labels kept).
+            order = np.lexsort((front_R, front_node))
+            front_node, front_R, front_E = front_node[order], front_R[order], front_E[order]
+            f_ptr = np.zeros(n + 1, dtype=np.int64)
+            np.cumsum(np.bincount(front_node, minlength=n), out=f_ptr[1:])
+            ahead = off_frontier(j, newR, newE, f_ptr, front_R, front_E)
+            j, newR, newE = j[ahead], newR[ahead], newE[ahead]
         keep, stays = _filter(j, newR, newE, front_node, front_R, front_E)
         node, R, E = j[keep], newR[keep], newE[keep]
         _summarise(node, R, -E, near_R, near_e, wide_R, wide_e)

@@ -96,3 +96,35 @@ def backward_fan(
             out_E[n_out] = new_E
             n_out += 1
     return out_j[:n_out], out_R[:n_out], out_E[:n_out]
+
+
+@njit(cache=True)
+def off_frontier(
+    node: np.ndarray,
+    R: np.ndarray,
+    E: np.ndarray,
+    f_ptr: np.ndarray,
+    f_R: np.ndarray,
+    f_E: np.ndarray,
+) -> np.ndarray:
+    """Per candidate (node, R, E): whether no frontier label of its node dominates or equals it
+    (R' <= R and E' >= E). The frontier of each node is rows f_ptr[j]:f_ptr[j+1], sorted by R
+    ascending, so E ascends too (a label further from B that allows no more error is off the
+    frontier): the label with the largest E among those with R' <= R is the last of them,
+    found by bisection. Exact comparisons, the same test as the sort of ``cost_to_go._filter``."""
+    out = np.ones(node.shape[0], np.bool_)
+    for c in range(node.shape[0]):
+        j = node[c]
+        lo = f_ptr[j]
+        hi = f_ptr[j + 1]
+        r = R[c]
+        # First row with f_R > r.
+        while lo < hi:
+            mid = (lo + hi) // 2
+            if f_R[mid] <= r:
+                lo = mid + 1
+            else:
+                hi = mid
+        if lo > f_ptr[j] and f_E[lo - 1] >= E[c]:
+            out[c] = False
+    return out
