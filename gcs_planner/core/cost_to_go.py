@@ -76,7 +76,7 @@ def cost_to_go(
     default)."""
     compiled = use_compiled(scenario.n, compiled)
     if compiled:
-        from gcs_planner.core.cost_to_go_kernel import backward_fan, off_frontier
+        from gcs_planner.core.cost_to_go_kernel import backward_fan, merge_frontier, off_frontier
     n = graph.n
     end = graph.end
     if is_v is None:
@@ -110,6 +110,11 @@ def cost_to_go(
     # the Pareto frontier of the labels kept so far only (``_filter``).
     kept_node, kept_R, kept_E, kept_layer = [node], [R], [E], [np.zeros(len(node), np.int64)]
     front_node, front_R, front_E = node.copy(), R.copy(), E.copy()
+    if compiled:  # the frontier as rows per point, sorted by R (see ``merge_frontier``)
+        order = np.lexsort((front_R, front_node))
+        front_node, front_R, front_E = front_node[order], front_R[order], front_E[order]
+        f_ptr = np.zeros(n + 1, dtype=np.int64)
+        np.cumsum(np.bincount(front_node, minlength=n), out=f_ptr[1:])
     # Per point, the kept label nearest B (largest E on a tie) and the one allowing the most
     # error (nearest B on a tie): most candidates are dominated by one of the two, and testing
     # that is one gather, where the full filter sorts every candidate. Both are kept labels,
@@ -147,24 +152,26 @@ def cost_to_go(
         else:
             j, newR, newE = _fan(node, R, E, r_ptr, r_src, r_len, is_v, own, graph, summary)
         if compiled:
-            # Most candidates lie behind the frontier: drop them by bisection, and sort only
-            # the rest with the frontier (the same labels kept).
-            order = np.lexsort((front_R, front_node))
-            front_node, front_R, front_E = front_node[order], front_R[order], front_E[order]
-            f_ptr = np.zeros(n + 1, dtype=np.int64)
-            np.cumsum(np.bincount(front_node, minlength=n), out=f_ptr[1:])
-            ahead = off_frontier(j, newR, newE, f_ptr, front_R, front_E)
+            # Most candidates lie behind the frontier (kept as rows per point, sorted by R):
+            # drop them by bisection, sort the rest alone and merge them into the frontier.
+            # The same labels as ``_filter`` keeps, without sorting the frontier each layer.
+            ahead = np.flatnonzero(off_frontier(j, newR, newE, f_ptr, front_R, front_E))
             j, newR, newE = j[ahead], newR[ahead], newE[ahead]
-        keep, stays = _filter(j, newR, newE, front_node, front_R, front_E)
+            order = np.lexsort((-newE, newR, j))
+            keep, f_ptr, front_node, front_R, front_E = merge_frontier(
+                j, newR, newE, order, f_ptr, front_R, front_E
+            )
+        else:
+            keep, stays = _filter(j, newR, newE, front_node, front_R, front_E)
+            front_node = np.concatenate([front_node[stays], j[keep]])
+            front_R = np.concatenate([front_R[stays], newR[keep]])
+            front_E = np.concatenate([front_E[stays], newE[keep]])
         node, R, E = j[keep], newR[keep], newE[keep]
         _summarise(node, R, -E, near_R, near_e, wide_R, wide_e)
         kept_node.append(node)
         kept_R.append(R)
         kept_E.append(E)
         kept_layer.append(np.full(len(node), layer))
-        front_node = np.concatenate([front_node[stays], node])
-        front_R = np.concatenate([front_R[stays], R])
-        front_E = np.concatenate([front_E[stays], E])
     arch_node, arch_R, arch_E, arch_layer = (
         np.concatenate(a) for a in (kept_node, kept_R, kept_E, kept_layer)
     )

@@ -128,3 +128,68 @@ def off_frontier(
         if lo > f_ptr[j] and f_E[lo - 1] >= E[c]:
             out[c] = False
     return out
+
+
+@njit(cache=True)
+def merge_frontier(
+    node: np.ndarray,
+    R: np.ndarray,
+    E: np.ndarray,
+    order: np.ndarray,
+    f_ptr: np.ndarray,
+    f_R: np.ndarray,
+    f_E: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The rule of ``cost_to_go._filter`` by a merge instead of a sort: (which candidates are
+    kept, the new frontier as rows per node sorted by R: f_ptr, node, R, E).
+
+    ``order`` lists the candidates by (node, R ascending, E descending); the frontier of each
+    node is rows f_ptr[j]:f_ptr[j+1], R ascending. Merged in the order of the sort (R
+    ascending, E descending, a frontier label before a candidate equal to it), a label is on
+    the new frontier iff its E exceeds every E before it at its node."""
+    n = f_ptr.shape[0] - 1
+    m = order.shape[0]
+    keep = np.zeros(node.shape[0], np.bool_)
+    cap = f_R.shape[0] + m
+    g_node = np.empty(cap, np.int64)
+    g_R = np.empty(cap)
+    g_E = np.empty(cap)
+    g_ptr = np.zeros(n + 1, np.int64)
+    out = 0
+    c = 0
+    for j in range(n):
+        g_ptr[j] = out
+        a = f_ptr[j]
+        a_end = f_ptr[j + 1]
+        best = -np.inf
+        while True:
+            has_c = c < m and node[order[c]] == j
+            has_a = a < a_end
+            if not has_c and not has_a:
+                break
+            take_a = has_a
+            if has_a and has_c:
+                o = order[c]
+                take_a = f_R[a] < R[o] or (f_R[a] == R[o] and f_E[a] >= E[o])
+            if take_a:
+                r = f_R[a]
+                e = f_E[a]
+                a += 1
+                if e > best:
+                    best = e
+                    g_node[out] = j
+                    g_R[out] = r
+                    g_E[out] = e
+                    out += 1
+            else:
+                o = order[c]
+                c += 1
+                if E[o] > best:
+                    best = E[o]
+                    keep[o] = True
+                    g_node[out] = j
+                    g_R[out] = R[o]
+                    g_E[out] = E[o]
+                    out += 1
+    g_ptr[n] = out
+    return keep, g_ptr, g_node[:out], g_R[:out], g_E[:out]
