@@ -38,7 +38,7 @@ from gcs_planner.core.pair_bounds import PairBounds, pair_bounds
 from gcs_planner.core.prefilter import FanBound, covered_fan
 from gcs_planner.core.probability import propagate, success_probability
 from gcs_planner.core.proof import PROB_EPS, lower_bounds, settled
-from gcs_planner.core.reach import build_reach_graph
+from gcs_planner.core.reach import ReachGraph, build_reach_graph
 from gcs_planner.core.route import Leg, Route, evaluate_route
 from gcs_planner.geometry.legs import FlownLeg, LegModel, path_angle_deg, scenario_leg_model
 from gcs_planner.geometry.trajectory import route_trajectory
@@ -235,6 +235,7 @@ def bnb_front(
     seeds: Sequence[Sequence[int]] = (),
     dominance: bool = True,
     budget: Budget | None = None,
+    graph: ReachGraph | None = None,
 ) -> BnbResult:
     """Exact Pareto front of (length, corrections[, probability]) with the scenario's turning
     radius, by best-first branch and bound. ``probability`` False treats every correction as
@@ -251,12 +252,12 @@ def bnb_front(
     the heading makes partial routes incomparable, and the search keeps whole simple routes.
 
     ``budget`` (labels per search, seconds for the whole call, progress) overrides
-    ``max_labels``.
+    ``max_labels``. ``graph``: the scenario's reach graph, when the caller has it already.
     """
     t0 = time.perf_counter()
     if budget is None:
         budget = Budget(max_labels)
-    ctx = _Context(scenario, probability, max_corrections)
+    ctx = _Context(scenario, probability, max_corrections, graph)
     if not dominance:
         res = _search(ctx, None, budget.share(stage="search"), seeds)
     elif not ctx.model.carries_heading:
@@ -327,12 +328,18 @@ def _relaxed(ctx: _Context, budget: Budget, seeds: Sequence[Sequence[int]]) -> B
 class _Context:
     """What every round of the search shares: the graph, the cost-to-go, the model."""
 
-    def __init__(self, scenario: Scenario, probability: bool, max_corrections: int | None) -> None:
+    def __init__(
+        self,
+        scenario: Scenario,
+        probability: bool,
+        max_corrections: int | None,
+        graph: ReachGraph | None = None,
+    ) -> None:
         self.scenario = scenario
         self.probability = probability
         self.params = scenario.params
         self.model: LegModel = scenario_leg_model(scenario)
-        self.graph = build_reach_graph(scenario)
+        self.graph = build_reach_graph(scenario) if graph is None else graph
         self.G = cost_to_go(scenario, self.graph)
         self.kmax = scenario.n - 2 if max_corrections is None else max_corrections
         self.kind_of = [Kind(int(c)) for c in scenario.kind]  # Enum() is slow in the loop

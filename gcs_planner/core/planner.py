@@ -15,6 +15,7 @@ from gcs_planner.core.bnb import DEFAULT_MAX_LABELS, PROB_EPS, bnb_front, flown_
 from gcs_planner.core.budget import Budget, ProgressCallback
 from gcs_planner.core.choose import choose as choose_route
 from gcs_planner.core.probability import success_probability
+from gcs_planner.core.reach import build_reach_graph
 from gcs_planner.core.route import Route, evaluate_route
 from gcs_planner.core.search import straight_front
 from gcs_planner.core.seeding import certain_front, reliable_seeds
@@ -222,7 +223,9 @@ def _branch_and_bound(
     # With the probability objective, the two-objective straight-leg front seeds the search
     # (its fewest-corrections end first of all) and bounds each route from below; the front
     # without the unreliable points seeds it with routes certain to arrive (``seeding``).
-    certain = certain_front(scenario, max_corrections) if use_probability else None
+    # One reach graph for both (on 20,000 points it takes seconds to build).
+    graph = build_reach_graph(scenario)
+    certain = certain_front(scenario, max_corrections, graph) if use_probability else None
     seeds = (*certain.seeds, *reliable_seeds(scenario, max_corrections)) if certain else ()
     res = bnb_front(
         scenario,
@@ -230,6 +233,7 @@ def _branch_and_bound(
         max_corrections=max_corrections,
         budget=budget,
         seeds=seeds,
+        graph=graph,
     )
     if certain is not None:
         res.lower_bounds = [

@@ -32,6 +32,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from gcs_planner.core.reach import ReachGraph
 from gcs_planner.core.search import straight_front
 from gcs_planner.scenario.model import Scenario
 
@@ -49,7 +50,9 @@ class CertainFront:
         return float(self.least[min(corrections, len(self.least) - 1)])
 
 
-def certain_front(scenario: Scenario, max_corrections: int | None = None) -> CertainFront:
+def certain_front(
+    scenario: Scenario, max_corrections: int | None = None, graph: ReachGraph | None = None
+) -> CertainFront:
     """The (length, corrections) front over walks with certain corrections and heading-free
     legs, each as long as the leg model's lower bound (the chord for straight and cs3d legs; for
     airplane legs the chord or the climb at the limit angle, whichever is longer): its simple
@@ -57,8 +60,9 @@ def certain_front(scenario: Scenario, max_corrections: int | None = None) -> Cer
     of those bounds, so the layered search over it is that front.
 
     Not the straight-leg front of a copy with R = 0: airplane legs with R = 0 cannot fly a leg
-    too steep for its length, which a helix flies with R > 0, so that front is no floor."""
-    res = straight_front(scenario, max_corrections=max_corrections, max_rounds=1)
+    too steep for its length, which a helix flies with R > 0, so that front is no floor.
+    ``graph``: the scenario's reach graph, when the caller has it already."""
+    res = straight_front(scenario, graph, max_corrections=max_corrections, max_rounds=1)
     kmax = max((fp.corrections for fp in res.front), default=0)
     least = np.full(kmax + 1, np.inf)
     for fp in res.front:
