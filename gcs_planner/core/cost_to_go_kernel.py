@@ -193,3 +193,37 @@ def merge_frontier(
                     out += 1
     g_ptr[n] = out
     return keep, g_ptr, g_node[:out], g_R[:out], g_E[:out]
+
+
+@njit(cache=True)
+def reverse_arcs(
+    indptr: np.ndarray, target: np.ndarray, length: np.ndarray, start: int, end: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The arcs between correction points (none out of A, none into B) grouped by target, as
+    (r_ptr, r_src, r_len): a counting sort, in the order a stable sort by target of the arcs
+    in their CSR order gives (by source, then as stored)."""
+    n = indptr.shape[0] - 1
+    r_ptr = np.zeros(n + 1, np.int64)
+    for i in range(n):
+        if i == start:
+            continue
+        for a in range(indptr[i], indptr[i + 1]):
+            t = target[a]
+            if t != end:
+                r_ptr[t + 1] += 1
+    for i in range(n):
+        r_ptr[i + 1] += r_ptr[i]
+    fill = r_ptr[:-1].copy()
+    r_src = np.empty(r_ptr[n], np.int64)
+    r_len = np.empty(r_ptr[n])
+    for i in range(n):
+        if i == start:
+            continue
+        for a in range(indptr[i], indptr[i + 1]):
+            t = target[a]
+            if t != end:
+                at = fill[t]
+                r_src[at] = i
+                r_len[at] = length[a]
+                fill[t] = at + 1
+    return r_ptr, r_src, r_len
