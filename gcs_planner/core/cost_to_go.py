@@ -78,6 +78,7 @@ def cost_to_go(
     if compiled:
         from gcs_planner.core.cost_to_go_kernel import (
             backward_fan,
+            frontier_order,
             merge_frontier,
             off_frontier,
             reverse_arcs,
@@ -169,7 +170,7 @@ def cost_to_go(
             # The same labels as ``_filter`` keeps, without sorting the frontier each layer.
             ahead = np.flatnonzero(off_frontier(j, newR, newE, f_ptr, front_R, front_E))
             j, newR, newE = j[ahead], newR[ahead], newE[ahead]
-            order = np.lexsort((-newE, newR, j))
+            order = frontier_order(j, newR, newE, n)
             keep, f_ptr, front_node, front_R, front_E = merge_frontier(
                 j, newR, newE, order, f_ptr, front_R, front_E
             )
