@@ -38,7 +38,7 @@ from gcs_planner.core.pair_bounds import PairBounds, pair_bounds
 from gcs_planner.core.prefilter import FanBound, covered_fan
 from gcs_planner.core.probability import propagate, success_probability
 from gcs_planner.core.proof import PROB_EPS, lower_bounds, settled
-from gcs_planner.core.reach import build_reach_graph
+from gcs_planner.core.reach import ReachGraph, build_reach_graph
 from gcs_planner.core.route import Leg, Route, evaluate_route
 from gcs_planner.geometry.legs import FlownLeg, LegModel, path_angle_deg, scenario_leg_model
 from gcs_planner.geometry.trajectory import route_trajectory
@@ -157,6 +157,20 @@ class _Incumbents:
             return True
         return bool(np.all(length + to_go[:m] >= self.best(mass)[k : k + m]))
 
+    def least_open(self, length: float, k: int, to_go: np.ndarray | None, mass: float) -> float:
+        """The least length L + G_j(e, m) over the numbers m of further corrections for which
+        ``covers`` fails (inf when it holds): no route this partial route still leads to and
+        that no found route dominates is shorter. Found routes only accrue, so the value only
+        grows while the partial route waits in the queue."""
+        if to_go is None:
+            return math.inf
+        m = min(len(to_go), self.kmax - k + 1)
+        if m <= 0:
+            return math.inf
+        reach = length + to_go[:m]
+        reach = reach[reach < self.best(mass)[k : k + m]]
+        return float(reach.min()) if len(reach) else math.inf
+
     def covers_by_level(
         self,
         length: float,
@@ -235,6 +249,7 @@ def bnb_front(
     seeds: Sequence[Sequence[int]] = (),
     dominance: bool = True,
     budget: Budget | None = None,
+    graph: ReachGraph | None = None,
 ) -> BnbResult:
     """Exact Pareto front of (length, corrections[, probability]) with the scenario's turning
     radius, by best-first branch and bound. ``probability`` False treats every correction as
@@ -251,15 +266,16 @@ def bnb_front(
     the heading makes partial routes incomparable, and the search keeps whole simple routes.
 
     ``budget`` (labels per search, seconds for the whole call, progress) overrides
-    ``max_labels``.
+    ``max_labels``. ``graph``: the scenario's reach graph, when the caller has it already.
     """
     t0 = time.perf_counter()
     if budget is None:
         budget = Budget(max_labels)
-    ctx = _Context(scenario, probability, max_corrections)
+    ctx = _Context(scenario, probability, max_corrections, graph)
     if not dominance:
         res = _search(ctx, None, budget.share(stage="search"), seeds)
     elif not ctx.model.carries_heading:
+        ctx.open_order = True
         res = _relaxed(ctx, budget.share(stage="search"), seeds)
     else:
         # With turns: first the exact front of the relaxation whose legs are the model's
@@ -327,12 +343,18 @@ def _relaxed(ctx: _Context, budget: Budget, seeds: Sequence[Sequence[int]]) -> B
 class _Context:
     """What every round of the search shares: the graph, the cost-to-go, the model."""
 
-    def __init__(self, scenario: Scenario, probability: bool, max_corrections: int | None) -> None:
+    def __init__(
+        self,
+        scenario: Scenario,
+        probability: bool,
+        max_corrections: int | None,
+        graph: ReachGraph | None = None,
+    ) -> None:
         self.scenario = scenario
         self.probability = probability
         self.params = scenario.params
         self.model: LegModel = scenario_leg_model(scenario)
-        self.graph = build_reach_graph(scenario)
+        self.graph = build_reach_graph(scenario) if graph is None else graph
         self.G = cost_to_go(scenario, self.graph)
         self.kmax = scenario.n - 2 if max_corrections is None else max_corrections
         self.kind_of = [Kind(int(c)) for c in scenario.kind]  # Enum() is slow in the loop
@@ -359,6 +381,9 @@ class _Context:
         self.pair_floor: PairBounds | None = None
         # Set once the floor is proven: the search over simple routes probes with it.
         self.prober: _Prober | None = None
+        # Queue partial routes by their least open continuation (``_search``): set for the
+        # straight-leg search, whose floors and probes (turns) keep the plain order.
+        self.open_order = False
 
     def failures(self) -> FailureBounds | None:
         """The failure bounds (``failure_bounds``), made on the first call: a search that
@@ -600,6 +625,12 @@ def _search(
         nogoods = {}
 
     ceiling = ctx.ceiling
+    # Straight legs: queue a partial route by its least continuation that no found route
+    # dominates (``least_open``), not by its least continuation of all, so that partial routes
+    # only the few-corrections end still needs wait until routes there are found, instead of
+    # being expanded as soon as their many-corrections continuations look short. Any order
+    # exhausts the same queue: the order only decides how soon routes are found.
+    by_open = ctx.open_order and relaxed and not probe
 
     # G2: for this model's legs, or in the search over the pair relaxation, whose cost-to-go
     # it is exactly (never in the heading-free relaxation, whose legs are shorter).
@@ -671,7 +702,14 @@ def _search(
         f, _, L, node, k, states, heading, path, to_go, arc = entry
         mass = sum(states.values())
         # Routes found since this label was queued may now cover it.
-        if inc.covers(L, k, to_go, mass) or by_level(L, k, node, states, mass, to_go, arc):
+        if by_open:
+            least = inc.least_open(L, k, to_go, mass)
+            if least == math.inf:
+                continue
+            if least > f:  # queued before routes that now cover its shortest continuations
+                heapq.heappush(heap, (least, *entry[1:]))
+                continue
+        elif inc.covers(L, k, to_go, mass) or by_level(L, k, node, states, mass, to_go, arc):
             continue
         if prober is not None and node != start and labels >= PROBE_FROM:
             covered, spent = prober(entry, inc, budget)
@@ -734,7 +772,11 @@ def _search(
                 g = None if g2 is None else _larger(g, g2)
             # (The test per probability level is left to the pop: it costs more than the
             # partial routes it would keep off the heap.)
-            if inc.covers(nL, k + 1, g, new_mass):
+            if by_open:
+                least = inc.least_open(nL, k + 1, g, new_mass)
+                if least == math.inf:
+                    continue
+            elif inc.covers(nL, k + 1, g, new_mass):
                 continue
             if relaxed:
                 key = _key(critical, j, path)
@@ -750,7 +792,7 @@ def _search(
             heapq.heappush(
                 heap,
                 (
-                    nL + float(g[-1]),
+                    least if by_open else nL + float(g[-1]),
                     next(counter),
                     nL,
                     j,

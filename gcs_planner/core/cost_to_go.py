@@ -75,6 +75,14 @@ def cost_to_go(
     corrects already carries right after its correction (0 for a correction that succeeds; the
     default)."""
     compiled = use_compiled(scenario.n, compiled)
+    if compiled:
+        from gcs_planner.core.cost_to_go_kernel import (
+            backward_fan,
+            frontier_order,
+            merge_frontier,
+            off_frontier,
+            reverse_arcs,
+        )
     n = graph.n
     end = graph.end
     if is_v is None:
@@ -104,8 +112,15 @@ def cost_to_go(
         np.zeros((0, 0), np.uint64),
     )
     node, R, E = node[keep], R[keep], E[keep]
-    arch_node, arch_R, arch_E = node.copy(), R.copy(), E.copy()
-    arch_layer = np.zeros(len(node), dtype=np.int64)
+    # Every label kept, with its layer, makes the table; new candidates are filtered against
+    # the Pareto frontier of the labels kept so far only (``_filter``).
+    kept_node, kept_R, kept_E, kept_layer = [node], [R], [E], [np.zeros(len(node), np.int64)]
+    front_node, front_R, front_E = node.copy(), R.copy(), E.copy()
+    if compiled:  # the frontier as rows per point, sorted by R (see ``merge_frontier``)
+        order = np.lexsort((front_R, front_node))
+        front_node, front_R, front_E = front_node[order], front_R[order], front_E[order]
+        f_ptr = np.zeros(n + 1, dtype=np.int64)
+        np.cumsum(np.bincount(front_node, minlength=n), out=f_ptr[1:])
     # Per point, the kept label nearest B (largest E on a tie) and the one allowing the most
     # error (nearest B on a tie): most candidates are dominated by one of the two, and testing
     # that is one gather, where the full filter sorts every candidate. Both are kept labels,
@@ -114,44 +129,67 @@ def cost_to_go(
     summary = (near_R, near_e, wide_R, wide_e)
     _summarise(node, R, -E, near_R, near_e, wide_R, wide_e)
 
-    # Reverse CSR over arcs between correction points.
-    inner = (tgt != end) & (src != graph.start)
-    r_src, r_tgt, r_len = src[inner], tgt[inner], dist[inner]
-    order = np.argsort(r_tgt, kind="stable")
-    r_src, r_tgt, r_len = r_src[order], r_tgt[order], r_len[order]
-    r_ptr = np.zeros(n + 1, dtype=np.int64)
-    np.add.at(r_ptr, r_tgt + 1, 1)
-    np.cumsum(r_ptr, out=r_ptr)
-
+    # Reverse CSR over arcs between correction points (compiled: one counting pass, where
+    # the sort of tens of millions of arcs takes seconds; the same arrays).
     if compiled:
-        from gcs_planner.core.cost_to_go_kernel import backward_layers
-
-        arch_node, arch_R, arch_E, arch_layer = backward_layers(
-            node, R, E, r_ptr, r_src, r_len, is_v, graph.lim_v, graph.lim_h, own, n - 1
+        del src, tgt
+        r_ptr, r_src, r_len = reverse_arcs(
+            graph.indptr, graph.target, graph.length, graph.start, end
         )
-    for layer in range(1, 1 if compiled else n):
+    else:
+        inner = (tgt != end) & (src != graph.start)
+        r_src, r_tgt, r_len = src[inner], tgt[inner], dist[inner]
+        order = np.argsort(r_tgt, kind="stable")
+        r_src, r_tgt, r_len = r_src[order], r_tgt[order], r_len[order]
+        r_ptr = np.zeros(n + 1, dtype=np.int64)
+        np.add.at(r_ptr, r_tgt + 1, 1)
+        np.cumsum(r_ptr, out=r_ptr)
+
+    for layer in range(1, n):
         if not len(node):
             break
-        j, newR, newE = _fan(node, R, E, r_ptr, r_src, r_len, is_v, own, graph, summary)
-        empty = np.zeros((len(j), 0), np.uint64)
-        keep = not_dominated(
-            j,
-            newR,
-            -newE,
-            empty,
-            arch_node,
-            arch_R,
-            -arch_E,
-            np.zeros((len(arch_node), 0), np.uint64),
-        )
+        if compiled:
+            j, newR, newE = backward_fan(
+                node,
+                R,
+                E,
+                r_ptr,
+                r_src,
+                r_len,
+                is_v,
+                graph.lim_v,
+                graph.lim_h,
+                own,
+                *(a.copy() for a in summary),
+            )
+        else:
+            j, newR, newE = _fan(node, R, E, r_ptr, r_src, r_len, is_v, own, graph, summary)
+        if compiled:
+            # Most candidates lie behind the frontier (kept as rows per point, sorted by R):
+            # drop them by bisection, sort the rest alone and merge them into the frontier.
+            # The same labels as ``_filter`` keeps, without sorting the frontier each layer.
+            ahead = np.flatnonzero(off_frontier(j, newR, newE, f_ptr, front_R, front_E))
+            j, newR, newE = j[ahead], newR[ahead], newE[ahead]
+            order = frontier_order(j, newR, newE, n)
+            keep, f_ptr, front_node, front_R, front_E = merge_frontier(
+                j, newR, newE, order, f_ptr, front_R, front_E
+            )
+        else:
+            keep, stays = _filter(j, newR, newE, front_node, front_R, front_E)
+            front_node = np.concatenate([front_node[stays], j[keep]])
+            front_R = np.concatenate([front_R[stays], newR[keep]])
+            front_E = np.concatenate([front_E[stays], newE[keep]])
         node, R, E = j[keep], newR[keep], newE[keep]
         _summarise(node, R, -E, near_R, near_e, wide_R, wide_e)
-        arch_node = np.concatenate([arch_node, node])
-        arch_R = np.concatenate([arch_R, R])
-        arch_E = np.concatenate([arch_E, E])
-        arch_layer = np.concatenate([arch_layer, np.full(len(node), layer)])
+        kept_node.append(node)
+        kept_R.append(R)
+        kept_E.append(E)
+        kept_layer.append(np.full(len(node), layer))
+    arch_node, arch_R, arch_E, arch_layer = (
+        np.concatenate(a) for a in (kept_node, kept_R, kept_E, kept_layer)
+    )
 
-    # A label can be dominated by a later one (the filter only drops new labels); the suffix
+    # A label can be dominated by a later one (it stays: its layer is smaller); the suffix
     # minima below make that harmless.
     order = np.lexsort((arch_E, arch_node))
     a_node, a_E, a_R, a_layer = arch_node[order], arch_E[order], arch_R[order], arch_layer[order]
@@ -168,6 +206,52 @@ def cost_to_go(
         lo, hi = indptr[j], indptr[j + 1]
         table[lo:hi] = np.minimum.accumulate(table[lo:hi][::-1], axis=0)[::-1]
     return CostToGo(indptr, a_E, table)
+
+
+def _filter(
+    j: np.ndarray,
+    R: np.ndarray,
+    E: np.ndarray,
+    front_node: np.ndarray,
+    front_R: np.ndarray,
+    front_E: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """(which candidates (j, R, E) no frontier label and no other candidate dominates or equals,
+    which frontier labels no kept candidate dominates): the frontier of the labels kept so far
+    and of the new ones together, in one sort.
+
+    Filtering against the frontier rather than every label kept is the same test: a kept label
+    off the frontier is dominated by one on it, which dominates whatever it dominates. Per
+    point, sorted by (R ascending, E descending, frontier labels before candidates on a full
+    tie), a label is on the new frontier iff its E exceeds every E before it; values are
+    replaced by their ranks so that points can be offset apart in exact integer arithmetic."""
+    m = len(j)
+    if m == 0:
+        return np.zeros(0, dtype=bool), np.ones(len(front_node), dtype=bool)
+    touched = np.zeros(int(max(j.max(), front_node.max(initial=0))) + 1, dtype=bool)
+    touched[j] = True
+    near = touched[front_node]
+    at = np.flatnonzero(near)
+    nodes = np.concatenate([front_node[at], j])
+    Rs = np.concatenate([front_R[at], R])
+    es = -np.concatenate([front_E[at], E])  # smaller is better
+    is_new = np.zeros(len(nodes), dtype=bool)
+    is_new[len(at) :] = True
+    order = np.lexsort((is_new, es, Rs, nodes))
+    _, e_rank = np.unique(es, return_inverse=True)
+    span = int(e_rank.max()) + 1
+    t = e_rank[order].astype(np.int64) - nodes[order].astype(np.int64) * span
+    run_min = np.minimum.accumulate(t)
+    prev = np.empty_like(run_min)
+    prev[0] = np.iinfo(np.int64).max
+    prev[1:] = run_min[:-1]
+    # The first label of a point sees the previous point's minimum, larger than any value of
+    # this point by construction of the offsets.
+    survive = np.zeros(len(order), dtype=bool)
+    survive[order] = t < prev
+    stays = np.ones(len(front_node), dtype=bool)
+    stays[at] = survive[: len(at)]
+    return survive[len(at) :], stays
 
 
 def _fan(

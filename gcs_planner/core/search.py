@@ -83,14 +83,17 @@ def straight_front(
     ``max_rounds``: stop the relaxation after this many rounds; the front may then hold walks
     that revisit points, and each of its lengths bounds the simple routes' from below.
     ``focus``: first search only the points that can lie on a front route (``_focused``) and
-    fall back to all of them where that cannot be proven; None: when the kernels run.
+    fall back to all of them where that cannot be proven; None: when the kernels run and no
+    ``graph`` is given (one that is must be the scenario's own reach graph to focus).
     ``upper_bound``: search only the routes no longer than this (the front returned is theirs);
     partial routes that cannot stay within it are dropped from the start.
     """
     t0 = time.perf_counter()
     compiled = use_compiled(scenario.n, compiled)
-    if graph is None and (compiled if focus is None else focus):
-        focused = _focused(scenario, max_corrections, max_rounds)
+    if focus is None:
+        focus = compiled and graph is None
+    if focus:
+        focused = _focused(scenario, max_corrections, max_rounds, graph)
         if focused is not None:
             focused.stats.seconds = time.perf_counter() - t0
             return focused
@@ -127,7 +130,10 @@ FOCUS_GROWTH = 2.0
 
 
 def _focused(
-    scenario: Scenario, max_corrections: int | None, max_rounds: int | None
+    scenario: Scenario,
+    max_corrections: int | None,
+    max_rounds: int | None,
+    whole: ReachGraph | None = None,
 ) -> FrontResult | None:
     """The front searched over the points that can lie on a front route, or None where that
     cannot be proven (the caller then searches all points).
@@ -165,7 +171,6 @@ def _focused(
     ab = float(to_end[start])
     slack = FOCUS_SLACK * ab + 1.0
     labels = 0  # over every bound tried
-    whole: ReachGraph | None = None
     while True:
         bound = min(ab + slack, last)
         # The rounding slack keeps a point on the ellipsoid's surface (a straight route) inside.
@@ -175,8 +180,9 @@ def _focused(
             res = _mapped(straight_front(scenario.subset(inside), focus=False, **kw), inside)
         elif route:
             # Long thin corridors: every point lies in the ellipsoid, but the bound still
-            # prunes the search. The graph over all points is made once.
-            whole = whole or build_reach_graph(scenario, compiled=True)
+            # prunes the search. The graph over all points is made once (or was given).
+            if whole is None:
+                whole = build_reach_graph(scenario, compiled=True)
             res = straight_front(scenario, whole, focus=False, **kw)
         else:
             return None  # no faster than the whole search, and no bound known to hold
