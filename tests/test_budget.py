@@ -241,3 +241,26 @@ def test_table_marks_routes_that_are_not_settled(capsys) -> None:
     assert main([*args, "--max-labels", "0"]) == 0  # no limit: proven
     full = capsys.readouterr().out
     assert "optimality: exact" in full and "? = not settled" not in full
+
+
+def test_long_corridor_three_objective_front_is_proven_and_holds_the_two_objective_front() -> None:
+    """A 300 km corridor of 2,000 points with straight legs (routes of some 25 corrections whose
+    lengths differ by metres): the three-objective front is proven within the default budget,
+    and every route of the two-objective front is on it (a route dominating one would have to
+    be as short with as few corrections), its fewest-corrections end among them."""
+    scenario = random_scenario(
+        2000, 1, params=Parameters(25, 15, 20, 25, 30, 0.001, turn_radius=0.0),
+        box=(300_000, 20_000, 2_000),
+    )  # fmt: skip
+    two = plan(scenario, objectives=("length", "corrections"))
+    three = plan(scenario, objectives=THREE)
+    assert three.optimal and all(three.proven())
+    assert len(three.routes) > len(two.routes) >= 2
+    for r in two.routes:
+        assert any(
+            q.corrections == r.corrections
+            and abs(q.length - r.length) <= 1e-6
+            and q.probability >= r.probability - 1e-12
+            for q in three.routes
+        ), (r.length, r.corrections)
+    assert min(q.corrections for q in three.routes) == two.routes[0].corrections
