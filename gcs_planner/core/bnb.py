@@ -21,6 +21,7 @@ dropped. The states such a probe expanded are covered too and prune later probes
 
 from __future__ import annotations
 
+import bisect
 import copy
 import heapq
 import itertools
@@ -506,13 +507,16 @@ def _kept(L: float, k: int, states: dict, mass: float, arc: int) -> tuple:
     return (L, k, states, mass, arc, min(v for v, _ in states), min(h for _, h in states))
 
 
-def _dominated_by(kept: Sequence[tuple], state: tuple, pairs: PairBounds | None) -> bool:
+def _dominated_by(
+    kept: Sequence[tuple], state: tuple, pairs: PairBounds | None, upto: int | None = None
+) -> bool:
     """Whether a partial route at a point, ``state`` (``_kept``), continues no better than one
     of ``kept`` (at the same point, having visited the same critical points) whatever it does
     next, in a relaxation whose legs depend on the arc flown last only through ``pairs``
-    (``_pair_margin``)."""
+    (``_pair_margin``). ``upto``: only the first so many of ``kept`` are asked (those no
+    longer than ``state`` when ``kept`` is sorted by length: no longer one dominates)."""
     L, k, states, mass, arc, v, h = state
-    for aL, ak, ast, am, a_arc, av, ah in kept:
+    for aL, ak, ast, am, a_arc, av, ah in itertools.islice(kept, upto):
         # The cheap tests first; the least errors of a dominating distribution are no larger.
         if aL > L or ak > k or am < mass - PROB_EPS or av > v or ah > h:
             continue
@@ -612,9 +616,9 @@ def _search(
     relaxed = critical is not None
     fan = FanBound(G, scenario.n)
     is_v_point = scenario.kind == Kind.V
-    # Per (point, critical points visited): the partial routes kept, as (L, k, states, mass,
-    # the arc they came by).
-    archive: dict[tuple[int, frozenset[int]], list[tuple[float, int, dict, float, int]]] = {}
+    # Per (point, critical points visited): the partial routes kept (``_kept``), sorted by
+    # length, and their lengths.
+    archive: dict[tuple[int, frozenset[int]], tuple[list[float], list[tuple]]] = {}
 
     probe = origin is not None
     inc = incumbents if incumbents is not None else _Incumbents(kmax)
@@ -744,7 +748,9 @@ def _search(
         ok[inner[covered_fan(L + flown[inner], k + 1, rows, inc.best(mass))]] = False
         for idx in np.flatnonzero(ok):
             j = int(targets[idx])
-            if j in path and (not relaxed or j in critical):
+            # (Over walks only critical points may not repeat: a set look-up first, the
+            # path's tuple scanned only for those.)
+            if (j in critical and j in path) if relaxed else j in path:
                 continue
             d = float(flown[idx])
             is_end = j == end
@@ -780,14 +786,17 @@ def _search(
                 continue
             if relaxed:
                 key = _key(critical, j, path)
-                kept = archive.setdefault(key, [])
+                lengths, kept = archive.setdefault(key, ([], []))
                 arc_in = int(lo + idx)
                 state = _kept(nL, k + 1, new_states, new_mass, arc_in)
-                if _dominated_by(kept, state, pair_floor) or (
+                # Kept by length: only those no longer than this one can dominate it.
+                shorter = bisect.bisect_right(lengths, nL)
+                if _dominated_by(kept, state, pair_floor, shorter) or (
                     probe and _dominated_by(nogoods.get(key, ()), state, pair_floor)
                 ):
                     continue
-                kept.append(state)
+                lengths.insert(shorter, nL)
+                kept.insert(shorter, state)
             new_heading = None if headings is None else headings[idx]
             heapq.heappush(
                 heap,
