@@ -208,15 +208,7 @@ def fewest_corrections(
         new_lo = size
         for i in range(lo_i, hi_i):
             u = node[i]
-            if u == s_start:
-                dv = 0.0
-                dh = 0.0
-            elif sv[u]:
-                dv = 0.0
-                dh = es[i]
-            else:
-                dv = es[i]
-                dh = 0.0
+            dv, dh = _carried(u == s_start, sv[u], es[i])
             # A leg into j must keep both errors within j's limits, so none is longer than the
             # largest limit less the error this label carries: the cells scanned shrink with it.
             rad = min(radius, top_v - dv, top_h - dh)
@@ -349,15 +341,7 @@ def layered_search(
             L = Ls[i]
             if L + to_end[u] >= best:
                 continue
-            if u == start:
-                dv = 0.0
-                dh = 0.0
-            elif is_v[u]:
-                dv = 0.0
-                dh = es[i]
-            else:
-                dv = es[i]
-                dh = 0.0
+            dv, dh = _carried(u == start, is_v[u], es[i])
             for a in range(indptr[u], indptr[u + 1]):
                 j = target[a]
                 if j == end:
@@ -413,6 +397,17 @@ def layered_search(
         f_k[:nfound], f_L[:nfound], f_label[:nfound], node[:size], parent[:size], alive, k + 1,
         closest,
     )  # fmt: skip
+
+
+@njit(cache=True)
+def _carried(at_start: bool, is_v: bool, e: float) -> tuple[float, float]:
+    """(vertical, horizontal) metres carried right after a point: none at A; after a V point
+    its vertical error is reset and the horizontal one carried, and the other way round."""
+    if at_start:
+        return 0.0, 0.0
+    if is_v:
+        return 0.0, e
+    return e, 0.0
 
 
 @njit(cache=True)
