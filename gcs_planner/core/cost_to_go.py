@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from gcs_planner.core.reach import ReachGraph, use_compiled
-from gcs_planner.core.search import _summarise, not_dominated
+from gcs_planner.core.search import _summarise, not_dominated, staircase
 from gcs_planner.scenario.model import Kind, Scenario
 
 
@@ -222,9 +222,8 @@ def _filter(
 
     Filtering against the frontier rather than every label kept is the same test: a kept label
     off the frontier is dominated by one on it, which dominates whatever it dominates. Per
-    point, sorted by (R ascending, E descending, frontier labels before candidates on a full
-    tie), a label is on the new frontier iff its E exceeds every E before it; values are
-    replaced by their ranks so that points can be offset apart in exact integer arithmetic."""
+    point, ``staircase`` on (R, -E), frontier labels winning ties.
+    """
     m = len(j)
     if m == 0:
         return np.zeros(0, dtype=bool), np.ones(len(front_node), dtype=bool)
@@ -237,18 +236,7 @@ def _filter(
     es = -np.concatenate([front_E[at], E])  # smaller is better
     is_new = np.zeros(len(nodes), dtype=bool)
     is_new[len(at) :] = True
-    order = np.lexsort((is_new, es, Rs, nodes))
-    _, e_rank = np.unique(es, return_inverse=True)
-    span = int(e_rank.max()) + 1
-    t = e_rank[order].astype(np.int64) - nodes[order].astype(np.int64) * span
-    run_min = np.minimum.accumulate(t)
-    prev = np.empty_like(run_min)
-    prev[0] = np.iinfo(np.int64).max
-    prev[1:] = run_min[:-1]
-    # The first label of a point sees the previous point's minimum, larger than any value of
-    # this point by construction of the offsets.
-    survive = np.zeros(len(order), dtype=bool)
-    survive[order] = t < prev
+    survive = staircase(nodes, Rs, es, is_new)
     stays = np.ones(len(front_node), dtype=bool)
     stays[at] = survive[: len(at)]
     return survive[len(at) :], stays

@@ -463,9 +463,8 @@ def not_dominated(
 ) -> np.ndarray:
     """Which new labels no archived label and no other new label dominates (or equals).
 
-    Labels compare only within a group (same point, same visited critical set). Within a group
-    sorted by (L, e), a label survives iff its e is strictly below every e before it. Values are
-    replaced by their ranks so that groups can be offset apart with exact integer arithmetic.
+    Labels compare only within a group (same point, same visited critical set), by
+    ``staircase`` (archived labels win ties).
     """
     m = len(j)
     if m == 0:
@@ -482,20 +481,30 @@ def not_dominated(
         group = group.ravel().astype(np.int64)
     else:
         group = nodes
-    order = np.lexsort((is_new, es, Ls, group))
-    _, e_rank = np.unique(es, return_inverse=True)
-    span = int(e_rank.max()) + 1
-    t = e_rank[order].astype(np.int64) - group[order].astype(np.int64) * span
+    return (staircase(group, Ls, es, is_new) & is_new)[-m:]
+
+
+def staircase(
+    group: np.ndarray, first: np.ndarray, second: np.ndarray, late: np.ndarray
+) -> np.ndarray:
+    """Which entries no other entry of their group dominates or equals on (first, second),
+    smaller better; of equal entries the first not ``late`` one, else the first. Sorted by
+    (group, first, second, late), an entry is kept iff its ``second`` is strictly below every
+    one before it in its group. Values are replaced by their ranks so that groups can be
+    offset apart with exact integer arithmetic. The mask is in the entries' order."""
+    order = np.lexsort((late, second, first, group))
+    _, rank = np.unique(second, return_inverse=True)
+    span = int(rank.max()) + 1
+    t = rank[order].astype(np.int64) - group[order].astype(np.int64) * span
     run_min = np.minimum.accumulate(t)
     prev = np.empty_like(run_min)
     prev[0] = np.iinfo(np.int64).max
     prev[1:] = run_min[:-1]
     # The first entry of a group sees the previous group's minimum, which is larger than any
     # value of this group by construction of the offsets.
-    keep_sorted = is_new[order] & (t < prev)
     keep = np.zeros(len(order), dtype=bool)
-    keep[order] = keep_sorted
-    return keep[-m:]
+    keep[order] = t < prev
+    return keep
 
 
 def explain_infeasible(scenario: Scenario, graph: ReachGraph, closest: int) -> str:
