@@ -56,7 +56,9 @@ def write_spec(tmp_path: Path, text: str, name: str = "spec.toml") -> Path:
     return path
 
 
-def small_spec(tmp_path: Path, seeds: int = 3, deltas: str = "[0.001, 0.0011]") -> Path:
+def small_spec(
+    tmp_path: Path, seeds: int = 3, deltas: str = "[0.001, 0.0011]", corrections: int = 24
+) -> Path:
     return write_spec(
         tmp_path,
         f"""
@@ -64,7 +66,7 @@ def small_spec(tmp_path: Path, seeds: int = 3, deltas: str = "[0.001, 0.0011]") 
 file = "{EXAMPLE_SCENARIO}"
 [[scenarios]]
 generate = "random"
-corrections = 24
+corrections = {corrections}
 seeds = {{ first = 1, count = {seeds} }}
 box = {SMALL_BOX}
 [grid]
@@ -284,7 +286,11 @@ def cli(*args: str) -> list[str]:
 
 
 def test_cli_interrupted_sweep_resumes_where_it_stopped(tmp_path: Path) -> None:
-    spec_path = small_spec(tmp_path, seeds=39, deltas="[0.001]")  # 40 cells
+    # 80 cells of 400 points (some 0.2 s each): several seconds of work left after the first
+    # save (a second in), so the interrupt finds the sweep running on any machine; cells of 24
+    # points all finished before the first save on a quick one.
+    cells = 80
+    spec_path = small_spec(tmp_path, seeds=cells - 1, deltas="[0.001]", corrections=400)
     out = tmp_path / "out"
     proc = subprocess.Popen(
         cli(str(spec_path), "--out", str(out)),
@@ -303,7 +309,7 @@ def test_cli_interrupted_sweep_resumes_where_it_stopped(tmp_path: Path) -> None:
     assert "interrupted" in err and "Traceback" not in err
     first = read_results(out)
     done_first = {r["cell_key"] for r in first}
-    assert 0 < len(done_first) < 40
+    assert 0 < len(done_first) < cells
 
     again = subprocess.run(
         cli(str(spec_path), "--out", str(out), "--resume"),
@@ -313,10 +319,10 @@ def test_cli_interrupted_sweep_resumes_where_it_stopped(tmp_path: Path) -> None:
     )
     assert again.returncode == 0, again.stderr
     assert f"{len(done_first)} already done" in again.stdout
-    assert f"{40 - len(done_first)} cells run" in again.stdout
+    assert f"{cells - len(done_first)} cells run" in again.stdout
     rows = read_results(out)
     keys = by_cell(rows)
-    assert len(keys) == 40 and all(r["status"] == "ok" for r in rows)
+    assert len(keys) == cells and all(r["status"] == "ok" for r in rows)
     kept = {(r["cell_key"], r["route"]): r for r in first}
     for r in rows:
         if r["cell_key"] in done_first:
