@@ -24,6 +24,7 @@ import contextlib
 import itertools
 import logging
 import os
+import signal
 import threading
 import time
 import uuid
@@ -275,11 +276,35 @@ def _run(client, todo: list[Cell], table, task, progress: Progress, save_interva
             new.append(future)
         return new
 
+    with _interrupt_flag() as interrupted:
+        return _collect(submit, futures, as_completed, table, progress, save_interval, interrupted)
+
+
+@contextlib.contextmanager
+def _interrupt_flag() -> Iterator[threading.Event]:
+    """An event set by Ctrl-C (SIGINT) while the sweep collects its cells. A KeyboardInterrupt
+    raised wherever the main thread happens to be waiting could be swallowed inside Dask's
+    client (a sweep so interrupted ran to its end); the flag is checked between cells instead,
+    and the sweep stops there, saving what it has."""
+    flag = threading.Event()
+    if threading.current_thread() is not threading.main_thread():
+        yield flag  # signals reach the main thread only
+        return
+    previous = signal.signal(signal.SIGINT, lambda signum, frame: flag.set())
+    try:
+        yield flag
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def _collect(submit, futures, as_completed, table, progress, save_interval, interrupted):
     flow = as_completed(submit(IN_FLIGHT))
     done = failed = infeasible = 0
     last_save = time.perf_counter()
     wait = save_interval
     for future in flow:
+        if interrupted.is_set():
+            raise KeyboardInterrupt
         for new in submit(1):  # one in for each one out: the scheduler holds IN_FLIGHT at most
             flow.add(new)
         cell = futures.pop(future)
@@ -299,6 +324,8 @@ def _run(client, todo: list[Cell], table, task, progress: Progress, save_interva
             table.save()
             last_save = time.perf_counter()
             wait = max(save_interval, SAVE_BUDGET * (last_save - t0))
+    if interrupted.is_set():
+        raise KeyboardInterrupt
     progress.update(done, failed, final=True)
     return done, failed, infeasible
 
