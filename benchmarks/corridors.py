@@ -14,7 +14,7 @@ import time
 from dataclasses import dataclass
 
 from benchmarks.cases import load_case
-from benchmarks.report import seconds, table
+from benchmarks.report import proof_text, seconds, table
 from gcs_planner.core.planner import plan
 from gcs_planner.core.search import straight_front
 
@@ -77,11 +77,7 @@ def render(rows: list[CorridorRow]) -> str:
     )
     out = []
     for r in rows:
-        if r.proven:
-            proof = "proven"
-        else:
-            below = f", complete below {r.complete_below:,.0f} m" if r.complete_below else ""
-            proof = f"gap {r.largest_gap:,.0f} m, {r.settled}/{r.routes} routes settled{below}"
+        proof = proof_text(r.proven, r.largest_gap, r.settled, r.routes, r.complete_below)
         same = abs(r.fewest[0] - r.two_objective[0]) < 1e-6 and r.fewest[1] == r.two_objective[1]
         out.append(
             (

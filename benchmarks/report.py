@@ -85,3 +85,14 @@ def seconds(s: float | None) -> str:
 
 def metres(m: float | None) -> str:
     return "–" if m is None or math.isinf(m) else f"{m:,.1f}"
+
+
+def proof_text(
+    proven: bool, largest_gap: float, settled: int, routes: int, complete_below: float | None
+) -> str:
+    """A front's proof in a table cell: "proven", or its largest gap, how many routes are
+    settled and the length below which the front is complete."""
+    if proven:
+        return "proven"
+    below = f", complete below {complete_below:,.0f} m" if complete_below else ""
+    return f"gap {largest_gap:,.0f} m, {settled}/{routes} routes settled{below}"

@@ -10,7 +10,7 @@ import time
 from dataclasses import dataclass
 
 from benchmarks.cases import load_case
-from benchmarks.report import seconds, table
+from benchmarks.report import proof_text, seconds, table
 from gcs_planner.core.planner import plan
 
 TURN_RADIUS = 200.0
@@ -96,12 +96,9 @@ def _complete_below(statement: str) -> float | None:
 
 def proof(r: TurnRow) -> str:
     """The word "proven", or the largest gap, the routes settled and where completeness ends."""
-    if r.optimal:
-        return "proven"
     if r.optimal is None:
         return "–"
-    below = f", complete below {r.complete_below:,.0f} m" if r.complete_below else ""
-    return f"gap {r.largest_gap:,.0f} m, {r.settled}/{r.routes} routes settled{below}"
+    return proof_text(r.optimal, r.largest_gap, r.settled, r.routes, r.complete_below)
 
 
 def render(rows: list[TurnRow]) -> str:
