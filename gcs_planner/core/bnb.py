@@ -54,6 +54,9 @@ PROBE_LABELS = 1000
 # Labels a search over simple routes expands before it probes: a search that proves its front
 # in fewer never pays for the probes (random 5,000 points, default mode: 4 s, 14 s probing).
 PROBE_FROM = 200
+# Dominance between error-state distributions asks Hall's condition of at most this many sets
+# (``_stochastically_dominates``); beyond, the partial routes are kept apart (always safe).
+MAX_UNIONS = 256
 
 __all__ = ["DEFAULT_MAX_LABELS", "PROB_EPS", "BnbResult", "Found", "bnb_front", "flown_route"]
 
@@ -114,7 +117,9 @@ class _Incumbents:
     def __init__(self, kmax: int) -> None:
         self.kmax = kmax
         self.found: list[Found] = []
-        self._best: dict[float, np.ndarray] = {}
+        # best() per number of found routes at least so likely (which ones: the likeliest).
+        self._best: dict[int, np.ndarray] = {}
+        self._probabilities: list[float] = []  # the found routes', ascending
         self._levels: list[float] | None = None
 
     def add(self, new: Found) -> None:
@@ -123,6 +128,7 @@ class _Incumbents:
         ]
         self.found.append(new)
         self._best.clear()
+        self._probabilities = sorted(f.probability for f in self.found)
         self._levels = None
 
     def levels(self) -> list[float]:
@@ -138,14 +144,15 @@ class _Incumbents:
     def best(self, mass: float) -> np.ndarray:
         """best[c] = the least length of a found route with <= c corrections and a probability
         of at least ``mass`` (inf if none)."""
-        b = self._best.get(mass)
+        likely = len(self.found) - bisect.bisect_left(self._probabilities, mass - PROB_EPS)
+        b = self._best.get(likely)
         if b is None:
             b = np.full(self.kmax + 1, np.inf)
             for f in self.found:
                 if f.probability >= mass - PROB_EPS and f.corrections <= self.kmax:
                     b[f.corrections] = min(b[f.corrections], f.length)
             np.minimum.accumulate(b, out=b)
-            self._best[mass] = b
+            self._best[likely] = b
         return b
 
     def covers(self, length: float, k: int, to_go: np.ndarray | None, mass: float) -> bool:
@@ -156,7 +163,7 @@ class _Incumbents:
         m = min(len(to_go), self.kmax - k + 1)
         if m <= 0:
             return True
-        return bool(np.all(length + to_go[:m] >= self.best(mass)[k : k + m]))
+        return bool((length + to_go[:m] >= self.best(mass)[k : k + m]).all())
 
     def least_open(self, length: float, k: int, to_go: np.ndarray | None, mass: float) -> float:
         """The least length L + G_j(e, m) over the numbers m of further corrections for which
@@ -208,7 +215,7 @@ class _Incumbents:
                 above = -math.inf if lo is None else lo  # the last interval: every route
                 np.maximum(reach, ceiling.least_above(above)[k:], out=reach)
             best = np.full(width, np.inf) if hi is None else self.best(hi)[k:]
-            if not np.all(reach >= best):
+            if not (reach >= best).all():
                 return False
         return True
 
@@ -451,7 +458,7 @@ class _Prober:
         self.critical = frozenset(critical)
         # Partial routes of the relaxation proven covered, by ``_key``; the found routes only
         # grow, so they stay covered.
-        self.nogoods: dict[tuple, list[tuple]] = {}
+        self.nogoods: dict[tuple, _Nogoods] = {}
         # Prefixes of relaxed completions that escaped a probe: a partial route along one is
         # likely to escape too, so it is expanded unprobed (skipping a probe is always sound).
         self.hopeful: set[tuple[int, ...]] = set()
@@ -464,7 +471,7 @@ class _Prober:
             return False, 0
         key = _key(self.critical, node, path[:-1])
         state = _kept(L, k, states, sum(states.values()), arc)
-        if _dominated_by(self.nogoods.get(key, ()), state, self.ctx.pair_floor):
+        if _dominated_by(self.nogoods.get(key, _NONE), state, self.ctx.pair_floor):
             return True, 0
         # The pair relaxation's heading is the arc flown last.
         first = arc if self.ctx.pair_floor is not None else None
@@ -507,8 +514,43 @@ def _kept(L: float, k: int, states: dict, mass: float, arc: int) -> tuple:
     return (L, k, states, mass, arc, min(v for v, _ in states), min(h for _, h in states))
 
 
+class _Nogoods:
+    """The partial routes proven covered at one point (``_kept`` tuples), and their scalar
+    fields as arrays: the probes ask each new partial route against hundreds of them, and
+    these only grow between probes, so the arrays are made again only after they grew."""
+
+    # From this many, the cheap tests of ``_dominated_by`` run on the arrays.
+    VECTOR_FROM = 32
+
+    def __init__(self) -> None:
+        self.items: list[tuple] = []
+        self._columns: tuple[np.ndarray, ...] | None = None
+
+    def append(self, state: tuple) -> None:
+        self.items.append(state)
+        self._columns = None
+
+    def candidates(self, state: tuple) -> Sequence[tuple]:
+        """Those that pass the cheap tests against ``state`` (all of them, when few)."""
+        if len(self.items) < self.VECTOR_FROM:
+            return self.items
+        if self._columns is None:
+            fields = np.array([(a[0], a[1], a[3], a[5], a[6]) for a in self.items]).T
+            self._columns = tuple(fields)
+        L, k, mass, v, h = self._columns
+        L0, k0, _, mass0, _, v0, h0 = state
+        ok = (L <= L0) & (k <= k0) & (mass >= mass0 - PROB_EPS) & (v <= v0) & (h <= h0)
+        return [self.items[i] for i in np.flatnonzero(ok)]
+
+
+_NONE = _Nogoods()  # no nogoods at a key
+
+
 def _dominated_by(
-    kept: Sequence[tuple], state: tuple, pairs: PairBounds | None, upto: int | None = None
+    kept: Sequence[tuple] | _Nogoods,
+    state: tuple,
+    pairs: PairBounds | None,
+    upto: int | None = None,
 ) -> bool:
     """Whether a partial route at a point, ``state`` (``_kept``), continues no better than one
     of ``kept`` (at the same point, having visited the same critical points) whatever it does
@@ -516,6 +558,8 @@ def _dominated_by(
     (``_pair_margin``). ``upto``: only the first so many of ``kept`` are asked (those no
     longer than ``state`` when ``kept`` is sorted by length: no longer one dominates)."""
     L, k, states, mass, arc, v, h = state
+    if isinstance(kept, _Nogoods):
+        kept = kept.candidates(state)
     for aL, ak, ast, am, a_arc, av, ah in itertools.islice(kept, upto):
         # The cheap tests first; the least errors of a dominating distribution are no larger.
         if aL > L or ak > k or am < mass - PROB_EPS or av > v or ah > h:
@@ -540,6 +584,8 @@ def _shifted(states: dict, shift: float) -> dict:
 
 def _larger(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """The pointwise larger of two bounds per m (each carried on with its last entry)."""
+    if len(a) == len(b):
+        return np.maximum(a, b)
     width = max(len(a), len(b))
     out = np.empty(width)
     out[: len(a)] = a
@@ -556,33 +602,35 @@ def _stochastically_dominates(d1: dict, d2: dict) -> bool:
     when d2's mass can be moved, unit by unit, onto d1's states no worse in both components:
     by Hall's theorem, when every set S of d2's states weighs no more than d1's states lying
     below some state of S. Large supports are not compared (False is always safe)."""
-    if len(d2) > 8:
-        return False
     if len(d1) == 1:  # one state: it must lie below every state of d2 and weigh as much
         (((v1, h1), m1),) = d1.items()
         return all(v1 <= v2 and h1 <= h2 for v2, h2 in d2) and m1 >= sum(d2.values()) - PROB_EPS
     if len(d2) == 1:  # one state: the states of d1 below it must weigh as much
         (((v2, h2), m2),) = d2.items()
         return sum(m for (v1, h1), m in d1.items() if v1 <= v2 and h1 <= h2) >= m2 - PROB_EPS
-    s1 = list(d1.items())
-    s2 = list(d2.items())
-    below = []
-    for (v2, h2), _ in s2:
+    weights = list(d1.values())
+    # Per state of d2: the set (a bit mask) of d1's states below it, and its mass.
+    below: list[tuple[int, float]] = []
+    for (v2, h2), m2 in d2.items():
         bits = 0
-        for i, ((v1, h1), _) in enumerate(s1):
+        for i, (v1, h1) in enumerate(d1):
             if v1 <= v2 and h1 <= h2:
                 bits |= 1 << i
         if not bits:
             return False
-        below.append(bits)
-    for subset in range(1, 1 << len(s2)):
-        need = 0.0
-        reach = 0
-        for i, (_, m2) in enumerate(s2):
-            if subset >> i & 1:
-                need += m2
-                reach |= below[i]
-        have = sum(m1 for i, (_, m1) in enumerate(s1) if reach >> i & 1)
+        below.append((bits, m2))
+    # Hall's condition need only be asked of the sets S closed under "below": for a union R of
+    # masks, of all of d2's states whose masks lie within R. Any other S with the same reach R
+    # is a subset of that one and needs no more. The unions are few where the masks nest.
+    unions = {0}
+    for bits in {b for b, _ in below}:
+        unions |= {u | bits for u in unions}
+        if len(unions) > MAX_UNIONS:
+            return False
+    unions.discard(0)
+    for reach in unions:
+        need = sum(m2 for bits, m2 in below if bits | reach == reach)
+        have = sum(w for i, w in enumerate(weights) if reach >> i & 1)
         if need > have + PROB_EPS:
             return False
     return True
@@ -792,7 +840,7 @@ def _search(
                 # Kept by length: only those no longer than this one can dominate it.
                 shorter = bisect.bisect_right(lengths, nL)
                 if _dominated_by(kept, state, pair_floor, shorter) or (
-                    probe and _dominated_by(nogoods.get(key, ()), state, pair_floor)
+                    probe and _dominated_by(nogoods.get(key, _NONE), state, pair_floor)
                 ):
                     continue
                 lengths.insert(shorter, nL)
@@ -819,7 +867,7 @@ def _search(
         covered = exhausted and escaped is None
         if covered:  # so is every partial route the probe expanded
             for key, state in expanded:
-                nogoods.setdefault(key, []).append(state)
+                nogoods.setdefault(key, _Nogoods()).append(state)
         witness = [] if escaped is None else [escaped]
         return BnbResult(witness, [], covered, labels, time.perf_counter() - t0, exhausted)
     found = sorted(inc.found, key=lambda g: (g.corrections, g.length))

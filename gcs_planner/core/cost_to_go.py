@@ -20,7 +20,8 @@ soon as, for each m, a route already found has <= k + m corrections and length <
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import bisect
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -37,15 +38,25 @@ class CostToGo:
     indptr: np.ndarray
     e_max: np.ndarray
     table: np.ndarray  # shape (labels, layers)
+    # Per point asked so far: its first row and its e_max as a list. The branch and bound asks
+    # one point at a time, and bisect on a list is several times faster than searchsorted on
+    # an array slice; converting only the points asked keeps large maps' tables compact.
+    _keys: dict[int, tuple[int, list[float]]] = field(
+        default_factory=dict, init=False, repr=False, compare=False
+    )
 
     @property
     def layers(self) -> int:
         return self.table.shape[1]
 
     def _row(self, j: int, e: float) -> int:
-        lo, hi = self.indptr[j], self.indptr[j + 1]
-        i = lo + int(np.searchsorted(self.e_max[lo:hi], e, side="left"))
-        return i if i < hi else -1
+        keys = self._keys.get(j)
+        if keys is None:
+            lo, hi = int(self.indptr[j]), int(self.indptr[j + 1])
+            keys = self._keys[j] = (lo, self.e_max[lo:hi].tolist())
+        lo, e_max = keys
+        i = bisect.bisect_left(e_max, e)
+        return lo + i if i < len(e_max) else -1
 
     def __call__(self, j: int, e: float) -> float:
         """G_j(e): the least length to B with any number of further corrections."""
