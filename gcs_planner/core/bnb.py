@@ -459,9 +459,17 @@ class _Prober:
         # Partial routes of the relaxation proven covered, by ``_key``; the found routes only
         # grow, so they stay covered.
         self.nogoods: dict[tuple, _Nogoods] = {}
-        # Prefixes of relaxed completions that escaped a probe: a partial route along one is
-        # likely to escape too, so it is expanded unprobed (skipping a probe is always sound).
+        # Prefixes of relaxed completions that escaped a probe, and of the routes the search
+        # starts with: a partial route along one is likely to escape too (its own relaxed
+        # completion is no longer than the route and at least as likely), so it is expanded
+        # unprobed (skipping a probe is always sound).
         self.hopeful: set[tuple[int, ...]] = set()
+
+    def hope(self, points: Sequence[int], after: int = 1) -> None:
+        """Mark the prefixes of ``points`` longer than ``after`` points (not the whole route)
+        hopeful."""
+        points = tuple(points)
+        self.hopeful.update(points[:n] for n in range(after + 1, len(points)))
 
     def __call__(self, entry: tuple, inc: _Incumbents, budget: Budget) -> tuple[bool, int]:
         """(covered, labels spent) for the heap ``entry`` of the search whose routes are
@@ -486,7 +494,7 @@ class _Prober:
             nogoods=self.nogoods,
         )
         for w in res.front:
-            self.hopeful.update(w.points[:n] for n in range(len(path) + 1, len(w.points)))
+            self.hope(w.points, after=len(path))
         return res.optimal, res.labels
 
 
@@ -728,6 +736,9 @@ def _search(
             inc.found, seed.length, seed.corrections, seed.probability
         ):
             inc.add(seed)
+    if prober is not None:
+        for route in inc.found:
+            prober.hope(route.points)
     counter = itertools.count()
     # Entry: (f, tiebreak, L, node, k, states, heading, path, to_go, last arc). A carries no
     # error and makes no correction: |A - B| bounds every route, whatever its corrections.
