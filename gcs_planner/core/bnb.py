@@ -609,7 +609,8 @@ def _stochastically_dominates(d1: dict, d2: dict) -> bool:
     ``d1`` as from ``d2``. Success from a state only falls as either error grows, so this holds
     when d2's mass can be moved, unit by unit, onto d1's states no worse in both components:
     by Hall's theorem, when every set S of d2's states weighs no more than d1's states lying
-    below some state of S. Large supports are not compared (False is always safe)."""
+    below some state of S. Where more than MAX_UNIONS sets would have to be asked (only with
+    more than 8 states in d2), the two are not compared (False is always safe)."""
     if len(d1) == 1:  # one state: it must lie below every state of d2 and weigh as much
         (((v1, h1), m1),) = d1.items()
         return all(v1 <= v2 and h1 <= h2 for v2, h2 in d2) and m1 >= sum(d2.values()) - PROB_EPS
