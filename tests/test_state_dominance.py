@@ -1,7 +1,8 @@
 """Dominance between error-state distributions (``bnb._stochastically_dominates``) against an
 independent method: a transport linear programme, whose optimum moves as much of d2's mass onto
 d1's states no worse in both components as can be moved. d1 dominates d2 exactly when all of it
-can (to within PROB_EPS; by max-flow min-cut the shortfall is the largest Hall deficiency)."""
+can (to within PROB_EPS, here the LP's own tolerance; by max-flow min-cut the shortfall is the
+largest Hall deficiency)."""
 
 from __future__ import annotations
 
