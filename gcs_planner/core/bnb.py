@@ -458,7 +458,7 @@ class _Prober:
         self.critical = frozenset(critical)
         # Partial routes of the relaxation proven covered, by ``_key``; the found routes only
         # grow, so they stay covered.
-        self.nogoods: dict[tuple, _Nogoods] = {}
+        self.nogoods: dict[tuple, list[tuple]] = {}
         # Prefixes of relaxed completions that escaped a probe, and of the routes the search
         # starts with: a partial route along one is likely to escape too (its own relaxed
         # completion is no longer than the route and at least as likely), so it is expanded
@@ -479,7 +479,7 @@ class _Prober:
             return False, 0
         key = _key(self.critical, node, path[:-1])
         state = _kept(L, k, states, sum(states.values()), arc)
-        if _dominated_by(self.nogoods.get(key, _NONE), state, self.ctx.pair_floor):
+        if _dominated_by(self.nogoods.get(key, ()), state, self.ctx.pair_floor):
             return True, 0
         # The pair relaxation's heading is the arc flown last.
         first = arc if self.ctx.pair_floor is not None else None
@@ -522,43 +522,8 @@ def _kept(L: float, k: int, states: dict, mass: float, arc: int) -> tuple:
     return (L, k, states, mass, arc, min(v for v, _ in states), min(h for _, h in states))
 
 
-class _Nogoods:
-    """The partial routes proven covered at one point (``_kept`` tuples), and their scalar
-    fields as arrays: the probes ask each new partial route against hundreds of them, and
-    these only grow between probes, so the arrays are made again only after they grew."""
-
-    # From this many, the cheap tests of ``_dominated_by`` run on the arrays.
-    VECTOR_FROM = 32
-
-    def __init__(self) -> None:
-        self.items: list[tuple] = []
-        self._columns: tuple[np.ndarray, ...] | None = None
-
-    def append(self, state: tuple) -> None:
-        self.items.append(state)
-        self._columns = None
-
-    def candidates(self, state: tuple) -> Sequence[tuple]:
-        """Those that pass the cheap tests against ``state`` (all of them, when few)."""
-        if len(self.items) < self.VECTOR_FROM:
-            return self.items
-        if self._columns is None:
-            fields = np.array([(a[0], a[1], a[3], a[5], a[6]) for a in self.items]).T
-            self._columns = tuple(fields)
-        L, k, mass, v, h = self._columns
-        L0, k0, _, mass0, _, v0, h0 = state
-        ok = (L <= L0) & (k <= k0) & (mass >= mass0 - PROB_EPS) & (v <= v0) & (h <= h0)
-        return [self.items[i] for i in np.flatnonzero(ok)]
-
-
-_NONE = _Nogoods()  # no nogoods at a key
-
-
 def _dominated_by(
-    kept: Sequence[tuple] | _Nogoods,
-    state: tuple,
-    pairs: PairBounds | None,
-    upto: int | None = None,
+    kept: Sequence[tuple], state: tuple, pairs: PairBounds | None, upto: int | None = None
 ) -> bool:
     """Whether a partial route at a point, ``state`` (``_kept``), continues no better than one
     of ``kept`` (at the same point, having visited the same critical points) whatever it does
@@ -566,8 +531,6 @@ def _dominated_by(
     (``_pair_margin``). ``upto``: only the first so many of ``kept`` are asked (those no
     longer than ``state`` when ``kept`` is sorted by length: no longer one dominates)."""
     L, k, states, mass, arc, v, h = state
-    if isinstance(kept, _Nogoods):
-        kept = kept.candidates(state)
     for aL, ak, ast, am, a_arc, av, ah in itertools.islice(kept, upto):
         # The cheap tests first; the least errors of a dominating distribution are no larger.
         if aL > L or ak > k or am < mass - PROB_EPS or av > v or ah > h:
@@ -852,7 +815,7 @@ def _search(
                 # Kept by length: only those no longer than this one can dominate it.
                 shorter = bisect.bisect_right(lengths, nL)
                 if _dominated_by(kept, state, pair_floor, shorter) or (
-                    probe and _dominated_by(nogoods.get(key, _NONE), state, pair_floor)
+                    probe and _dominated_by(nogoods.get(key, ()), state, pair_floor)
                 ):
                     continue
                 lengths.insert(shorter, nL)
@@ -879,7 +842,7 @@ def _search(
         covered = exhausted and escaped is None
         if covered:  # so is every partial route the probe expanded
             for key, state in expanded:
-                nogoods.setdefault(key, _Nogoods()).append(state)
+                nogoods.setdefault(key, []).append(state)
         witness = [] if escaped is None else [escaped]
         return BnbResult(witness, [], covered, labels, time.perf_counter() - t0, exhausted)
     found = sorted(inc.found, key=lambda g: (g.corrections, g.length))
