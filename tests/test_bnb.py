@@ -248,3 +248,26 @@ def test_contest_fronts_with_turns_re_evaluate_to_the_same_flown_length(
             legs = [s.leg for s in again.stops[1:]]
             p = success_probability(scenario, f.points, legs).probability
             assert abs(p - f.probability) <= 1e-12
+
+
+@pytest.mark.parametrize("probability", [False, True])
+def test_front_is_exact_with_a_cost_to_go_cut_short(monkeypatch, probability: bool) -> None:
+    """A time limit cuts the cost-to-go (and the pair bounds') layers short: the weaker bound
+    must leave the search exact. Here every table stops after 0 or 1 layers (B's own arcs)."""
+    from gcs_planner.core import bnb, cost_to_go, pair_bounds
+
+    layers = 0
+
+    def cut_short(*args, **kwargs):
+        asked = itertools.count(0)
+        return cost_to_go.cost_to_go(*args, **{**kwargs, "stop": lambda: next(asked) >= layers})
+
+    monkeypatch.setattr(bnb, "cost_to_go", cut_short)
+    monkeypatch.setattr(pair_bounds, "cost_to_go", cut_short)
+    cut = 0
+    for seed in range(30):
+        layers = seed % 2
+        scenario = turning_scenario(seed, radius=[200.0, 1500.0, 0.0][seed % 3])
+        result, _ = assert_front_equals_enumeration(scenario, probability, seed)
+        cut += any(c.startswith("the cost-to-go is") for c in result.cut)
+    assert cut >= 15

@@ -168,6 +168,25 @@ def test_time_limit_zero_stops_before_the_first_label_and_names_the_flag() -> No
     assert result.stats["labels"] == 0
 
 
+def test_time_limit_cuts_the_set_up_short_and_what_it_claims_still_holds() -> None:
+    """With the limit already passed (0 s: deterministic) the bounds the search builds first are
+    cut short or skipped, the statement says which, and the gaps it reports still hold."""
+    checked = 0
+    for seed in range(12):
+        scenario = turning_scenario(seed, radius=200.0)
+        want = enumerate_front(scenario, probability=True)
+        if not want:
+            continue
+        exact = [_Point(w[0], w[1], -w[2]) for w in want]
+        cut = plan(scenario, objectives=THREE, max_labels=None, time_limit=0)
+        assert not cut.optimal and cut.stats["labels"] == 0
+        assert "no bounds over the cone of arrival headings" in cut.stats["setup_cut"]
+        assert "cut the set-up short" in cut.statement
+        claims_hold(cut.routes, cut.proven(), cut.lower_bounds, exact, True)
+        checked += 1
+    assert checked >= 6
+
+
 def test_infeasibility_not_proven_names_the_flag_to_raise() -> None:
     scenario = corridor(2).with_params(turn_radius=200.0)
     with pytest.raises(InfeasibleError, match="not proven.*--max-labels"):

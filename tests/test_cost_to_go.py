@@ -63,3 +63,44 @@ def test_bound_per_number_of_corrections_is_the_shortest_walk() -> None:
                     assert np.all(np.diff(table) <= 0)  # more corrections never cost more
                     assert G(j, float(e)) == table[-1]
     assert checked > 500 and finite > 100
+
+
+def test_a_table_cut_short_keeps_its_layers_and_bounds_the_rest_from_below() -> None:
+    """``stop`` ends the layers: the columns made are the full table's, the last one is no
+    larger than the full table anywhere beyond, and no point B can be reached from is lost."""
+    cut = compared = 0
+    for seed in range(60):
+        scenario = mixed_scenario(seed, n_min=4, n_max=9)
+        graph = build_reach_graph(scenario)
+        full = cost_to_go(scenario, graph)
+        assert full.cut_at is None
+        for layers in (0, 1, 2, 3):
+            part = cost_to_go(scenario, graph, stop=_after(layers))
+            if part.cut_at is None:  # converged before the cut
+                np.testing.assert_array_equal(part.table, full.table)
+                continue
+            cut += 1
+            assert part.cut_at == layers and part.layers == layers + 1
+            for j in range(scenario.n):
+                if j == scenario.end:
+                    continue
+                for e in np.linspace(0.0, scenario.params.reach_m, 7):
+                    want = full.by_corrections(j, float(e))
+                    got = part.by_corrections(j, float(e))
+                    assert got is not None  # never "B out of reach" for want of layers
+                    to_b = float(graph.to_end[j])
+                    for m in range(scenario.n):
+                        w = np.inf if want is None else float(want[min(m, len(want) - 1)])
+                        g = float(got[min(m, len(got) - 1)])
+                        if m < layers:
+                            assert g == w, (seed, j, e, m)
+                        else:
+                            assert g <= w and g <= to_b, (seed, j, e, m)
+                        compared += 1
+    assert cut >= 80 and compared > 5_000
+
+
+def _after(layers: int):
+    """A ``stop`` that ends the table after ``layers`` layers (it is asked before each)."""
+    asked = itertools.count(0)
+    return lambda: next(asked) >= layers

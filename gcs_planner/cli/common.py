@@ -132,8 +132,9 @@ def add_plan_arguments(parser: argparse.ArgumentParser) -> None:
         "--time-limit",
         type=_seconds,
         metavar="SECONDS",
-        help="stop the branch and bound after this many seconds in all (default: no limit; "
-        "building the reach graph and the bounds before it is not interrupted)",
+        help="stop the branch and bound after this many seconds in all (default: no limit); "
+        "past it the bounds built before the search are cut short or skipped (the statement "
+        "says which); reading the scenario and building its reach graph are not interrupted",
     )
     budget.add_argument(
         "--max-labels",

@@ -90,6 +90,9 @@ class BnbResult:
     proven: list[bool] | None = None
     # Labels the probes of this search expanded (``_Prober``).
     probe_labels: int = 0
+    # What the time limit cut short or skipped before the search (in words; empty: nothing).
+    # Every bound stays admissible without it: only the proof gets harder.
+    cut: tuple[str, ...] = ()
 
 
 def _least_length(front: Sequence[Found], corrections: int, probability: float) -> float:
@@ -279,7 +282,7 @@ def bnb_front(
     t0 = time.perf_counter()
     if budget is None:
         budget = Budget(max_labels)
-    ctx = _Context(scenario, probability, max_corrections, graph)
+    ctx = _Context(scenario, probability, max_corrections, graph, stop=budget.expired)
     if not dominance:
         res = _search(ctx, None, budget.share(stage="search"), seeds)
     elif not ctx.model.carries_heading:
@@ -320,6 +323,7 @@ def bnb_front(
                 max(lb, _least_length(floor.front, g.corrections, g.probability))
                 for g, lb in zip(res.front, res.lower_bounds)
             ]
+    res.cut = tuple(dict.fromkeys(ctx.cut))  # the floors' copies share the list
     res.seconds = time.perf_counter() - t0
     return res
 
@@ -357,13 +361,20 @@ class _Context:
         probability: bool,
         max_corrections: int | None,
         graph: ReachGraph | None = None,
+        stop: Callable[[], bool] | None = None,
     ) -> None:
+        # ``stop``: whether the user's time limit has passed; the bounds below are then cut
+        # short or skipped (each only speeds the proof), and ``cut`` says which.
+        self.stop = stop if stop is not None else (lambda: False)
+        self.cut: list[str] = []
         self.scenario = scenario
         self.probability = probability
         self.params = scenario.params
         self.model: LegModel = scenario_leg_model(scenario)
         self.graph = build_reach_graph(scenario) if graph is None else graph
-        self.G = cost_to_go(scenario, self.graph)
+        self.G = cost_to_go(scenario, self.graph, stop=self.stop)
+        if self.G.cut_at is not None:
+            self.cut.append(_cut_bound("the cost-to-go", self.G.cut_at))
         self.kmax = scenario.n - 2 if max_corrections is None else max_corrections
         self.kind_of = [Kind(int(c)) for c in scenario.kind]  # Enum() is slow in the loop
         self.unreliable = scenario.unreliable if probability else np.zeros(scenario.n, dtype=bool)
@@ -374,11 +385,16 @@ class _Context:
         # Bounds that know the cone of headings a route arrives with (``pair_bounds``); only
         # for this model's own legs, never for its relaxation's.
         # (Two objectives prove fast without them: there they cost more than they save.)
-        self.pairs: PairBounds | None = (
-            pair_bounds(scenario, self.graph, self.model)
-            if probability and self.model.carries_heading
-            else None
-        )
+        self.pairs: PairBounds | None = None
+        if probability and self.model.carries_heading:
+            if self.stop():
+                self.cut.append("no bounds over the cone of arrival headings")
+            else:
+                self.pairs = pair_bounds(scenario, self.graph, self.model, stop=self.stop)
+                if self.pairs is not None and self.pairs.G.cut_at is not None:
+                    self.cut.append(
+                        _cut_bound("the bound over arrival headings", self.pairs.G.cut_at)
+                    )
         # Made on first need (``failures``): with pairs, over them too, and asked by the arc
         # flown last.
         self._failures: FailureBounds | None = None
@@ -398,7 +414,9 @@ class _Context:
         proves its front in a few labels never pays for them."""
         if not self._failures_made:
             self._failures_made = True
-            if self.pairs is None:
+            if self.stop():
+                self.cut.append("no bounds per probability level")
+            elif self.pairs is None:
                 self._failures = failure_bounds(self.scenario, self.graph)
             else:
                 self._failures = failure_bounds(
@@ -435,6 +453,16 @@ class _Context:
             legs = [s.leg for s in route.stops[1:]]
             prob = success_probability(self.scenario, points, legs).probability
         return Found(route.length, route.corrections, min(1.0, prob), points) if prob > 0 else None
+
+
+def _cut_bound(name: str, cut_at: int) -> str:
+    """What a cost-to-go cut short (``cut_at``) still knows, in words."""
+    if cut_at == 0:
+        return f"{name} is the straight distance to B (no layer made)"
+    return (
+        f"{name} is exact for up to {cut_at - 1} further corrections (beyond, the straight "
+        "distance to B bounds)"
+    )
 
 
 class _Prober:

@@ -7,8 +7,10 @@ far. One budget is shared by every round of one plan (relaxation rounds, the str
 floor), so the limits are the user's total, not per round.
 
 The time limit is checked between labels, never inside one: a search stops within one label's
-work of the limit. Progress is reported to a callback at most every ``every`` seconds, so a slow
-terminal never slows the search.
+work of the limit. It covers the bounds a search builds first too (cost-to-go layers, the pair
+and failure bounds, the seeds), which are cut short or skipped once it has passed; reading the
+scenario and building its reach graph come before it can act. Progress is reported to a
+callback at most every ``every`` seconds, so a slow terminal never slows the search.
 """
 
 from __future__ import annotations
@@ -93,14 +95,20 @@ class Budget:
     def elapsed(self) -> float:
         return time.monotonic() - self.start
 
+    def expired(self) -> bool:
+        """Whether the time limit has passed (a limit of 0 always has): the set-up before a
+        search asks this between its steps, and skips or cuts short what only speeds the proof
+        (``cost_to_go``'s ``stop``)."""
+        return self.deadline is not None and (
+            self.time_limit == 0 or time.monotonic() >= self.deadline
+        )
+
     def take(self) -> bool:
         """Spend one label; False (and nothing spent) when the budget is used up."""
         if self.max_labels is not None and self.spent >= self.max_labels:
             return self._stop("labels")
         # A time limit of 0 stops before the first label: deterministic, whatever the machine.
-        if self.deadline is not None and (
-            self.time_limit == 0 or time.monotonic() >= self.deadline
-        ):
+        if self.expired():
             return self._stop("time")
         self.spent += 1
         return True

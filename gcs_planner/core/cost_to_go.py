@@ -16,11 +16,17 @@ j -> B is layer 0). Keeping it gives the bound per number of further corrections
 G_j(e, m) = the least length with at most m more corrections, which is what prunes a partial
 route with k corrections: it can only end as (>= L + G_j(e, m), k + m), and that is dominated as
 soon as, for each m, a route already found has <= k + m corrections and length <= L + G_j(e, m).
+
+On large maps the layers take seconds each (20,000 points: about 0.8 s a layer). A caller with a
+deadline passes ``stop``: the layers end when it says so, and one last column bounds every walk
+with more corrections than the layers made by the straight distance to B (``ReachGraph.to_end``,
+no longer than any walk): weaker, still admissible, so a search over it stays exact.
 """
 
 from __future__ import annotations
 
 import bisect
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -38,6 +44,10 @@ class CostToGo:
     indptr: np.ndarray
     e_max: np.ndarray
     table: np.ndarray  # shape (labels, layers)
+    # None: every layer was made (the bound is exact). Otherwise the layers made before
+    # ``stop`` ended them: columns up to it are exact, the last bounds more corrections by the
+    # straight distance to B (see the module's docstring).
+    cut_at: int | None = None
     # Per point asked so far: its first row and its e_max as a list. The branch and bound asks
     # one point at a time, and bisect on a list is several times faster than searchsorted on
     # an array slice; converting only the points asked keeps large maps' tables compact.
@@ -77,6 +87,7 @@ def cost_to_go(
     *,
     is_v: np.ndarray | None = None,
     own_start: np.ndarray | None = None,
+    stop: Callable[[], bool] | None = None,
 ) -> CostToGo:
     """G of the scenario over ``graph``. ``compiled``: expand layers with the numba kernel
     (True), numpy (False) or by size (None); the same table either way.
@@ -84,7 +95,12 @@ def cost_to_go(
     ``is_v`` and ``own_start`` serve graphs whose nodes are not the scenario's points (see
     ``failure_bounds``): per node, whether it is a V point, and the metres the component it
     corrects already carries right after its correction (0 for a correction that succeeds; the
-    default)."""
+    default).
+
+    ``stop``: asked before each layer (the first is B's own arcs); True ends the layers and
+    makes the table admissible without them (``cut_at``)."""
+    if stop is not None and stop():  # not even B's own arcs: the straight distance alone
+        return _table(graph, [], [], [], [], 0)
     compiled = use_compiled(scenario.n, compiled)
     if compiled:
         from gcs_planner.core.cost_to_go_kernel import (
@@ -156,8 +172,12 @@ def cost_to_go(
         np.add.at(r_ptr, r_tgt + 1, 1)
         np.cumsum(r_ptr, out=r_ptr)
 
+    cut_at = None
     for layer in range(1, n):
         if not len(node):
+            break
+        if stop is not None and stop():
+            cut_at = layer
             break
         if compiled:
             j, newR, newE = backward_fan(
@@ -196,6 +216,30 @@ def cost_to_go(
         kept_R.append(R)
         kept_E.append(E)
         kept_layer.append(np.full(len(node), layer))
+    return _table(graph, kept_node, kept_R, kept_E, kept_layer, cut_at)
+
+
+def _table(
+    graph: ReachGraph,
+    kept_node: list[np.ndarray],
+    kept_R: list[np.ndarray],
+    kept_E: list[np.ndarray],
+    kept_layer: list[np.ndarray],
+    cut_at: int | None,
+) -> CostToGo:
+    """The table of the labels kept, per layer; ``cut_at``: the layers ended there (``stop``)."""
+    n, end = graph.n, graph.end
+    if cut_at is not None:
+        # Walks with cut_at or more further corrections: at least the straight distance to B,
+        # whatever the error carried (E above every limit, so that every feasible e finds it).
+        tail = np.flatnonzero(np.arange(n) != end)
+        limits = np.concatenate([graph.lim_v, graph.lim_h])
+        top = float(np.max(limits[np.isfinite(limits)], initial=0.0))  # A's are inf
+        kept_node.append(tail)
+        # (Less a relative 1e-9, as the pair bounds' legs: rounding may only weaken a bound.)
+        kept_R.append(graph.to_end[tail] * (1.0 - 1e-9))
+        kept_E.append(np.full(len(tail), 2.0 * top + 1.0))
+        kept_layer.append(np.full(len(tail), cut_at))
     arch_node, arch_R, arch_E, arch_layer = (
         np.concatenate(a) for a in (kept_node, kept_R, kept_E, kept_layer)
     )
@@ -216,7 +260,7 @@ def cost_to_go(
     for j in np.flatnonzero(np.diff(indptr)):
         lo, hi = indptr[j], indptr[j + 1]
         table[lo:hi] = np.minimum.accumulate(table[lo:hi][::-1], axis=0)[::-1]
-    return CostToGo(indptr, a_E, table)
+    return CostToGo(indptr, a_E, table, cut_at)
 
 
 def _filter(

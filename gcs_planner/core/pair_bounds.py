@@ -26,6 +26,7 @@ over a graph whose nodes are the arcs of the reach graph.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -155,9 +156,14 @@ def pair_leg_bounds(
     return out
 
 
-def pair_bounds(scenario: Scenario, graph: ReachGraph, model: LegModel) -> PairBounds | None:
+def pair_bounds(
+    scenario: Scenario,
+    graph: ReachGraph,
+    model: LegModel,
+    stop: Callable[[], bool] | None = None,
+) -> PairBounds | None:
     """G2 of ``scenario`` over ``graph`` for airplane legs with turns (None for other models,
-    or when the pairs are too many to pay off)."""
+    or when the pairs are too many to pay off). ``stop``: see ``cost_to_go``."""
     if not isinstance(model, AirplaneLegs) or model.radius <= 0:
         return None
     n, end, start = graph.n, graph.end, graph.start
@@ -184,5 +190,5 @@ def pair_bounds(scenario: Scenario, graph: ReachGraph, model: LegModel) -> PairB
     point = np.concatenate([dst[first], [end, start]])
     pairs = graph.expanded(tail, head, lb, point, start_node, end_node)
     is_v = scenario.kind[point] == Kind.V
-    G = cost_to_go(scenario, pairs, is_v=is_v)
+    G = cost_to_go(scenario, pairs, is_v=is_v, stop=stop)
     return PairBounds(G, node_of_arc, pairs.indptr, pairs.length, pairs, point)

@@ -220,6 +220,13 @@ def _with_probability(scenario: Scenario, route: Route) -> Route:
     return route.with_probabilities(sp.probability, sp.per_stop)
 
 
+def _cut_text(cut: Sequence[str]) -> str:
+    """What the time limit cut short before the search, for a statement ('' if nothing)."""
+    if not cut:
+        return ""
+    return f"; the time limit also cut the set-up short ({'; '.join(cut)})"
+
+
 def _branch_and_bound(
     scenario: Scenario, use_probability: bool, max_corrections: int | None, budget: Budget
 ):
@@ -229,7 +236,11 @@ def _branch_and_bound(
     # One reach graph for both (on 20,000 points it takes seconds to build).
     graph = build_reach_graph(scenario)
     certain = certain_front(scenario, max_corrections, graph) if use_probability else None
-    seeds = (*certain.seeds, *reliable_seeds(scenario, max_corrections)) if certain else ()
+    # (The certain front stays whatever the time limit: it is the floor every gap is measured
+    # from, and seconds even on 20,000 points. The routes certain to arrive only speed the
+    # proof: past the limit they are left out.)
+    reliable = () if budget.expired() else reliable_seeds(scenario, max_corrections)
+    seeds = (*certain.seeds, *reliable) if certain else ()
     res = bnb_front(
         scenario,
         probability=use_probability,
@@ -253,6 +264,8 @@ def _branch_and_bound(
         # Labels the probes expanded (turns): outside the label budget, within the time limit.
         "probe_labels": res.probe_labels,
         "critical_points": len(res.critical),
+        # What the time limit cut short before the search (empty: nothing).
+        "setup_cut": list(res.cut),
     }
     model = scenario.vehicle.describe() + (", uncertain corrections" if use_probability else "")
     heading_free = not scenario_leg_model(scenario).carries_heading
@@ -266,7 +279,7 @@ def _branch_and_bound(
             (
                 f"no feasible route found with {model} within the search budget of "
                 f"{budget.describe()} ({res.open_labels} partial routes left open), so "
-                f"infeasibility is not proven: {budget.advice()}"
+                f"infeasibility is not proven: {budget.advice()}{_cut_text(res.cut)}"
             ),
             stats,
         )
@@ -303,7 +316,7 @@ def _branch_and_bound(
             f"front are at least "
             f"{res.open_bound:,.1f} m long; {unsettled} of {len(res.front)} routes are not "
             f"marked optimal because partial routes that may lead to front routes with no "
-            f"more corrections (or a higher probability) are still open"
+            f"more corrections (or a higher probability) are still open{_cut_text(res.cut)}"
         )
     if res.proven is not None:
         stats["settled"] = list(res.proven)
