@@ -458,11 +458,8 @@ class _Context:
 def _cut_bound(name: str, cut_at: int) -> str:
     """What a cost-to-go cut short (``cut_at``) still knows, in words."""
     if cut_at == 0:
-        return f"{name} is the straight distance to B (no layer made)"
-    return (
-        f"{name} is exact for up to {cut_at - 1} further corrections (beyond, the straight "
-        "distance to B bounds)"
-    )
+        return f"{name}: no layer made, only the straight distance to B"
+    return f"{name}: exact up to {cut_at - 1} further corrections, the distance to B beyond"
 
 
 class _Prober:
