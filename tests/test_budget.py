@@ -200,6 +200,7 @@ def test_progress_reports_bound_open_routes_and_routes_found() -> None:
     scenario = corridor(3)
     budget = Budget(max_labels=None, progress=seen.append, every=0.0)
     res = bnb_front(scenario, probability=True, budget=budget)
+    seen = [p for p in seen if not p.setup]  # the set-up's own reports: see the next test
     assert len(seen) == res.labels > 0
     if res.rounds == 1:
         assert [p.labels for p in seen] == list(range(1, res.labels + 1))
@@ -212,6 +213,25 @@ def test_progress_reports_bound_open_routes_and_routes_found() -> None:
     line = out.getvalue()
     assert "labels" in line and "partial routes open" in line and "routes found" in line
     assert line.endswith("\n") and "\r" not in line  # no terminal: one plain line per report
+
+
+def test_progress_shows_the_set_up_before_the_search() -> None:
+    """On large maps the bounds take seconds before the first label: the console is told what
+    is being built (every report is due here: ``every`` = 0)."""
+    seen: list[Progress] = []
+    scenario = turning_scenario(3, radius=200.0)
+    budget = Budget(max_labels=None, progress=seen.append, every=0.0)
+    res = bnb_front(scenario, probability=True, budget=budget)
+    setup = [p.setup for p in seen if p.setup]
+    assert setup[:2] == ["cost-to-go, layer 0", "cost-to-go, layer 1"]
+    assert any(s.startswith("bounds over headings, layer") for s in setup)
+    first_label = next(i for i, p in enumerate(seen) if p.labels)
+    assert not any(p.setup.startswith("cost-to-go") for p in seen[first_label:])
+    assert res.optimal and not res.cut  # no time limit: nothing cut
+    out = io.StringIO()
+    show = terminal_progress(out)
+    show(seen[0])
+    assert out.getvalue() == f"set-up: cost-to-go, layer 0, {seen[0].seconds:.1f} s\n"
 
 
 def test_budget_flags_on_the_command_line(capsys) -> None:

@@ -282,7 +282,7 @@ def bnb_front(
     t0 = time.perf_counter()
     if budget is None:
         budget = Budget(max_labels)
-    ctx = _Context(scenario, probability, max_corrections, graph, stop=budget.expired)
+    ctx = _Context(scenario, probability, max_corrections, graph, budget)
     if not dominance:
         res = _search(ctx, None, budget.share(stage="search"), seeds)
     elif not ctx.model.carries_heading:
@@ -361,18 +361,19 @@ class _Context:
         probability: bool,
         max_corrections: int | None,
         graph: ReachGraph | None = None,
-        stop: Callable[[], bool] | None = None,
+        budget: Budget | None = None,
     ) -> None:
-        # ``stop``: whether the user's time limit has passed; the bounds below are then cut
-        # short or skipped (each only speeds the proof), and ``cut`` says which.
-        self.stop = stop if stop is not None else (lambda: False)
+        # The user's budget: once its time limit has passed, the bounds below are cut short or
+        # skipped (each only speeds the proof), and ``cut`` says which; meanwhile it shows
+        # what the set-up builds.
+        self.budget = budget if budget is not None else Budget(None)
         self.cut: list[str] = []
         self.scenario = scenario
         self.probability = probability
         self.params = scenario.params
         self.model: LegModel = scenario_leg_model(scenario)
         self.graph = build_reach_graph(scenario) if graph is None else graph
-        self.G = cost_to_go(scenario, self.graph, stop=self.stop)
+        self.G = cost_to_go(scenario, self.graph, stop=self._layers("cost-to-go"))
         if self.G.cut_at is not None:
             self.cut.append(_cut_bound("the cost-to-go", self.G.cut_at))
         self.kmax = scenario.n - 2 if max_corrections is None else max_corrections
@@ -387,10 +388,12 @@ class _Context:
         # (Two objectives prove fast without them: there they cost more than they save.)
         self.pairs: PairBounds | None = None
         if probability and self.model.carries_heading:
-            if self.stop():
+            if self.budget.expired():
                 self.cut.append("no bounds over the cone of arrival headings")
             else:
-                self.pairs = pair_bounds(scenario, self.graph, self.model, stop=self.stop)
+                self.pairs = pair_bounds(
+                    scenario, self.graph, self.model, stop=self._layers("bounds over headings")
+                )
                 if self.pairs is not None and self.pairs.G.cut_at is not None:
                     self.cut.append(
                         _cut_bound("the bound over arrival headings", self.pairs.G.cut_at)
@@ -409,12 +412,24 @@ class _Context:
         # straight-leg search, whose floors and probes (turns) keep the plain order.
         self.open_order = False
 
+    def _layers(self, what: str) -> Callable[[], bool]:
+        """A cost-to-go's ``stop``: asked before each layer, it shows the layer and says
+        whether the time limit has passed."""
+        layer = itertools.count()
+
+        def stop() -> bool:
+            self.budget.setup(f"{what}, layer {next(layer)}")
+            return self.budget.expired()
+
+        return stop
+
     def failures(self) -> FailureBounds | None:
         """The failure bounds (``failure_bounds``), made on the first call: a search that
         proves its front in a few labels never pays for them."""
         if not self._failures_made:
             self._failures_made = True
-            if self.stop():
+            self.budget.setup("bounds per probability level")
+            if self.budget.expired():
                 self.cut.append("no bounds per probability level")
             elif self.pairs is None:
                 self._failures = failure_bounds(self.scenario, self.graph)

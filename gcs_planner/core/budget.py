@@ -36,6 +36,9 @@ class Progress:
     bound: float
     seconds: float
     stage: str = ""
+    # What the set-up before the search is building (empty once the search runs): on large
+    # maps the bounds take seconds, and a console that shows nothing meanwhile looks hung.
+    setup: str = ""
 
 
 ProgressCallback = Callable[[Progress], None]
@@ -128,6 +131,11 @@ class Budget:
         self._next_report = now + self.every
         return True
 
+    def setup(self, what: str) -> None:
+        """Report, when one is due, that the set-up is building ``what``."""
+        if self.progress is not None and self.due():
+            self.progress(Progress(0, 0, 0, math.inf, self.elapsed(), self.stage, setup=what))
+
     def report(self, labels: int, open_routes: int, found: int, bound: float) -> None:
         if self.progress is not None:
             self.progress(Progress(labels, open_routes, found, bound, self.elapsed(), self.stage))
@@ -165,6 +173,8 @@ class TerminalProgress:
             f"{stage}{p.seconds:.1f} s, {p.labels:,} labels, {p.open_routes:,} partial routes "
             f"open, {p.routes_found} routes found, front complete below {bound}"
         )
+        if p.setup:
+            line = f"set-up: {p.setup}, {p.seconds:.1f} s"
         self.out.write(f"\r{line}\x1b[K" if self.tty else f"{line}\n")
         self.out.flush()
         self.shown = True

@@ -235,12 +235,16 @@ def _branch_and_bound(
     # without the unreliable points seeds it with routes certain to arrive (``seeding``).
     # One reach graph for both (on 20,000 points it takes seconds to build).
     graph = build_reach_graph(scenario)
-    certain = certain_front(scenario, max_corrections, graph) if use_probability else None
-    # (The certain front stays whatever the time limit: it is the floor every gap is measured
-    # from, and seconds even on 20,000 points. The routes certain to arrive only speed the
-    # proof: past the limit they are left out.)
-    reliable = () if budget.expired() else reliable_seeds(scenario, max_corrections)
-    seeds = (*certain.seeds, *reliable) if certain else ()
+    certain, seeds = None, ()
+    if use_probability:
+        # (The certain front stays whatever the time limit: it is the floor every gap is
+        # measured from, and seconds even on 20,000 points. The routes certain to arrive only
+        # speed the proof: past the limit they are left out.)
+        budget.setup("the two-objective front")
+        certain = certain_front(scenario, max_corrections, graph)
+        budget.setup("routes certain to arrive")
+        reliable = () if budget.expired() else reliable_seeds(scenario, max_corrections)
+        seeds = (*certain.seeds, *reliable)
     res = bnb_front(
         scenario,
         probability=use_probability,
