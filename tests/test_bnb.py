@@ -252,9 +252,10 @@ def test_contest_fronts_with_turns_re_evaluate_to_the_same_flown_length(
 
 @pytest.mark.parametrize("probability", [False, True])
 def test_front_is_exact_with_a_cost_to_go_cut_short(monkeypatch, probability: bool) -> None:
-    """A time limit cuts the cost-to-go (and the pair bounds') layers short: the weaker bound
-    must leave the search exact. Here every table stops after 0 or 1 layers (B's own arcs)."""
-    from gcs_planner.core import bnb, cost_to_go, pair_bounds
+    """A time limit cuts the cost-to-go's layers short (and the pair and failure bounds'): the
+    weaker bounds must leave the search exact. Here every table stops after 0 or 1 layers (B's
+    own arcs)."""
+    from gcs_planner.core import bnb, cost_to_go, failure_bounds, pair_bounds
 
     layers = 0
 
@@ -264,10 +265,14 @@ def test_front_is_exact_with_a_cost_to_go_cut_short(monkeypatch, probability: bo
 
     monkeypatch.setattr(bnb, "cost_to_go", cut_short)
     monkeypatch.setattr(pair_bounds, "cost_to_go", cut_short)
-    cut = 0
+    monkeypatch.setattr(failure_bounds, "cost_to_go", cut_short)
+    monkeypatch.setattr(bnb, "FAILURE_BOUNDS_FROM", 0)  # made (and cut) at once
+    cut = failures_cut = 0
     for seed in range(20):
         layers = seed % 2
         scenario = turning_scenario(seed, radius=[200.0, 1500.0, 0.0][seed % 3])
         result, _ = assert_front_equals_enumeration(scenario, probability, seed)
         cut += any(c.startswith("the cost-to-go:") for c in result.cut)
+        failures_cut += any(c.startswith("the bounds per probability") for c in result.cut)
     assert cut >= 10
+    assert failures_cut >= 5 or not probability

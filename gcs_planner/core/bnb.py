@@ -428,15 +428,20 @@ class _Context:
         proves its front in a few labels never pays for them."""
         if not self._failures_made:
             self._failures_made = True
-            self.budget.setup("bounds per probability level")
+            name = "bounds per probability level"
             if self.budget.expired():
-                self.cut.append("no bounds per probability level")
-            elif self.pairs is None:
-                self._failures = failure_bounds(self.scenario, self.graph)
+                self.cut.append(f"no {name}")
             else:
-                self._failures = failure_bounds(
-                    self.scenario, self.pairs.graph, point_of=self.pairs.point
+                graph, point_of = (
+                    (self.graph, None)
+                    if self.pairs is None
+                    else (self.pairs.graph, self.pairs.point)
                 )
+                self._failures = failure_bounds(
+                    self.scenario, graph, point_of=point_of, stop=self._layers(name)
+                )
+                if self._failures is not None and self._failures.G.cut_at is not None:
+                    self.cut.append(_cut_bound(f"the {name}", self._failures.G.cut_at))
         return self._failures
 
     def relaxed(self) -> _Context:

@@ -31,6 +31,7 @@ carried error (some branch arrives); the pointwise maximum of valid lower bounds
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -104,10 +105,12 @@ def failure_bounds(
     graph: ReachGraph,
     failures: int = MAX_FAILURES,
     point_of: np.ndarray | None = None,
+    stop: Callable[[], bool] | None = None,
 ) -> FailureBounds | None:
     """The bounds G^0 .. G^failures of ``scenario`` over ``graph`` (None when no correction can
     fail: every point reliable, or p = 1). ``point_of``: the scenario point of each node of
-    ``graph`` when its nodes are not the points (the pairs of ``pair_bounds``)."""
+    ``graph`` when its nodes are not the points (the pairs of ``pair_bounds``). ``stop``: see
+    ``cost_to_go`` (a table cut short is weaker, still a lower bound)."""
     p = scenario.params.p_success
     point = np.arange(graph.n) if point_of is None else np.asarray(point_of)
     unreliable = np.asarray(scenario.unreliable, dtype=bool)[point]
@@ -159,5 +162,5 @@ def failure_bounds(
     expanded = graph.expanded(e_src, e_dst, e_len, node_pt, start, end)
     # numpy or the compiled layer by the scenario's size, as the plain cost-to-go (loading the
     # compiled kernels costs more than small maps save).
-    G = cost_to_go(scenario, expanded, is_v=is_v_pt[node_pt], own_start=own)
+    G = cost_to_go(scenario, expanded, is_v=is_v_pt[node_pt], own_start=own, stop=stop)
     return FailureBounds(G, n, failures, 1.0 - p, is_v_pt)
