@@ -9,11 +9,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from gcs_planner.core.bnb import DEFAULT_MAX_LABELS, PROB_EPS, bnb_front, flown_route
 from gcs_planner.core.budget import Budget, ProgressCallback
 from gcs_planner.core.choose import choose as choose_route
+from gcs_planner.core.focus import FOCUS_FROM, focus
 from gcs_planner.core.probability import success_probability
 from gcs_planner.core.reach import build_reach_graph
 from gcs_planner.core.route import Route, evaluate_route
@@ -232,27 +233,47 @@ def _branch_and_bound(
 ):
     # With the probability objective, the two-objective straight-leg front seeds the search
     # (its fewest-corrections end first of all) and bounds each route from below; the front
-    # without the unreliable points seeds it with routes certain to arrive (``seeding``).
-    # One reach graph for both (on 20,000 points it takes seconds to build).
+    # without the unreliable points seeds it with routes certain to arrive (``seeding``). On
+    # large maps it is made with two objectives too: a route of it may bound every front route
+    # and focus the search (``focus``). One reach graph for all (on 20,000 points it takes
+    # seconds to build).
     graph = build_reach_graph(scenario)
     certain, seeds = None, ()
-    if use_probability:
+    if use_probability or scenario.n >= FOCUS_FROM:
         # (The certain front stays whatever the time limit: it is the floor every gap is
         # measured from, and seconds even on 20,000 points. The routes certain to arrive only
         # speed the proof: past the limit they are left out.)
         budget.setup("the two-objective front")
         certain = certain_front(scenario, max_corrections, graph)
-        budget.setup("routes certain to arrive")
-        reliable = () if budget.expired() else reliable_seeds(scenario, max_corrections)
-        seeds = (*certain.seeds, *reliable)
+        seeds = certain.seeds
+        if use_probability:
+            budget.setup("routes certain to arrive")
+            reliable = () if budget.expired() else reliable_seeds(scenario, max_corrections)
+            seeds = (*seeds, *reliable)
+    inside = focus(scenario, certain, seeds, use_probability)
+    searched = scenario
+    if inside is not None:
+        # Every front route lies within the ellipsoid (``focus``): search its points alone,
+        # in their own indices, and map the routes back.
+        budget.setup(f"the {len(inside):,} points a front route can pass")
+        searched = scenario.subset(inside)
+        graph = build_reach_graph(searched)
+        position = {int(p): i for i, p in enumerate(inside)}
+        seeds = tuple(
+            tuple(position[p] for p in s) for s in seeds if all(p in position for p in s)
+        )
     res = bnb_front(
-        scenario,
+        searched,
         probability=use_probability,
         max_corrections=max_corrections,
         budget=budget,
         seeds=seeds,
         graph=graph,
     )
+    if inside is not None:
+        res.front = [
+            replace(g, points=tuple(int(inside[i]) for i in g.points)) for g in res.front
+        ]
     if certain is not None:
         res.lower_bounds = [
             max(lb, certain.floor(g.corrections)) for g, lb in zip(res.front, res.lower_bounds)
@@ -270,6 +291,8 @@ def _branch_and_bound(
         "critical_points": len(res.critical),
         # What the time limit cut short before the search (empty: nothing).
         "setup_cut": list(res.cut),
+        # Fewer than the scenario's points when the search was focused (``focus``).
+        "points": searched.n,
     }
     model = scenario.vehicle.describe() + (", uncertain corrections" if use_probability else "")
     heading_free = not scenario_leg_model(scenario).carries_heading
@@ -311,6 +334,11 @@ def _branch_and_bound(
             f"exact: the Pareto front over all simple feasible routes with {model}, proven by "
             f"exhaustive branch and bound ({res.labels} labels; bound: {bound}; {how})"
         )
+        if inside is not None:
+            statement += (
+                f"; searched over the {len(inside):,} of {scenario.n:,} points within the "
+                "ellipsoid that a route with the fewest corrections bounds"
+            )
     else:
         unsettled = len(res.front) - sum(res.proven or ())
         statement = (
