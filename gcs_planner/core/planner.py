@@ -235,16 +235,18 @@ def _branch_and_bound(
     # (its fewest-corrections end first of all) and bounds each route from below; the front
     # without the unreliable points seeds it with routes certain to arrive (``seeding``). On
     # large maps it is made with two objectives too: a route of it may bound every front route
-    # and focus the search (``focus``). One reach graph for all (on 20,000 points it takes
-    # seconds to build).
-    graph = build_reach_graph(scenario)
+    # and focus the search (``focus``). One reach graph for all; on large maps (seconds to
+    # build on 20,000 points) it is made only if the search cannot be focused.
+    large = scenario.n >= FOCUS_FROM
+    graph = None if large else build_reach_graph(scenario)
     certain, seeds = None, ()
-    if use_probability or scenario.n >= FOCUS_FROM:
+    if use_probability or large:
         # (The certain front stays whatever the time limit: it is the floor every gap is
         # measured from, and seconds even on 20,000 points. The routes certain to arrive only
         # speed the proof: past the limit they are left out.)
         budget.setup("the two-objective front")
         certain = certain_front(scenario, max_corrections, graph)
+        graph = certain.graph if graph is None else graph
         seeds = certain.seeds
         if use_probability:
             budget.setup("routes certain to arrive")
@@ -262,6 +264,9 @@ def _branch_and_bound(
         seeds = tuple(
             tuple(position[p] for p in s) for s in seeds if all(p in position for p in s)
         )
+    elif graph is None:
+        budget.setup("the reach graph")
+        graph = build_reach_graph(scenario)
     res = bnb_front(
         searched,
         probability=use_probability,

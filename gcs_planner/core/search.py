@@ -66,6 +66,9 @@ class FrontResult:
     stats: SearchStats
     # When the front is empty: the diagnosis of why (see explain_infeasible).
     why_infeasible: str | None = None
+    # The reach graph over every point, when the search made it or was given it (None when it
+    # searched a focused subset only): a caller that needs it too need not build it again.
+    graph: ReachGraph | None = field(default=None, repr=False, compare=False)
 
 
 def straight_front(
@@ -120,7 +123,7 @@ def straight_front(
     stats.critical = critical
     stats.seconds = time.perf_counter() - t0
     why = None if front else explain_infeasible(scenario, graph, closest)
-    return FrontResult(tuple(front), stats, why)
+    return FrontResult(tuple(front), stats, why, graph)
 
 
 # Focusing: the first bound's slack over |AB|, and how much it grows while the routes within

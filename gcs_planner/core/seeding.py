@@ -28,7 +28,7 @@ long sparse corridors than the seeds are worth.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -42,6 +42,9 @@ class CertainFront:
     seeds: tuple[tuple[int, ...], ...]
     # least[c]: the least straight-leg length with <= c corrections (inf where none).
     least: np.ndarray
+    # The scenario's reach graph, when the search made it (or was given it); None when it
+    # searched only the points near the straight line from A to B (large maps).
+    graph: ReachGraph | None = field(default=None, repr=False, compare=False)
 
     def floor(self, corrections: int) -> float:
         """A lower bound on the length of any route with <= ``corrections`` corrections."""
@@ -61,7 +64,9 @@ def certain_front(
 
     Not the straight-leg front of a copy with R = 0: airplane legs with R = 0 cannot fly a leg
     too steep for its length, which a helix flies with R > 0, so that front is no floor.
-    ``graph``: the scenario's reach graph, when the caller has it already."""
+    ``graph``: the scenario's reach graph, when the caller has it already; without one, large
+    maps search only the points that can lie on a front route (``search._focused``) and the
+    graph over every point is made only where that cannot be proven (then returned)."""
     res = straight_front(
         scenario,
         graph,
@@ -75,7 +80,7 @@ def certain_front(
         least[fp.corrections] = min(least[fp.corrections], fp.length)
     np.minimum.accumulate(least, out=least)
     simple = tuple(fp.points for fp in res.front if len(set(fp.points)) == len(fp.points))
-    return CertainFront(simple, least)
+    return CertainFront(simple, least, res.graph)
 
 
 def reliable_seeds(
