@@ -8,6 +8,12 @@ from gcs_planner.scenario.generate import random_scenario
 from gcs_planner.scenario.model import Parameters, Scenario
 
 
+def contest_params(**changes: float) -> Parameters:
+    """Dataset 1's limits (alpha 25/15, beta 20/25, theta 30, delta 0.001), corrections that
+    succeed with p = 0.8, and ``changes`` (turn radius, failure residual, climb limits)."""
+    return Parameters(25, 15, 20, 25, 30, 0.001, **{"p_success": 0.8, **changes})
+
+
 def corridor_scenario(seed: int, n_min: int = 4, n_max: int = 7) -> Scenario:
     """Sparse scenarios in a narrow corridor with random limits: few chains are feasible, and
     now and then only walks that revisit a point are (the elementarity cases of MODEL.md)."""

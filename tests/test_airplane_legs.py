@@ -8,6 +8,7 @@ import math
 
 import numpy as np
 import pytest
+from helpers import contest_params
 from test_bnb import assert_front_equals_enumeration, enumerate_front, pareto
 
 from gcs_planner.core.bnb import flown_route
@@ -15,7 +16,6 @@ from gcs_planner.core.planner import plan
 from gcs_planner.geometry.airplane import airplane_leg, airplane_legs, lower_bounds
 from gcs_planner.geometry.trajectory import scenario_trajectory
 from gcs_planner.scenario.generate import random_scenario
-from gcs_planner.scenario.model import Parameters
 
 
 def fly(leg, step: float = 0.25) -> dict:
@@ -107,15 +107,8 @@ def test_without_a_turning_radius_a_steep_leg_cannot_be_flown() -> None:
 
 def climbing_scenario(seed: int):
     rng = np.random.default_rng(seed)
-    params = Parameters(
-        25,
-        15,
-        20,
-        25,
-        30,
-        0.001,
+    params = contest_params(
         turn_radius=float(rng.choice([0.0, 200.0, 800.0])),
-        p_success=0.8,
         fail_residual=float(rng.uniform(2, 15)),
         max_climb_angle=float(rng.choice([8.0, 15.0, 25.0])),
         max_descent_angle=float(rng.choice([8.0, 15.0, 30.0])),

@@ -6,7 +6,7 @@ import itertools
 
 import numpy as np
 import pytest
-from helpers import mixed_scenario
+from helpers import contest_params, mixed_scenario
 
 from gcs_planner.core.bnb import bnb_front, flown_route
 from gcs_planner.core.probability import success_probability
@@ -65,17 +65,7 @@ def assert_front_equals_enumeration(scenario, probability: bool, seed: int):
 
 def turning_scenario(seed: int, radius: float):
     rng = np.random.default_rng(seed)
-    params = Parameters(
-        25,
-        15,
-        20,
-        25,
-        30,
-        0.001,
-        turn_radius=radius,
-        p_success=0.8,
-        fail_residual=float(rng.uniform(2, 15)),
-    )
+    params = contest_params(turn_radius=radius, fail_residual=float(rng.uniform(2, 15)))
     return random_scenario(
         int(rng.integers(2, 6)),
         seed,

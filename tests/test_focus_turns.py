@@ -5,13 +5,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from helpers import contest_params
 
 from gcs_planner.core import focus, planner
 from gcs_planner.core.planner import plan
 from gcs_planner.core.seeding import certain_front
 from gcs_planner.errors import InfeasibleError
 from gcs_planner.scenario.generate import random_scenario
-from gcs_planner.scenario.model import Parameters
 
 TWO = ("length", "corrections")
 THREE = ("length", "corrections", "probability")
@@ -20,15 +20,8 @@ THREE = ("length", "corrections", "probability")
 def sparse_scenario(seed: int):
     """A few dozen points in a wide box, turns of several radii or none, unreliable points."""
     rng = np.random.default_rng(seed)
-    params = Parameters(
-        25,
-        15,
-        20,
-        25,
-        30,
-        0.001,
+    params = contest_params(
         turn_radius=float(rng.choice([0.0, 200.0, 1500.0])),
-        p_success=0.8,
         fail_residual=float(rng.uniform(2, 15)),
     )
     n = int(rng.integers(15, 40))
