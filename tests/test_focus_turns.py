@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from helpers import contest_params
 
-from gcs_planner.core import focus, planner
+from gcs_planner.core import focus
 from gcs_planner.core.planner import plan
 from gcs_planner.core.seeding import certain_front
 from gcs_planner.errors import InfeasibleError
@@ -39,13 +39,11 @@ def test_a_focused_front_is_the_front_over_every_point(monkeypatch, objectives) 
     focused = 0
     for seed in range(24):
         scenario = sparse_scenario(seed)
-        monkeypatch.setattr(planner, "FOCUS_FROM", 0)
         monkeypatch.setattr(focus, "FOCUS_FROM", 0)
         try:
             got = plan(scenario, objectives=objectives, max_labels=None)
         except InfeasibleError:
             got = None
-        monkeypatch.setattr(planner, "FOCUS_FROM", 10**9)
         monkeypatch.setattr(focus, "FOCUS_FROM", 10**9)
         try:
             want = plan(scenario, objectives=objectives, max_labels=None)

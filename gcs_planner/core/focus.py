@@ -77,6 +77,11 @@ def ellipsoid(scenario: Scenario, bound: float) -> np.ndarray:
     return np.flatnonzero(inside)
 
 
+def large(scenario: Scenario) -> bool:
+    """Whether ``scenario`` is large enough to focus (``FOCUS_FROM``)."""
+    return scenario.n >= FOCUS_FROM
+
+
 def focus(
     scenario: Scenario,
     certain: CertainFront | None,
@@ -86,7 +91,7 @@ def focus(
     """The points to search (indices of ``scenario``), or None to search them all: on maps of
     ``FOCUS_FROM`` points or more, and only where the ellipsoid holds at most half of them
     (elsewhere the bounds over all points cost about as much)."""
-    if certain is None or scenario.n < FOCUS_FROM:
+    if certain is None or not large(scenario):
         return None
     bound = front_bound(scenario, certain, routes, probability)
     if bound is None:

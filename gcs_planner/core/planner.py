@@ -14,7 +14,7 @@ from dataclasses import dataclass, field, replace
 from gcs_planner.core.bnb import DEFAULT_MAX_LABELS, PROB_EPS, bnb_front, flown_route
 from gcs_planner.core.budget import Budget, ProgressCallback
 from gcs_planner.core.choose import choose as choose_route
-from gcs_planner.core.focus import FOCUS_FROM, focus
+from gcs_planner.core.focus import focus, large
 from gcs_planner.core.probability import success_probability
 from gcs_planner.core.reach import build_reach_graph
 from gcs_planner.core.route import Route, evaluate_route
@@ -237,10 +237,10 @@ def _branch_and_bound(
     # large maps it is made with two objectives too: a route of it may bound every front route
     # and focus the search (``focus``). One reach graph for all; on large maps (seconds to
     # build on 20,000 points) it is made only if the search cannot be focused.
-    large = scenario.n >= FOCUS_FROM
-    graph = None if large else build_reach_graph(scenario)
+    on_large_map = large(scenario)
+    graph = None if on_large_map else build_reach_graph(scenario)
     certain, seeds = None, ()
-    if use_probability or large:
+    if use_probability or on_large_map:
         # (The certain front stays whatever the time limit: it is the floor every gap is
         # measured from, and seconds even on 20,000 points. The routes certain to arrive only
         # speed the proof: past the limit they are left out.)
