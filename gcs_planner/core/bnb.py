@@ -29,6 +29,7 @@ import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -45,6 +46,9 @@ from gcs_planner.geometry.legs import FlownLeg, LegModel, path_angle_deg, scenar
 from gcs_planner.geometry.trajectory import route_trajectory
 from gcs_planner.scenario.model import Kind, Scenario
 
+if TYPE_CHECKING:
+    from gcs_planner.core.probe_kernel import CompiledProbes
+
 # Labels a search over simple routes expands before it makes the failure bounds.
 FAILURE_BOUNDS_FROM = 1_000
 # How many times the heading-free floor's labels the pair floor is expected to need at most.
@@ -54,6 +58,10 @@ PROBE_LABELS = 1000
 # Labels a search over simple routes expands before it probes: a search that proves its front
 # in fewer never pays for the probes (random 5,000 points, default mode: 4 s, 14 s probing).
 PROBE_FROM = 200
+# Probes run compiled (``probe_kernel``; False: the Python search below, the reference the
+# tests hold them to), where the critical points fit the kernel's bit masks.
+COMPILED_PROBES = True
+MAX_COMPILED_CRITICAL = 62
 # Dominance between error-state distributions asks Hall's condition of at most this many sets
 # (``_stochastically_dominates``); beyond, the partial routes are kept apart (always safe).
 MAX_UNIONS = 256
@@ -501,6 +509,10 @@ class _Prober:
         self.ctx = probe
         # Walks that revisit none of these points: the floor's, under which it was exact.
         self.critical = frozenset(critical)
+        # The probes compiled (``probe_kernel``): the same answers, made on first need (numba
+        # is loaded only by searches that probe).
+        self.compiled: CompiledProbes | None = None
+        self._compile = COMPILED_PROBES and len(self.critical) <= MAX_COMPILED_CRITICAL
         # Partial routes of the relaxation proven covered, by ``_key``; the found routes only
         # grow, so they stay covered.
         self.nogoods: dict[tuple, list[tuple]] = {}
@@ -522,6 +534,22 @@ class _Prober:
         f, _, L, node, k, states, _heading, path, to_go, arc = entry
         if path in self.hopeful:
             return False, 0
+        if self._compile:
+            if self.compiled is None:
+                # Numba compiles the kernel on its first use after installing (about half a
+                # minute on a small machine) and loads it from its cache after that.
+                budget.setup("the compiled probes (compiled once after installing)")
+                from gcs_planner.core.probe_kernel import CompiledProbes
+
+                self.compiled = CompiledProbes(self.ctx, self.critical)
+            child = budget.probe(PROBE_LABELS)
+            limit = 0 if child.expired() else PROBE_LABELS
+            covered, labels, escape = self.compiled(
+                inc, L, node, k, states, arc, path, to_go, limit
+            )
+            if escape:
+                self.hope(path + escape, after=len(path))
+            return covered, labels
         key = _key(self.critical, node, path[:-1])
         state = _kept(L, k, states, sum(states.values()), arc)
         if _dominated_by(self.nogoods.get(key, ()), state, self.ctx.pair_floor):
