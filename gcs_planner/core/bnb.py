@@ -62,6 +62,10 @@ PROBE_FROM = 200
 # tests hold them to), where the critical points fit the kernel's bit masks.
 COMPILED_PROBES = True
 MAX_COMPILED_CRITICAL = 62
+# Airplane legs from a heading compiled (``geometry.airplane_kernel``) after this many labels of
+# a search; False: numpy's throughout.
+COMPILED_LEGS = True
+COMPILED_LEGS_FROM = 200
 # Dominance between error-state distributions asks Hall's condition of at most this many sets
 # (``_stochastically_dominates``); beyond, the partial routes are kept apart (always safe).
 MAX_UNIONS = 256
@@ -709,6 +713,7 @@ def _search(
     relaxed = critical is not None
     fan = FanBound(G, scenario.n)
     is_v_point = scenario.kind == Kind.V
+    fast_legs = getattr(model, "compiled_lengths", None) if COMPILED_LEGS else None
     # Per (point, critical points visited): the partial routes kept (``_kept``), sorted by
     # length, and their lengths.
     archive: dict[tuple[int, frozenset[int]], tuple[list[float], list[tuple]]] = {}
@@ -832,7 +837,12 @@ def _search(
             flown = straight if heading is None else pair_floor.legs(heading)
             headings = lo + np.arange(hi - lo)
         elif model.carries_heading:
-            flown, headings = model.lengths(xyz[node], heading, xyz[targets])
+            # Compiled airplane legs once the search proves long (numba loads in a fraction
+            # of a second: short searches never pay for it).
+            if fast_legs is not None and heading is not None and labels > COMPILED_LEGS_FROM:
+                flown, headings = fast_legs(xyz[node], heading, xyz[targets])
+            else:
+                flown, headings = model.lengths(xyz[node], heading, xyz[targets])
         else:  # heading-free legs are as long as the graph's arcs
             flown, headings = straight, None
         v_min = min(s[0] for s in states)

@@ -22,7 +22,13 @@ from typing import Protocol
 
 import numpy as np
 
-from gcs_planner.geometry.airplane import AirplaneLeg, airplane_leg, airplane_legs, lower_bounds
+from gcs_planner.geometry.airplane import (
+    AirplaneLeg,
+    _tan,
+    airplane_leg,
+    airplane_legs,
+    lower_bounds,
+)
 from gcs_planner.geometry.dubins import CSLeg, cs_leg, cs_lengths, straight_leg
 
 FlownLeg = CSLeg | AirplaneLeg
@@ -119,6 +125,16 @@ class AirplaneLegs:
             start, heading, ends, self.radius, self.max_climb_angle, self.max_descent_angle
         )
         return legs.length, (legs.heading if self.radius > 0 else None)
+
+    def compiled_lengths(self, start, heading, ends):
+        """``lengths`` from a given heading, compiled (``airplane_kernel``: within a few ulp of
+        numpy's). Loads numba on the first call: for searches that fly many partial routes."""
+        from gcs_planner.geometry.airplane_kernel import airplane_lengths
+
+        return airplane_lengths(
+            start, heading, ends, self.radius, _tan(self.max_climb_angle),
+            _tan(self.max_descent_angle),
+        )  # fmt: skip
 
     def lower_bounds(self, start, ends):
         return lower_bounds(

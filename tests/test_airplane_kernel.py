@@ -1,0 +1,57 @@
+"""The compiled airplane legs (``geometry.airplane_kernel``) against numpy's
+(``airplane.airplane_legs``), and the branch and bound flying them from its first label."""
+
+from __future__ import annotations
+
+import numpy as np
+from test_probes import assert_same_front, dfs_front, front_of, probed_scenario
+
+from gcs_planner.core import bnb
+from gcs_planner.geometry.airplane import _tan, airplane_legs
+from gcs_planner.geometry.airplane_kernel import airplane_lengths
+
+
+def test_compiled_airplane_legs_equal_numpys_to_a_few_ulp() -> None:
+    """Random legs of every kind: turns either way, targets inside the turning circle
+    (unreachable), straight ahead, straight behind, coincident, climbs needing helices."""
+    rng = np.random.default_rng(1)
+    kinds = {"unreachable": 0, "helix": 0, "ahead": 0, "behind": 0}
+    for trial in range(2000):
+        radius = float(rng.choice([50.0, 200.0, 1500.0]))
+        climb, descent = (float(a) for a in rng.choice([90.0, 20.0, 10.0], 2))
+        start = rng.uniform(-5000, 5000, 3)
+        heading = rng.normal(size=3)
+        ends = start + rng.uniform(-3000, 3000, (12, 3)) * rng.choice([0.1, 1.0])
+        if trial % 5 == 0:
+            ends[0] = start + np.array([500 * heading[0], 500 * heading[1], 10.0])
+            ends[1] = start - np.array([500 * heading[0], 500 * heading[1], -10.0])
+            ends[2] = start
+        want = airplane_legs(start, heading, ends, radius, climb, descent)
+        length, head = airplane_lengths(start, heading, ends, radius, _tan(climb), _tan(descent))
+        np.testing.assert_array_equal(np.isinf(length), np.isinf(want.length))
+        np.testing.assert_array_equal(np.isnan(head), np.isnan(want.heading))
+        ok = np.isfinite(want.length)
+        np.testing.assert_allclose(length[ok], want.length[ok], rtol=4e-15, atol=0)
+        np.testing.assert_allclose(head[ok], want.heading[ok], rtol=0, atol=1e-14)
+        kinds["unreachable"] += int((~ok).sum())
+        kinds["helix"] += int((want.helix_turns[ok] > 0).sum())
+        kinds["ahead"] += int((want.straight[ok] & (want.length[ok] > 1)).sum())
+        kinds["behind"] += int((ok & (want.arc_angle > 3.1415)).sum())
+    assert all(count >= 100 for count in kinds.values()), kinds
+
+
+def test_fronts_flying_compiled_legs_from_the_first_label(monkeypatch) -> None:
+    """The same fronts as numpy's legs and as enumeration, two and three objectives."""
+    monkeypatch.setattr(bnb, "COMPILED_LEGS_FROM", -1)
+    for legs in ("airplane", "airplane, climb limits"):
+        for seed in range(6):
+            scenario = probed_scenario(seed, legs)
+            for probability in (True, False):
+                got = bnb.bnb_front(scenario, probability=probability, max_labels=10**6)
+                monkeypatch.setattr(bnb, "COMPILED_LEGS", False)
+                numpy = bnb.bnb_front(scenario, probability=probability, max_labels=10**6)
+                monkeypatch.setattr(bnb, "COMPILED_LEGS", True)
+                assert got.optimal and numpy.optimal
+                assert [f.points for f in got.front] == [f.points for f in numpy.front]
+                want = dfs_front(scenario, probability)
+                assert_same_front(front_of(got, probability), want, (legs, seed, probability))
