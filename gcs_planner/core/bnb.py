@@ -26,6 +26,7 @@ import copy
 import heapq
 import itertools
 import math
+import sys
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -42,7 +43,14 @@ from gcs_planner.core.probability import propagate, success_probability
 from gcs_planner.core.proof import PROB_EPS, lower_bounds, settled
 from gcs_planner.core.reach import ReachGraph, build_reach_graph
 from gcs_planner.core.route import Leg, Route, evaluate_route
-from gcs_planner.geometry.legs import FlownLeg, LegModel, path_angle_deg, scenario_leg_model
+from gcs_planner.geometry.airplane import _tan
+from gcs_planner.geometry.legs import (
+    AirplaneLegs,
+    FlownLeg,
+    LegModel,
+    path_angle_deg,
+    scenario_leg_model,
+)
 from gcs_planner.geometry.trajectory import route_trajectory
 from gcs_planner.scenario.model import Kind, Scenario
 
@@ -66,6 +74,10 @@ MAX_COMPILED_CRITICAL = 62
 # a search; False: numpy's throughout.
 COMPILED_LEGS = True
 COMPILED_LEGS_FROM = 200
+# The searches over walks with turns (floors, guide) compiled (``search_kernel``) when they
+# need more than this many labels; False: Python throughout.
+COMPILED_SEARCH = True
+TRIAL = 300
 # Dominance between error-state distributions asks Hall's condition of at most this many sets
 # (``_stochastically_dominates``); beyond, the partial routes are kept apart (always safe).
 MAX_UNIONS = 256
@@ -694,6 +706,7 @@ def _search(
     origin: tuple | None = None,
     incumbents: _Incumbents | None = None,
     nogoods: dict | None = None,
+    compiled: bool = True,
 ) -> BnbResult:
     """One best-first search. ``critical`` None: whole simple routes, no dominance (turns, or
     the sound fallback). Otherwise walks that may not revisit a critical point, with dominance
@@ -703,7 +716,26 @@ def _search(
     searches the completions of one partial route and stops at the first that no incumbent
     dominates; it adds no route. Its result is ``optimal`` when it proved that none exists;
     then every partial route it expanded is covered too and joins ``nogoods`` (by ``_key``),
-    which prune the partial routes of later probes that continue no better."""
+    which prune the partial routes of later probes that continue no better.
+
+    ``compiled`` False keeps a search over walks in Python (``search_kernel`` otherwise runs
+    it once it needs more than TRIAL labels)."""
+    legs_mode = None if origin is not None or not compiled else _legs_mode(ctx, critical)
+    left = None if budget.max_labels is None else budget.max_labels - budget.spent
+    if legs_mode is not None and critical is not None:
+        if "gcs_planner.core.search_kernel" in sys.modules:  # loaded: no trial needed
+            return _compiled_search(ctx, critical, budget, seeds, legs_mode)
+    if legs_mode is not None and critical is not None and (left is None or left > TRIAL):
+        # Compiled once the search proves long: a short one never loads numba. The trial is
+        # the same search, so starting over loses nothing but its time.
+        trial_budget = budget.probe(TRIAL)
+        trial = _search(ctx, critical, trial_budget, seeds, compiled=False)
+        if trial.exhausted or trial_budget.stopped_by == "time":
+            budget.spent += trial.labels
+            if not trial.exhausted:
+                budget._stop("time")
+            return trial
+        return _compiled_search(ctx, critical, budget, seeds, legs_mode)
     t0 = time.perf_counter()
     scenario, params, model, graph, G = ctx.scenario, ctx.params, ctx.model, ctx.graph, ctx.G
     kmax, kind_of, unreliable = ctx.kmax, ctx.kind_of, ctx.unreliable
@@ -928,28 +960,35 @@ def _search(
                 nogoods.setdefault(key, []).append(state)
         witness = [] if escaped is None else [escaped]
         return BnbResult(witness, [], covered, labels, time.perf_counter() - t0, exhausted)
-    found = sorted(inc.found, key=lambda g: (g.corrections, g.length))
     live = [
-        e
+        (e[0], e[2], e[4], e[8], sum(e[5].values()))
         for e in heap
         if not inc.covers(e[2], e[4], e[8], sum(e[5].values()))
         and not by_level(e[2], e[4], e[3], e[5], sum(e[5].values()), e[8], e[9])
     ]
+    return _ending(ctx, inc, live, labels, t0, exhausted, probe_labels)
+
+
+def _ending(
+    ctx: _Context,
+    inc: _Incumbents,
+    live: list[tuple[float, float, int, np.ndarray, float]],
+    labels: int,
+    t0: float,
+    exhausted: bool,
+    probe_labels: int = 0,
+) -> BnbResult:
+    """A search's result from its found routes and the partial routes it left open that no
+    found route covers (``live``: f, L, k, bounds to go, mass)."""
+    found = sorted(inc.found, key=lambda g: (g.corrections, g.length))
     open_bound = min((e[0] for e in live), default=math.inf)
-    open_routes = [(e[2], e[4], e[8], sum(e[5].values())) for e in live]
+    open_routes = [e[1:] for e in live]
     lower = lower_bounds(found, open_routes)
-    complete = not live
-    proven = settled(
-        found,
-        open_routes,
-        inc.best,
-        kmax,
-        ctx.probability,
-    )
+    proven = settled(found, open_routes, inc.best, ctx.kmax, ctx.probability)
     return BnbResult(
         found,
         lower,
-        complete,
+        not live,
         labels,
         time.perf_counter() - t0,
         exhausted,
@@ -958,6 +997,95 @@ def _search(
         proven=proven,
         probe_labels=probe_labels,
     )
+
+
+def _legs_mode(ctx: _Context, critical: frozenset[int] | None) -> int | None:
+    """How ``search_kernel`` flies the legs of a search over walks (None: it cannot, the
+    search stays in Python): arrays of heading-free legs, the pair relaxation's, or airplane
+    legs from the heading."""
+    if critical is None or ctx.open_order or not COMPILED_SEARCH:
+        return None
+    if len(critical) > MAX_COMPILED_CRITICAL:
+        return None
+    if ctx.pair_floor is not None:
+        return 1
+    if not ctx.model.carries_heading:
+        return 0
+    return 2 if isinstance(ctx.model, AirplaneLegs) else None
+
+
+def _compiled_search(
+    ctx: _Context,
+    critical: frozenset[int],
+    budget: Budget,
+    seeds: Sequence[Sequence[int]],
+    legs_mode: int,
+) -> BnbResult:
+    """``_search`` over walks run by ``search_kernel`` (see there), with the same result."""
+    from gcs_planner.core import search_kernel as sk
+
+    t0 = time.perf_counter()
+    scenario, graph, model = ctx.scenario, ctx.graph, ctx.model
+    inc = _Incumbents(ctx.kmax)
+    for points in seeds:
+        seed = ctx.seed(points)
+        if seed is not None and not _dominated(
+            inc.found, seed.length, seed.corrections, seed.probability
+        ):
+            inc.add(seed)
+    bits = np.full(scenario.n, -1, np.int64)
+    for b, point in enumerate(sorted(critical)):
+        bits[point] = b
+    pairs = ctx.pair_floor
+    i0, f0 = np.empty(0, np.int64), np.empty(0)
+    heading_a = scenario.heading_at_a
+    airplane = isinstance(model, AirplaneLegs)
+    seed_ptr = np.cumsum([0, *(len(f.points) for f in inc.found)]).astype(np.int64)
+    limit = -1 if budget.max_labels is None else max(0, budget.max_labels - budget.spent)
+    sk._BUDGETS.append(budget)
+    try:
+        out = sk.search(
+            graph.indptr.astype(np.int64), graph.target, graph.length, graph.lim_v,
+            graph.lim_h, int(graph.start), int(graph.end), float(graph.to_end[graph.start]),
+            np.asarray(scenario.kind, np.int64), np.asarray(ctx.unreliable, bool),
+            float(ctx.params.p_success), float(ctx.params.residual_m), int(ctx.kmax), bits,
+            ctx.G.indptr.astype(np.int64), ctx.G.e_max, ctx.G.table, legs_mode,
+            i0 if pairs is None else pairs.node_of_arc.astype(np.int64),
+            i0 if pairs is None else pairs.pair_ptr.astype(np.int64),
+            f0 if pairs is None else pairs.pair_length,
+            i0 if pairs is None else pairs.G.indptr.astype(np.int64),
+            f0 if pairs is None else pairs.G.e_max,
+            np.empty((0, 1)) if pairs is None else pairs.G.table,
+            np.ascontiguousarray(scenario.xyz, float),
+            float(model.radius) if airplane else 0.0,
+            _tan(model.max_climb_angle) if airplane else math.inf,
+            _tan(model.max_descent_angle) if airplane else math.inf,
+            heading_a is not None,
+            np.zeros(3) if heading_a is None else np.asarray(heading_a, float),
+            np.array([f.length for f in inc.found], float),
+            np.array([f.corrections for f in inc.found], np.int64),
+            np.array([f.probability for f in inc.found], float),
+            seed_ptr,
+            np.array([p for f in inc.found for p in f.points], np.int64),
+            limit,
+        )  # fmt: skip
+    finally:
+        sk._BUDGETS.pop()
+    labels, stopped, f_len, f_k, f_p, f_ptr, f_points, o_f, o_L, o_k, o_mass, o_ptr, o_to_go = out
+    budget.spent += int(labels)
+    if stopped:
+        budget._stop("labels" if stopped == 1 else "time")
+    inc = _Incumbents(ctx.kmax)
+    for g in range(len(f_len)):
+        points = tuple(int(p) for p in f_points[f_ptr[g] : f_ptr[g + 1]])
+        inc.add(Found(float(f_len[g]), int(f_k[g]), float(f_p[g]), points))
+    live = []
+    for x in range(len(o_f)):
+        to_go = o_to_go[o_ptr[x] : o_ptr[x + 1]]
+        L, k, mass = float(o_L[x]), int(o_k[x]), float(o_mass[x])
+        if not inc.covers(L, k, to_go, mass):
+            live.append((float(o_f[x]), L, k, to_go, mass))
+    return _ending(ctx, inc, live, int(labels), t0, stopped == 0)
 
 
 def flown_route(

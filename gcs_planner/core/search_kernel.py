@@ -1,0 +1,460 @@
+"""The branch and bound's searches with dominance over walks, compiled (numba): the floors
+(heading-free legs, or lb(i, j, t) over the cone of arrival headings) and the guide (airplane
+legs flown from the heading, partial routes compared as if the heading did not matter).
+
+The same search as ``bnb._search`` with ``critical`` given, outside a probe and in its plain
+order (the straight-leg search queues by least open continuation and stays in Python): the
+same best-first order, the same tests in the same order, the same error-state chain and
+dominance as the compiled probes (``probe_kernel``, whose pieces it shares), routes added to
+the found ones as ``_Incumbents.add`` does. With array legs it is the Python search exactly
+(tested: fronts, labels, open partial routes); with airplane legs it flies
+``airplane_kernel``'s legs, within a few ulp of numpy's. Every 64 labels it asks the plan's
+budget (through ``objmode``) whether the time limit has passed and shows progress.
+"""
+
+from __future__ import annotations
+
+import heapq
+import math
+
+import numpy as np
+from numba import njit, objmode, types
+from numba.typed import Dict
+
+from gcs_planner.core.probe_kernel import (
+    _KEY,
+    PROB_EPS,
+    _best_rows,
+    _covers,
+    _dominates,
+    _grow_f,
+    _larger,
+    _likely,
+    _row,
+)
+from gcs_planner.geometry.airplane import STEEP_SLACK_M
+from gcs_planner.geometry.airplane_kernel import airplane_lengths
+from gcs_planner.geometry.dubins import COINCIDENT_M, TWO_PI
+
+KIND_V, KIND_H = 2, 3
+LEGS_ARRAYS, LEGS_PAIRS, LEGS_AIRPLANE = 0, 1, 2
+# Labels between two looks at the budget (time limit, progress).
+TICK = 64
+
+# The budget of the search running now (``tick``): objmode reaches Python objects only
+# through globals.
+_BUDGETS: list = []
+
+
+def tick(labels: int, queued: int, found: int, bound: float) -> bool:
+    """Show progress when due; whether the time limit has passed."""
+    budget = _BUDGETS[-1]
+    if budget.due():
+        budget.report(labels, queued, found, bound)
+    return budget.expired()
+
+
+@njit(cache=True)
+def _free_airplane_lengths(
+    start: np.ndarray, ends: np.ndarray, radius: float, tan_climb: float, tan_descent: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """``airplane_legs`` with no heading (at A, when none is given): straight horizontal
+    paths, helices where too steep, the heading out along the chord."""
+    m = ends.shape[0]
+    length = np.empty(m)
+    head = np.empty((m, 3))
+    for i in range(m):
+        wx = ends[i, 0] - start[0]
+        wy = ends[i, 1] - start[1]
+        h = math.hypot(wx, wy)
+        if h > COINCIDENT_M:
+            head[i, 0], head[i, 1], head[i, 2] = wx / h, wy / h, 0.0 / h
+        else:
+            head[i, 0], head[i, 1], head[i, 2] = 1.0, 0.0, 0.0
+        dz = ends[i, 2] - start[2]
+        g = tan_climb if dz > 0 else tan_descent
+        need = 0.0 if math.isinf(g) else abs(dz) / g
+        k = 0.0
+        if need - h > STEEP_SLACK_M:
+            k = max(math.ceil((need - h - STEEP_SLACK_M) / (TWO_PI * radius)), 0.0)
+        flat = h + TWO_PI * radius * k
+        length[i] = math.sqrt(flat * flat + dz * dz)
+    return length, head
+
+
+@njit(cache=True)
+def _add_found(
+    inc_len: list, inc_k: list, inc_p: list, inc_path: list, alive: list, L: float, k: int,
+    p: float, path: np.ndarray,
+) -> None:  # fmt: skip
+    """``_Incumbents.add``: the found routes the new one dominates die, then it joins. (They
+    are marked, not popped: ``list.pop(i)`` of a typed list of arrays corrupts the heap in
+    numba 0.6x.)"""
+    for i in range(len(inc_len)):
+        if alive[i] and k <= inc_k[i] and p >= inc_p[i] - PROB_EPS and L <= inc_len[i]:
+            alive[i] = False
+    inc_len.append(L)
+    inc_k.append(k)
+    inc_p.append(p)
+    inc_path.append(path)
+    alive.append(True)
+
+
+@njit(cache=True)
+def _found_arrays(
+    inc_len: list, inc_k: list, inc_p: list, alive: list
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The live found routes as arrays (lengths, corrections, probabilities) and their
+    indices into the lists."""
+    F = 0
+    for i in range(len(alive)):
+        F += alive[i]
+    a_len = np.empty(F)
+    a_k = np.empty(F, np.int64)
+    a_p = np.empty(F)
+    index = np.empty(F, np.int64)
+    g = 0
+    for i in range(len(alive)):
+        if alive[i]:
+            a_len[g], a_k[g], a_p[g], index[g] = inc_len[i], inc_k[i], inc_p[i], i
+            g += 1
+    return a_len, a_k, a_p, index
+
+
+@njit(cache=True)
+def search(
+    indptr: np.ndarray,
+    target: np.ndarray,
+    glen: np.ndarray,
+    lim_v: np.ndarray,
+    lim_h: np.ndarray,
+    start: int,
+    end: int,
+    to_end_start: float,
+    kind: np.ndarray,
+    unreliable: np.ndarray,
+    p_success: float,
+    residual_m: float,
+    kmax: int,
+    crit_bit: np.ndarray,
+    g_ptr: np.ndarray,
+    g_emax: np.ndarray,
+    g_table: np.ndarray,
+    legs_mode: int,
+    node_of_arc: np.ndarray,
+    pair_ptr: np.ndarray,
+    pair_length: np.ndarray,
+    p_ptr: np.ndarray,
+    p_emax: np.ndarray,
+    p_table: np.ndarray,
+    xyz: np.ndarray,
+    radius: float,
+    tan_climb: float,
+    tan_descent: float,
+    has_heading_a: bool,
+    heading_a: np.ndarray,
+    seed_len: np.ndarray,
+    seed_k: np.ndarray,
+    seed_p: np.ndarray,
+    seed_ptr: np.ndarray,
+    seed_points: np.ndarray,
+    max_labels: int,
+):  # noqa: ANN201  (see ``bnb._compiled_search``)
+    """One search from A: (labels, stopped: 0 exhausted, 1 by labels, 2 by time, the found
+    routes (lengths, corrections, probabilities, points as CSR) and the partial routes still
+    queued (f, L, k, mass, bounds to go as CSR))."""
+    has_pairs = legs_mode == LEGS_PAIRS
+    # The routes found: the seeds first.
+    inc_len = [0.0]
+    inc_k = [0]
+    inc_p = [0.0]
+    inc_path = [np.empty(0, np.int64)]
+    alive = [True]
+    alive.clear()
+    inc_len.clear()
+    inc_k.clear()
+    inc_p.clear()
+    inc_path.clear()
+    for s in range(len(seed_len)):
+        inc_len.append(seed_len[s])
+        inc_k.append(seed_k[s])
+        inc_p.append(seed_p[s])
+        inc_path.append(seed_points[seed_ptr[s] : seed_ptr[s + 1]].copy())
+        alive.append(True)
+    changed = True
+    best_rows = np.empty((1, kmax + 1))
+    probs_sorted = np.empty(0)
+
+    lab_L = [0.0]
+    lab_k = [0]
+    lab_node = [np.int64(start)]
+    lab_arc = [np.int64(-1)]
+    lab_parent = [np.int64(-1)]
+    lab_mask = [np.int64(0)]
+    lab_ss = [0]
+    lab_sn = [1]
+    lab_mass = [1.0]
+    lab_vmin = [0.0]
+    lab_hmin = [0.0]
+    lab_to_go = [np.array([to_end_start])]
+    lab_head = [heading_a.copy()]
+    lab_has_head = [has_heading_a]
+    archive_next = [np.int64(-1)]
+    archive = Dict.empty(key_type=_KEY, value_type=types.int64)
+    sv = np.zeros(256)
+    sh = np.zeros(256)
+    sm = np.zeros(256)
+    sm[0] = 1.0
+    used = 1
+
+    heap = [(to_end_start, np.int64(0), np.int64(0))]
+    counter = 1
+    labels = 0
+    stopped = 0
+    new_v = np.empty(64)
+    new_h = np.empty(64)
+    new_m = np.empty(64)
+    while len(heap) > 0:
+        if changed:
+            a_len, a_k, a_p, _ = _found_arrays(inc_len, inc_k, inc_p, alive)
+            order = np.argsort(a_p, kind="mergesort")
+            probs_sorted = a_p[order]
+            best_rows = _best_rows(a_len, a_k, order, kmax)
+            changed = False
+        f, _, lab = heapq.heappop(heap)
+        L = lab_L[lab]
+        k = lab_k[lab]
+        node = lab_node[lab]
+        mass = lab_mass[lab]
+        s = lab_ss[lab]
+        n = lab_sn[lab]
+        if _covers(L, k, lab_to_go[lab], best_rows[_likely(probs_sorted, mass)], kmax):
+            continue
+        if max_labels >= 0 and labels >= max_labels:
+            heapq.heappush(heap, (f, np.int64(-1), lab))
+            stopped = 1
+            break
+        if labels % TICK == 0:
+            queued = len(heap)
+            found = 0
+            for g in range(len(alive)):
+                found += alive[g]
+            with objmode(late="boolean"):
+                late = tick(labels, queued, found, f)
+            if late:
+                heapq.heappush(heap, (f, np.int64(-1), lab))
+                stopped = 2
+                break
+        labels += 1
+        lo = indptr[node]
+        hi = indptr[node + 1]
+        deg = hi - lo
+        if legs_mode == LEGS_AIRPLANE:
+            ends = np.empty((deg, 3))
+            for idx in range(deg):
+                t = target[lo + idx]
+                ends[idx, 0], ends[idx, 1], ends[idx, 2] = xyz[t, 0], xyz[t, 1], xyz[t, 2]
+            if lab_has_head[lab]:
+                flown, heads = airplane_lengths(
+                    xyz[node], lab_head[lab], ends, radius, tan_climb, tan_descent
+                )
+            else:
+                flown, heads = _free_airplane_lengths(
+                    xyz[node], ends, radius, tan_climb, tan_descent
+                )
+        elif has_pairs and lab_arc[lab] >= 0:
+            a0 = pair_ptr[node_of_arc[lab_arc[lab]]]
+            flown = pair_length[a0 : a0 + deg]
+            heads = np.empty((0, 3))
+        else:
+            flown = glen[lo:hi]
+            heads = np.empty((0, 3))
+        v_min = lab_vmin[lab]
+        h_min = lab_hmin[lab]
+        mask = lab_mask[lab]
+        for idx in range(deg):
+            j = np.int64(target[lo + idx])
+            d = flown[idx]
+            if not (v_min + d <= lim_v[j] and h_min + d <= lim_h[j]):
+                continue
+            bit = crit_bit[j]
+            if bit >= 0 and (mask >> bit) & 1:
+                continue
+            is_end = j == end
+            if not is_end and k + 1 > kmax:
+                continue
+            kj = kind[j]
+            fails = unreliable[j] and (kj == KIND_V or kj == KIND_H)
+            p = p_success if fails else 1.0
+            q = 1.0 - p
+            if len(new_v) < 2 * n:
+                new_v = np.empty(2 * n)
+                new_h = np.empty(2 * n)
+                new_m = np.empty(2 * n)
+            count = 0
+            for i in range(n):
+                v = sv[s + i] + d
+                h = sh[s + i] + d
+                if not (v <= lim_v[j] and h <= lim_h[j]):
+                    continue
+                w = sm[s + i]
+                for branch in range(2):
+                    if branch == 0:
+                        if not p > 0.0:
+                            continue
+                        share = w * p
+                        if kj == KIND_V:
+                            bv, bh = 0.0, h
+                        elif kj == KIND_H:
+                            bv, bh = v, 0.0
+                        else:
+                            bv, bh = v, h
+                    else:
+                        if not q > 0.0:
+                            continue
+                        share = w * q
+                        if kj == KIND_V:
+                            bv, bh = min(v, residual_m), h
+                        elif kj == KIND_H:
+                            bv, bh = v, min(h, residual_m)
+                        else:
+                            bv, bh = v, h
+                    hit = -1
+                    for c in range(count):
+                        if new_v[c] == bv and new_h[c] == bh:
+                            hit = c
+                            break
+                    if hit >= 0:
+                        new_m[hit] = new_m[hit] + share
+                    else:
+                        new_v[count] = bv
+                        new_h[count] = bh
+                        new_m[count] = 0.0 + share
+                        count += 1
+            if count == 0:
+                continue
+            new_mass = 0.0
+            for c in range(count):
+                new_mass += new_m[c]
+            nL = L + d
+            if is_end:
+                arrive = min(1.0, new_mass)
+                least = np.inf
+                for g in range(len(inc_len)):
+                    if (
+                        alive[g]
+                        and inc_k[g] <= k
+                        and inc_p[g] >= arrive - PROB_EPS
+                        and inc_len[g] < least
+                    ):
+                        least = inc_len[g]
+                if not least <= nL:
+                    points = [j]
+                    back = lab
+                    while back >= 0:
+                        points.append(lab_node[back])
+                        back = lab_parent[back]
+                    path = np.empty(len(points), np.int64)
+                    for i in range(len(points)):
+                        path[i] = points[len(points) - 1 - i]
+                    _add_found(inc_len, inc_k, inc_p, inc_path, alive, nL, k, arrive, path)
+                    a_len, a_k, a_p, _ = _found_arrays(inc_len, inc_k, inc_p, alive)
+                    order = np.argsort(a_p, kind="mergesort")
+                    probs_sorted = a_p[order]
+                    best_rows = _best_rows(a_len, a_k, order, kmax)
+                continue
+            e_min = np.inf
+            for c in range(count):
+                carried = new_h[c] if kj == KIND_V else new_v[c]
+                if carried < e_min:
+                    e_min = carried
+            r = _row(g_ptr, g_emax, j, e_min)
+            if r < 0:
+                continue
+            g_to = g_table[r]
+            arc_in = lo + idx
+            if has_pairs:
+                pnode = node_of_arc[arc_in]
+                if pnode < 0:
+                    continue
+                r2 = _row(p_ptr, p_emax, pnode, e_min)
+                if r2 < 0:
+                    continue
+                g_to = _larger(g_to, p_table[r2])
+            if _covers(nL, k + 1, g_to, best_rows[_likely(probs_sorted, new_mass)], kmax):
+                continue
+            nv = np.inf
+            nh = np.inf
+            for c in range(count):
+                nv = min(nv, new_v[c])
+                nh = min(nh, new_h[c])
+            key = (j, mask)
+            head = archive.get(key, -1)
+            e = head
+            dominated = False
+            while e >= 0:
+                if _dominates(
+                    lab_L[e], lab_k[e], lab_mass[e], lab_arc[e], lab_vmin[e], lab_hmin[e],
+                    sv, sh, sm, lab_ss[e], lab_sn[e],
+                    nL, k + 1, new_mass, arc_in, nv, nh, new_v, new_h, new_m, 0, count,
+                    has_pairs, node_of_arc, pair_ptr, pair_length,
+                ):  # fmt: skip
+                    dominated = True
+                    break
+                e = archive_next[e]
+            if dominated:
+                continue
+            child = len(lab_L)
+            if used + count > len(sv):
+                sv = _grow_f(sv, used + count)
+                sh = _grow_f(sh, used + count)
+                sm = _grow_f(sm, used + count)
+            sv[used : used + count] = new_v[:count]
+            sh[used : used + count] = new_h[:count]
+            sm[used : used + count] = new_m[:count]
+            lab_ss.append(used)
+            lab_sn.append(count)
+            used += count
+            lab_L.append(nL)
+            lab_k.append(k + 1)
+            lab_node.append(j)
+            lab_arc.append(arc_in)
+            lab_parent.append(lab)
+            lab_mask.append(mask | (np.int64(1) << bit) if bit >= 0 else mask)
+            lab_mass.append(new_mass)
+            lab_vmin.append(nv)
+            lab_hmin.append(nh)
+            lab_to_go.append(g_to)
+            if legs_mode == LEGS_AIRPLANE:
+                lab_head.append(heads[idx].copy())
+                lab_has_head.append(True)
+            else:
+                lab_head.append(heading_a)
+                lab_has_head.append(False)
+            archive_next.append(head)
+            archive[key] = child
+            heapq.heappush(heap, (nL + g_to[len(g_to) - 1], np.int64(counter), np.int64(child)))
+            counter += 1
+    # What is left: the found routes and the partial routes still queued.
+    f_len, f_k, f_p, index = _found_arrays(inc_len, inc_k, inc_p, alive)
+    F = len(f_len)
+    f_ptr = np.zeros(F + 1, np.int64)
+    for g in range(F):
+        f_ptr[g + 1] = f_ptr[g] + len(inc_path[index[g]])
+    f_points = np.empty(f_ptr[F], np.int64)
+    for g in range(F):
+        f_points[f_ptr[g] : f_ptr[g + 1]] = inc_path[index[g]]
+    Q = len(heap)
+    o_f = np.empty(Q)
+    o_L = np.empty(Q)
+    o_k = np.empty(Q, np.int64)
+    o_mass = np.empty(Q)
+    o_ptr = np.zeros(Q + 1, np.int64)
+    for x in range(Q):
+        lab = heap[x][2]
+        o_f[x], o_L[x], o_k[x], o_mass[x] = heap[x][0], lab_L[lab], lab_k[lab], lab_mass[lab]
+        o_ptr[x + 1] = o_ptr[x] + len(lab_to_go[lab])
+    o_to_go = np.empty(o_ptr[Q])
+    for x in range(Q):
+        o_to_go[o_ptr[x] : o_ptr[x + 1]] = lab_to_go[heap[x][2]]
+    return labels, stopped, f_len, f_k, f_p, f_ptr, f_points, o_f, o_L, o_k, o_mass, o_ptr, o_to_go
