@@ -435,6 +435,8 @@ class _Context:
         # Queue partial routes by their least open continuation (``_search``): set for the
         # straight-leg search, whose floors and probes (turns) keep the plain order.
         self.open_order = False
+        # Seeds flown so far (``seed``), shared with the relaxations' copies.
+        self._seeds: dict[tuple, Found | None] = {}
 
     def _layers(self, what: str) -> Callable[[], bool]:
         """A cost-to-go's ``stop``: asked before each layer, it shows the layer and says
@@ -487,8 +489,16 @@ class _Context:
         return other
 
     def seed(self, points: Sequence[int]) -> Found | None:
-        """A known route as an incumbent, evaluated under this search's model."""
+        """A known route as an incumbent, evaluated under this search's model (once per model
+        and route: the floors' routes seed the guide, the guide's the search, the rounds of a
+        relaxation the same ones again)."""
         points = tuple(int(i) for i in points)
+        key = (self.model, self.probability, points)
+        if key not in self._seeds:
+            self._seeds[key] = self._flown_seed(points)
+        return self._seeds[key]
+
+    def _flown_seed(self, points: tuple[int, ...]) -> Found | None:
         route = flown_route(self.scenario, points, self.model)
         if not route.feasible:
             return None
