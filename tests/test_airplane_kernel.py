@@ -1,5 +1,6 @@
-"""The compiled airplane legs (``geometry.airplane_kernel``) against numpy's
-(``airplane.airplane_legs``), and the branch and bound flying them from its first label."""
+"""The compiled airplane and cs3d legs (``geometry.airplane_kernel``, ``dubins_kernel``) against
+numpy's (``airplane.airplane_legs``, ``dubins.cs_lengths``), and the branch and bound flying
+them from its first label."""
 
 from __future__ import annotations
 
@@ -9,6 +10,8 @@ from test_probes import assert_same_front, dfs_front, front_of, probed_scenario
 from gcs_planner.core import bnb
 from gcs_planner.geometry.airplane import _tan, airplane_legs
 from gcs_planner.geometry.airplane_kernel import airplane_lengths
+from gcs_planner.geometry.dubins import cs_lengths
+from gcs_planner.geometry.dubins_kernel import cs_lengths as compiled_cs_lengths
 
 
 def test_compiled_airplane_legs_equal_numpys_to_a_few_ulp() -> None:
@@ -43,7 +46,7 @@ def test_compiled_airplane_legs_equal_numpys_to_a_few_ulp() -> None:
 def test_fronts_flying_compiled_legs_from_the_first_label(monkeypatch) -> None:
     """The same fronts as numpy's legs and as enumeration, two and three objectives."""
     monkeypatch.setattr(bnb, "COMPILED_LEGS_FROM", -1)
-    for legs in ("airplane", "airplane, climb limits"):
+    for legs in ("airplane", "airplane, climb limits", "cs3d"):
         for seed in range(6):
             scenario = probed_scenario(seed, legs)
             for probability in (True, False):
@@ -55,3 +58,27 @@ def test_fronts_flying_compiled_legs_from_the_first_label(monkeypatch) -> None:
                 assert [f.points for f in got.front] == [f.points for f in numpy.front]
                 want = dfs_front(scenario, probability)
                 assert_same_front(front_of(got, probability), want, (legs, seed, probability))
+
+
+def test_compiled_cs3d_legs_equal_numpys_to_a_few_ulp() -> None:
+    """The tilted-plane CS legs (``dubins.cs_lengths``): any heading, radius 0 included."""
+    rng = np.random.default_rng(3)
+    unreachable = straight = 0
+    for trial in range(2000):
+        radius = float(rng.choice([0.0, 50.0, 200.0, 1500.0]))
+        start = rng.uniform(-5000, 5000, 3)
+        heading = rng.normal(size=3)
+        ends = start + rng.uniform(-3000, 3000, (12, 3)) * rng.choice([0.1, 1.0])
+        if trial % 5 == 0:
+            u = heading / np.linalg.norm(heading)
+            ends[0], ends[1], ends[2] = start + 500 * u, start - 500 * u, start
+        want, want_heading = cs_lengths(start, heading, ends, radius)
+        got, got_heading = compiled_cs_lengths(start, heading, ends, radius)
+        np.testing.assert_array_equal(np.isinf(got), np.isinf(want))
+        np.testing.assert_array_equal(np.isnan(got_heading), np.isnan(want_heading))
+        ok = np.isfinite(want)
+        np.testing.assert_allclose(got[ok], want[ok], rtol=4e-15, atol=0)
+        np.testing.assert_allclose(got_heading[ok], want_heading[ok], rtol=0, atol=1e-14)
+        unreachable += int((~ok).sum())
+        straight += int(np.isclose(want[ok], np.linalg.norm(ends - start, axis=1)[ok]).sum())
+    assert unreachable >= 100 and straight >= 100, (unreachable, straight)

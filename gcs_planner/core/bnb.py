@@ -46,6 +46,7 @@ from gcs_planner.core.route import Leg, Route, evaluate_route
 from gcs_planner.geometry.airplane import _tan
 from gcs_planner.geometry.legs import (
     AirplaneLegs,
+    CS3DLegs,
     FlownLeg,
     LegModel,
     path_angle_deg,
@@ -1021,7 +1022,9 @@ def _legs_mode(ctx: _Context, critical: frozenset[int] | None) -> int | None:
         return 1
     if not ctx.model.carries_heading:
         return 0
-    return 2 if isinstance(ctx.model, AirplaneLegs) else None
+    if isinstance(ctx.model, AirplaneLegs):
+        return 2
+    return 3 if isinstance(ctx.model, CS3DLegs) else None
 
 
 def _compiled_search(
@@ -1067,7 +1070,7 @@ def _compiled_search(
             f0 if pairs is None else pairs.G.e_max,
             np.empty((0, 1)) if pairs is None else pairs.G.table,
             np.ascontiguousarray(scenario.xyz, float),
-            float(model.radius) if airplane else 0.0,
+            float(model.radius) if airplane or isinstance(model, CS3DLegs) else 0.0,
             _tan(model.max_climb_angle) if airplane else math.inf,
             _tan(model.max_descent_angle) if airplane else math.inf,
             heading_a is not None,

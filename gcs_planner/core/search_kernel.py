@@ -1,15 +1,16 @@
 """The branch and bound's searches with dominance over walks, compiled (numba): the floors
-(heading-free legs, or lb(i, j, t) over the cone of arrival headings) and the guide (airplane
-legs flown from the heading, partial routes compared as if the heading did not matter).
+(heading-free legs, or lb(i, j, t) over the cone of arrival headings) and the guide (airplane or
+cs3d legs flown from the heading, partial routes compared as if the heading did not matter).
 
 The same search as ``bnb._search`` with ``critical`` given, outside a probe and in its plain
 order (the straight-leg search queues by least open continuation and stays in Python): the
 same best-first order, the same tests in the same order, the same error-state chain and
 dominance as the compiled probes (``probe_kernel``, whose pieces it shares), routes added to
 the found ones as ``_Incumbents.add`` does. With array legs it is the Python search exactly
-(tested: fronts, labels, open partial routes); with airplane legs it flies
-``airplane_kernel``'s legs, within a few ulp of numpy's. Every 64 labels it asks the plan's
-budget (through ``objmode``) whether the time limit has passed and shows progress.
+(tested: fronts, labels, open partial routes); with airplane or cs3d legs it flies
+``airplane_kernel``'s or ``dubins_kernel``'s legs, within a few ulp of numpy's. Every 64
+labels it asks the plan's budget (through ``objmode``) whether the time limit has passed and
+shows progress.
 """
 
 from __future__ import annotations
@@ -35,9 +36,10 @@ from gcs_planner.core.probe_kernel import (
 from gcs_planner.geometry.airplane import STEEP_SLACK_M
 from gcs_planner.geometry.airplane_kernel import airplane_lengths
 from gcs_planner.geometry.dubins import COINCIDENT_M, TWO_PI
+from gcs_planner.geometry.dubins_kernel import cs_lengths
 
 KIND_V, KIND_H = 2, 3
-LEGS_ARRAYS, LEGS_PAIRS, LEGS_AIRPLANE = 0, 1, 2
+LEGS_ARRAYS, LEGS_PAIRS, LEGS_AIRPLANE, LEGS_CS3D = 0, 1, 2, 3
 # Labels between two looks at the budget (time limit, progress).
 TICK = 64
 
@@ -262,6 +264,24 @@ def search(
                 flown, heads = _free_airplane_lengths(
                     xyz[node], ends, radius, tan_climb, tan_descent
                 )
+        elif legs_mode == LEGS_CS3D:
+            ends = np.empty((deg, 3))
+            for idx in range(deg):
+                t = target[lo + idx]
+                ends[idx, 0], ends[idx, 1], ends[idx, 2] = xyz[t, 0], xyz[t, 1], xyz[t, 2]
+            if lab_has_head[lab]:
+                flown, heads = cs_lengths(xyz[node], lab_head[lab], ends, radius)
+            else:  # a free heading at A: the chord (``CS3DLegs.lengths``)
+                flown = np.empty(deg)
+                heads = np.empty((deg, 3))
+                for idx in range(deg):
+                    wx = ends[idx, 0] - xyz[node, 0]
+                    wy = ends[idx, 1] - xyz[node, 1]
+                    wz = ends[idx, 2] - xyz[node, 2]
+                    chord = math.sqrt(wx * wx + wy * wy + wz * wz)
+                    flown[idx] = chord
+                    div = chord if chord > 0 else 1.0
+                    heads[idx, 0], heads[idx, 1], heads[idx, 2] = wx / div, wy / div, wz / div
         elif has_pairs and lab_arc[lab] >= 0:
             a0 = pair_ptr[node_of_arc[lab_arc[lab]]]
             flown = pair_length[a0 : a0 + deg]
@@ -425,7 +445,7 @@ def search(
             lab_vmin.append(nv)
             lab_hmin.append(nh)
             lab_to_go.append(g_to)
-            if legs_mode == LEGS_AIRPLANE:
+            if legs_mode == LEGS_AIRPLANE or legs_mode == LEGS_CS3D:
                 lab_head.append(heads[idx].copy())
                 lab_has_head.append(True)
             else:

@@ -94,6 +94,13 @@ class CS3DLegs:
             return chord, w / np.where(chord > 0, chord, 1.0)[:, None]
         return cs_lengths(start, heading, ends, self.radius)
 
+    def compiled_lengths(self, start, heading, ends):
+        """``lengths`` from a given heading, compiled (``dubins_kernel``: within a few ulp of
+        numpy's). Loads numba on the first call: for searches that fly many partial routes."""
+        from gcs_planner.geometry.dubins_kernel import cs_lengths as compiled
+
+        return compiled(start, heading, ends, self.radius)
+
     def lower_bounds(self, start, ends):
         return _chords(start, ends)
 
