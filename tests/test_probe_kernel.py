@@ -156,3 +156,57 @@ def test_compiled_bounds_per_probability_level_equal_the_python_ones(dataset_pat
                     deepest += 1
     assert all(forced[q] >= 50 for q in ("-1", "0", "1", "2", "3")), forced
     assert deepest >= 20, deepest
+
+
+def test_compiled_test_per_probability_level_answers_as_the_python_one() -> None:
+    """``_covers_by_level`` against ``_Incumbents.covers_by_level`` with random found routes,
+    ceilings and bounds to go much shorter than the corrections still allowed (where the
+    kernel decides the rest at once from ``_level_tables``)."""
+    rng = np.random.default_rng(5)
+    answers: collections.Counter[bool] = collections.Counter()
+    tails = 0
+    for _ in range(3000):
+        kmax = int(rng.integers(3, 30))
+        inc = bnb._Incumbents(kmax)
+        for _ in range(int(rng.integers(0, 8))):
+            inc.add(
+                bnb.Found(
+                    float(rng.uniform(100, 200)), int(rng.integers(0, kmax + 1)),
+                    float(rng.choice([1.0, 0.8, 0.64, 0.5, float(rng.uniform(0.1, 1))])), (0, 1),
+                )
+            )  # fmt: skip
+        ceiling = None
+        if rng.random() < 0.7:
+            relaxed = [
+                bnb.Found(float(rng.uniform(80, 190)), int(rng.integers(0, kmax + 1)),
+                          float(rng.uniform(0.05, 1)), (0, 1))
+                for _ in range(int(rng.integers(1, 8)))
+            ]  # fmt: skip
+            ceiling = bnb.Ceiling(relaxed, kmax)
+        k = int(rng.integers(0, kmax + 1))
+        to_go = np.minimum.accumulate(rng.uniform(0, 80, int(rng.integers(1, 5))))
+        length, mass = float(rng.uniform(0, 120)), float(rng.uniform(0.05, 1))
+        want = inc.covers_by_level(length, k, mass, lambda gap, b=to_go: b, ceiling)
+        levels = np.array(inc.levels(), float)
+        p = np.array([f.probability for f in inc.found], float)
+        order = np.argsort(p, kind="stable").astype(np.int64)
+        best = probe_kernel._best_rows(
+            np.array([f.length for f in inc.found], float),
+            np.array([f.corrections for f in inc.found], np.int64), order, kmax,
+        )  # fmt: skip
+        has_ceil = ceiling is not None
+        ceil_rows = np.empty((0, kmax + 1))
+        if has_ceil:
+            above = [*levels, -np.inf]
+            ceil_rows = np.vstack([ceiling.least_above(float(lo)) for lo in above])
+        tables = probe_kernel._level_tables(levels, np.sort(p), best, has_ceil, ceil_rows, kmax)
+        one = np.zeros(1)
+        got = probe_kernel._covers_by_level(
+            length, k, mass, to_go, kmax, levels, *tables, has_ceil, ceil_rows,
+            False, np.zeros(1, np.int64), one, np.empty((0, 1)), 0, 0, 0.0, np.zeros(1, bool),
+            0, one, one, np.ones(1), 0, 1,
+        )  # fmt: skip
+        assert got == want
+        answers[want] += 1
+        tails += len(to_go) < kmax - k + 1
+    assert answers[True] >= 300 and answers[False] >= 300 and tails >= 1000, (answers, tails)

@@ -289,6 +289,18 @@ def _dominates(
 
 
 @njit(cache=True)
+def _forced(weight: float, gap: float, failures: int, q_fail: float) -> int:
+    """FailureBounds.forced: the first failures a state of mass ``weight`` must survive in a
+    continuation that loses less than ``gap`` (-1: none, the state may die whole)."""
+    if weight < gap + MASS_SLACK:
+        return -1
+    q = 0
+    while q < failures and weight * q_fail ** float(q + 1) >= gap + MASS_SLACK:
+        q += 1
+    return q
+
+
+@njit(cache=True)
 def _failure_rows(
     f_ptr: np.ndarray,
     f_emax: np.ndarray,
@@ -317,12 +329,9 @@ def _failure_rows(
         return np.empty(0)
     out = f_table[r].copy()
     for i in range(n):
-        w = sm[s + i]
-        if w < gap + MASS_SLACK:
-            continue  # forced: -1
-        q = 0
-        while q < f_failures and w * f_qfail ** float(q + 1) >= gap + MASS_SLACK:
-            q += 1
+        q = _forced(sm[s + i], gap, f_failures, f_qfail)
+        if q < 0:
+            continue
         e = sh[s + i] if carried_h else sv[s + i]
         r = _row(f_ptr, f_emax, q * f_n + at, e)
         if r < 0:
@@ -335,6 +344,33 @@ def _failure_rows(
 
 
 @njit(cache=True)
+def _level_tables(
+    levels: np.ndarray,
+    probs_sorted: np.ndarray,
+    best_rows: np.ndarray,
+    has_ceil: bool,
+    ceil_rows: np.ndarray,
+    kmax: int,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Per probability interval i (above the likeliest found route, then below each level):
+    the found routes' best[c] that match it (inf for the first), and next_bad[c], the first
+    c' >= c where the ceiling is below that best (kmax + 1: none; without a ceiling every
+    c'). Both best and the ceiling are non-increasing in c, and so is every bound to go, so
+    past the end of a bound (constant from there) ``_covers_by_level`` needs only these."""
+    nlev = len(levels)
+    level_best = np.full((nlev + 1, kmax + 1), np.inf)
+    next_bad = np.empty((nlev + 1, kmax + 2), np.int64)
+    for i in range(nlev + 1):
+        if i > 0:
+            level_best[i] = best_rows[_likely(probs_sorted, levels[i - 1])]
+        next_bad[i, kmax + 1] = kmax + 1
+        for c in range(kmax, -1, -1):
+            bad = not has_ceil or ceil_rows[i, c] < level_best[i, c]
+            next_bad[i, c] = c if bad else next_bad[i, c + 1]
+    return level_best, next_bad
+
+
+@njit(cache=True)
 def _covers_by_level(
     length: float,
     k: int,
@@ -342,8 +378,8 @@ def _covers_by_level(
     to_go: np.ndarray,
     kmax: int,
     levels: np.ndarray,
-    probs_sorted: np.ndarray,
-    best_rows: np.ndarray,
+    level_best: np.ndarray,
+    next_bad: np.ndarray,
     has_ceil: bool,
     ceil_rows: np.ndarray,
     has_fail: bool,
@@ -361,43 +397,58 @@ def _covers_by_level(
     s: int,
     n: int,
 ) -> bool:
-    """_Incumbents.covers_by_level with the probe's bound per level (bnb._search.by_level)."""
+    """_Incumbents.covers_by_level with the probe's bound per level (bnb._search.by_level):
+    for each probability interval, every m with max(L + bound(m), ceiling) >= best. Checked
+    entry by entry over the bound's own length, and past it (where L + bound is a constant A)
+    at once: it fails there iff some c has A < best[c] (c below the first best <= A) and the
+    ceiling below best[c] (``_level_tables``)."""
     width = kmax - k + 1
     if width <= 0:
         return True
     nlev = len(levels)
-    reach = np.empty(width)
+    # The bound depends on the gap only through the failures each state must survive: levels
+    # that force the same ones share it (as bnb's memo per forced tuple).
+    forced = np.full(n, -2, np.int64)
+    bound = to_go
     for i in range(nlev + 1):
         floor = levels[i] + PROB_EPS if i < nlev else 0.0
         if floor >= mass:
             continue
         if has_fail:
-            rows = _failure_rows(
-                f_ptr, f_emax, f_table, f_n, f_failures, f_qfail, f_isv, at, sv, sh, sm, s, n,
-                mass - floor,
-            )  # fmt: skip
-            if len(rows) == 0:
+            same = forced[0] != -2
+            for x in range(n):
+                q = _forced(sm[s + x], mass - floor, f_failures, f_qfail)
+                if q != forced[x]:
+                    same = False
+                    forced[x] = q
+            if not same:
+                rows = _failure_rows(
+                    f_ptr, f_emax, f_table, f_n, f_failures, f_qfail, f_isv, at, sv, sh, sm,
+                    s, n, mass - floor,
+                )  # fmt: skip
+                bound = rows if len(rows) == 0 else _larger(rows, to_go)
+            if len(bound) == 0:
                 continue
-            bound = _larger(rows, to_go)
-        else:
-            bound = to_go
+        best = level_best[i]
         m = min(len(bound), width)
-        for c in range(width):
-            reach[c] = length + (bound[c] if c < m else bound[len(bound) - 1])
-        if has_ceil:
-            for c in range(width):
-                x = ceil_rows[i, k + c]
-                if x > reach[c] or x != x:
-                    reach[c] = x
-        if i == 0:
-            for c in range(width):
-                if not (reach[c] >= np.inf):
-                    return False
-        else:
-            best = best_rows[_likely(probs_sorted, levels[i - 1])]
-            for c in range(width):
-                if not (reach[c] >= best[k + c]):
-                    return False
+        for c in range(m):
+            reach = length + bound[c]
+            if has_ceil and ceil_rows[i, k + c] > reach:
+                reach = ceil_rows[i, k + c]
+            if not (reach >= best[k + c]):
+                return False
+        if m < width:
+            A = length + bound[len(bound) - 1]
+            lo = k + m
+            hi = kmax + 1
+            while lo < hi:  # the first c >= k + m with best[c] <= A
+                mid = (lo + hi) // 2
+                if best[mid] <= A:
+                    hi = mid
+                else:
+                    lo = mid + 1
+            if next_bad[i, k + m] < lo:
+                return False
     return True
 
 
@@ -477,6 +528,7 @@ def probe(
     and, when covered, the partial routes it expanded: their keys, scalars and states, to
     join the nogoods)."""
     best_rows = _best_rows(inc_len, inc_k, order, kmax)
+    level_best, next_bad = _level_tables(levels, probs_sorted, best_rows, has_ceil, ceil_rows, kmax)
     # Labels: the partial route probed is label 0.
     lab_L = [o_L]
     lab_k = [o_k]
@@ -555,7 +607,7 @@ def probe(
         if has_fail or has_ceil:
             at = node_of_arc[lab_arc[lab]] if has_pairs else node
             if _covers_by_level(
-                L, k, mass, to_go, kmax, levels, probs_sorted, best_rows, has_ceil, ceil_rows,
+                L, k, mass, to_go, kmax, levels, level_best, next_bad, has_ceil, ceil_rows,
                 has_fail, f_ptr, f_emax, f_table, f_n, f_failures, f_qfail, f_isv, at,
                 sv, sh, sm, s, n,
             ):  # fmt: skip
