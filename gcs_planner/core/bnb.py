@@ -742,9 +742,7 @@ def _search(
         trial_budget = budget.probe(TRIAL)
         trial = _search(ctx, critical, trial_budget, seeds, compiled=False)
         if trial.exhausted or trial_budget.stopped_by == "time":
-            budget.spent += trial.labels
-            if not trial.exhausted:
-                budget._stop("time")
+            budget.stopped("" if trial.exhausted else "time", trial.labels)
             return trial
         return _compiled_search(ctx, critical, budget, seeds, legs_mode)
     t0 = time.perf_counter()
@@ -1035,9 +1033,13 @@ def _compiled_search(
     legs_mode: int,
 ) -> BnbResult:
     """``_search`` over walks run by ``search_kernel`` (see there), with the same result."""
+    t0 = time.perf_counter()
+    if "gcs_planner.core.search_kernel" not in sys.modules:
+        # Numba compiles the kernel on its first use after installing (about half a minute
+        # on a small machine) and loads it from its cache after that.
+        budget.setup("the compiled search (compiled once after installing)")
     from gcs_planner.core import search_kernel as sk
 
-    t0 = time.perf_counter()
     scenario, graph, model = ctx.scenario, ctx.graph, ctx.model
     inc = _Incumbents(ctx.kmax)
     for points in seeds:
@@ -1085,9 +1087,7 @@ def _compiled_search(
     finally:
         sk._BUDGETS.pop()
     labels, stopped, f_len, f_k, f_p, f_ptr, f_points, o_f, o_L, o_k, o_mass, o_ptr, o_to_go = out
-    budget.spent += int(labels)
-    if stopped:
-        budget._stop("labels" if stopped == 1 else "time")
+    budget.stopped(("", "labels", "time")[stopped], int(labels))
     inc = _Incumbents(ctx.kmax)
     for g in range(len(f_len)):
         points = tuple(int(p) for p in f_points[f_ptr[g] : f_ptr[g + 1]])

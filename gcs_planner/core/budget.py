@@ -121,6 +121,14 @@ class Budget:
         self._root.stopped_by = why
         return False
 
+    def stopped(self, why: str, labels: int) -> None:
+        """Record ``labels`` spent outside ``take`` (a compiled search counts its own) and,
+        unless ``why`` is empty, that the labels ("labels") or the time limit ("time") stopped
+        the search."""
+        self.spent += labels
+        if why:
+            self._stop(why)
+
     def due(self) -> bool:
         """Whether a progress report is due (cheap: called once per label)."""
         if self.progress is None:
