@@ -27,3 +27,35 @@ def test_compiled_layers_make_the_same_table() -> None:
         np.testing.assert_array_equal(a.table, b.table)
         nonempty += a.table.shape[1] > 3
     assert nonempty >= 3
+
+
+def test_compiled_layers_make_the_same_table_over_expanded_graphs(monkeypatch) -> None:
+    """The graphs whose nodes are not the points (the pairs of ``pair_bounds``, the copies per
+    forced failure of ``failure_bounds``, with their own V flags and start errors), which the
+    compiled layers serve from COMPILED_FROM_NODES nodes once numba is loaded."""
+    from test_probes import probed_scenario
+
+    from gcs_planner.core import cost_to_go as module
+    from gcs_planner.core.failure_bounds import failure_bounds
+    from gcs_planner.core.pair_bounds import pair_bounds
+    from gcs_planner.geometry.legs import scenario_leg_model
+
+    expanded = 0
+    for seed in range(6):
+        scenario = probed_scenario(seed, "airplane")
+        graph = build_reach_graph(scenario)
+        pairs = pair_bounds(scenario, graph, scenario_leg_model(scenario))
+        assert pairs is not None
+        for over, point_of in ((graph, None), (pairs.graph, pairs.point)):
+            tables = []
+            for compiled in (False, True):
+                monkeypatch.setattr(module, "use_compiled", lambda n, c, on=compiled: on)
+                bounds = failure_bounds(scenario, over, point_of=point_of)
+                assert bounds is not None
+                tables.append(bounds.G)
+            a, b = tables
+            np.testing.assert_array_equal(a.indptr, b.indptr)
+            np.testing.assert_array_equal(a.e_max, b.e_max)
+            np.testing.assert_array_equal(a.table, b.table)
+            expanded += a.table.shape[0] > over.n
+    assert expanded >= 6
