@@ -248,6 +248,113 @@ def _stochastically_dominates(
 
 
 @njit(cache=True)
+def _propagate(
+    sv: np.ndarray,
+    sh: np.ndarray,
+    sm: np.ndarray,
+    s: int,
+    n: int,
+    leg: float,
+    kind: int,
+    unreliable: bool,
+    p_success: float,
+    residual_m: float,
+    v_lim: float,
+    h_lim: float,
+    new_v: np.ndarray,
+    new_h: np.ndarray,
+    new_m: np.ndarray,
+) -> int:
+    """``probability.propagate`` of the states sv/sh/sm[s:s + n] over a leg into a point of
+    ``kind``: the new states into new_v/new_h/new_m (room for 2n), in the order they first
+    appear (so every later sum of masses adds the same floats in the same order); returns
+    how many."""
+    fails = unreliable and (kind == KIND_V or kind == KIND_H)
+    p = p_success if fails else 1.0
+    q = 1.0 - p
+    count = 0
+    for i in range(n):
+        v = sv[s + i] + leg
+        h = sh[s + i] + leg
+        if not (v <= v_lim and h <= h_lim):
+            continue
+        w = sm[s + i]
+        for branch in range(2):
+            if branch == 0:
+                if not p > 0.0:
+                    continue
+                share = w * p
+                if kind == KIND_V:
+                    bv, bh = 0.0, h
+                elif kind == KIND_H:
+                    bv, bh = v, 0.0
+                else:
+                    bv, bh = v, h
+            else:
+                if not q > 0.0:
+                    continue
+                share = w * q
+                if kind == KIND_V:
+                    bv, bh = min(v, residual_m), h
+                elif kind == KIND_H:
+                    bv, bh = v, min(h, residual_m)
+                else:
+                    bv, bh = v, h
+            found = -1
+            for c in range(count):
+                if new_v[c] == bv and new_h[c] == bh:
+                    found = c
+                    break
+            if found >= 0:
+                new_m[found] = new_m[found] + share
+            else:
+                new_v[count] = bv
+                new_h[count] = bh
+                new_m[count] = 0.0 + share
+                count += 1
+    return count
+
+
+@njit(cache=True)
+def _to_go_after(
+    new_v: np.ndarray,
+    new_h: np.ndarray,
+    count: int,
+    kind: int,
+    j: int,
+    arc: int,
+    g_ptr: np.ndarray,
+    g_emax: np.ndarray,
+    g_table: np.ndarray,
+    has_pairs: bool,
+    node_of_arc: np.ndarray,
+    p_ptr: np.ndarray,
+    p_emax: np.ndarray,
+    p_table: np.ndarray,
+) -> np.ndarray:
+    """The bound to go per further correction of a partial route just corrected at j over
+    ``arc`` (G at its least carried error, G is non-decreasing in it; with pairs the larger
+    with G2), empty when no walk reaches B."""
+    e_min = np.inf
+    for c in range(count):
+        carried = new_h[c] if kind == KIND_V else new_v[c]
+        if carried < e_min:
+            e_min = carried
+    r = _row(g_ptr, g_emax, j, e_min)
+    if r < 0:
+        return np.empty(0)
+    if not has_pairs:
+        return g_table[r]
+    node = node_of_arc[arc]
+    if node < 0:
+        return np.empty(0)
+    r2 = _row(p_ptr, p_emax, node, e_min)
+    if r2 < 0:
+        return np.empty(0)
+    return _larger(g_table[r], p_table[r2])
+
+
+@njit(cache=True)
 def _dominates(
     aL: float,
     ak: int,
@@ -636,54 +743,13 @@ def probe(
             if not is_end and k + 1 > kmax:
                 continue
             # The error-state chain (probability.propagate), states in order of appearance.
-            kj = kind[j]
-            fails = unreliable[j] and (kj == KIND_V or kj == KIND_H)
-            p = p_success if fails else 1.0
-            q = 1.0 - p
             if len(new_v) < 2 * n:
-                new_v = np.empty(2 * n)
-                new_h = np.empty(2 * n)
-                new_m = np.empty(2 * n)
-            count = 0
-            for i in range(n):
-                v = sv[s + i] + d
-                h = sh[s + i] + d
-                if not (v <= lim_v[j] and h <= lim_h[j]):
-                    continue
-                w = sm[s + i]
-                for branch in range(2):
-                    if branch == 0:
-                        if not p > 0.0:
-                            continue
-                        share = w * p
-                        if kj == KIND_V:
-                            bv, bh = 0.0, h
-                        elif kj == KIND_H:
-                            bv, bh = v, 0.0
-                        else:
-                            bv, bh = v, h
-                    else:
-                        if not q > 0.0:
-                            continue
-                        share = w * q
-                        if kj == KIND_V:
-                            bv, bh = min(v, residual_m), h
-                        elif kj == KIND_H:
-                            bv, bh = v, min(h, residual_m)
-                        else:
-                            bv, bh = v, h
-                    found = -1
-                    for c in range(count):
-                        if new_v[c] == bv and new_h[c] == bh:
-                            found = c
-                            break
-                    if found >= 0:
-                        new_m[found] = new_m[found] + share
-                    else:
-                        new_v[count] = bv
-                        new_h[count] = bh
-                        new_m[count] = 0.0 + share
-                        count += 1
+                new_v, new_h, new_m = np.empty(2 * n), np.empty(2 * n), np.empty(2 * n)
+            kj = kind[j]
+            count = _propagate(
+                sv, sh, sm, s, n, d, kj, unreliable[j], p_success, residual_m, lim_v[j],
+                lim_h[j], new_v, new_h, new_m,
+            )  # fmt: skip
             if count == 0:
                 continue
             new_mass = 0.0
@@ -696,24 +762,13 @@ def probe(
                     escape_to = j
                     break
                 continue
-            e_min = np.inf
-            for c in range(count):
-                e = new_h[c] if kj == KIND_V else new_v[c]
-                if e < e_min:
-                    e_min = e
-            r = _row(g_ptr, g_emax, j, e_min)
-            if r < 0:
-                continue
-            g = g_table[r]
             arc_in = lo + idx
-            if has_pairs:
-                pnode = node_of_arc[arc_in]
-                if pnode < 0:
-                    continue
-                r2 = _row(p_ptr, p_emax, pnode, e_min)
-                if r2 < 0:
-                    continue
-                g = _larger(g, p_table[r2])
+            g = _to_go_after(
+                new_v, new_h, count, kj, j, arc_in, g_ptr, g_emax, g_table, has_pairs,
+                node_of_arc, p_ptr, p_emax, p_table,
+            )  # fmt: skip
+            if len(g) == 0:
+                continue
             if _covers(nL, k + 1, g, best_rows[_likely(probs_sorted, new_mass)], kmax):
                 continue
             nv = np.inf

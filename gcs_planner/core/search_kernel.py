@@ -29,16 +29,15 @@ from gcs_planner.core.probe_kernel import (
     _covers,
     _dominates,
     _grow_f,
-    _larger,
     _likely,
-    _row,
+    _propagate,
+    _to_go_after,
 )
 from gcs_planner.geometry.airplane import STEEP_SLACK_M
 from gcs_planner.geometry.airplane_kernel import airplane_lengths
 from gcs_planner.geometry.dubins import COINCIDENT_M, TWO_PI
 from gcs_planner.geometry.dubins_kernel import cs_lengths
 
-KIND_V, KIND_H = 2, 3
 LEGS_ARRAYS, LEGS_PAIRS, LEGS_AIRPLANE, LEGS_CS3D = 0, 1, 2, 3
 # Labels between two looks at the budget (time limit, progress).
 TICK = 64
@@ -121,6 +120,17 @@ def _found_arrays(
             a_len[g], a_k[g], a_p[g], index[g] = inc_len[i], inc_k[i], inc_p[i], i
             g += 1
     return a_len, a_k, a_p, index
+
+
+@njit(cache=True)
+def _incumbent_tables(
+    inc_len: list, inc_k: list, inc_p: list, alive: list, kmax: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """The live found routes' probabilities, ascending, and ``_best_rows`` (as
+    ``_Incumbents.best`` per number of routes at least so likely)."""
+    a_len, a_k, a_p, _ = _found_arrays(inc_len, inc_k, inc_p, alive)
+    order = np.argsort(a_p, kind="mergesort")
+    return a_p[order], _best_rows(a_len, a_k, order, kmax)
 
 
 @njit(cache=True)
@@ -218,10 +228,7 @@ def search(
     new_m = np.empty(64)
     while len(heap) > 0:
         if changed:
-            a_len, a_k, a_p, _ = _found_arrays(inc_len, inc_k, inc_p, alive)
-            order = np.argsort(a_p, kind="mergesort")
-            probs_sorted = a_p[order]
-            best_rows = _best_rows(a_len, a_k, order, kmax)
+            probs_sorted, best_rows = _incumbent_tables(inc_len, inc_k, inc_p, alive, kmax)
             changed = False
         f, _, lab = heapq.heappop(heap)
         L = lab_L[lab]
@@ -251,11 +258,12 @@ def search(
         lo = indptr[node]
         hi = indptr[node + 1]
         deg = hi - lo
-        if legs_mode == LEGS_AIRPLANE:
+        if legs_mode == LEGS_AIRPLANE or legs_mode == LEGS_CS3D:
             ends = np.empty((deg, 3))
             for idx in range(deg):
                 t = target[lo + idx]
                 ends[idx, 0], ends[idx, 1], ends[idx, 2] = xyz[t, 0], xyz[t, 1], xyz[t, 2]
+        if legs_mode == LEGS_AIRPLANE:
             if lab_has_head[lab]:
                 flown, heads = airplane_lengths(
                     xyz[node], lab_head[lab], ends, radius, tan_climb, tan_descent
@@ -265,10 +273,6 @@ def search(
                     xyz[node], ends, radius, tan_climb, tan_descent
                 )
         elif legs_mode == LEGS_CS3D:
-            ends = np.empty((deg, 3))
-            for idx in range(deg):
-                t = target[lo + idx]
-                ends[idx, 0], ends[idx, 1], ends[idx, 2] = xyz[t, 0], xyz[t, 1], xyz[t, 2]
             if lab_has_head[lab]:
                 flown, heads = cs_lengths(xyz[node], lab_head[lab], ends, radius)
             else:  # a free heading at A: the chord (``CS3DLegs.lengths``)
@@ -303,54 +307,14 @@ def search(
             is_end = j == end
             if not is_end and k + 1 > kmax:
                 continue
-            kj = kind[j]
-            fails = unreliable[j] and (kj == KIND_V or kj == KIND_H)
-            p = p_success if fails else 1.0
-            q = 1.0 - p
+            # The error-state chain (probability.propagate), states in order of appearance.
             if len(new_v) < 2 * n:
-                new_v = np.empty(2 * n)
-                new_h = np.empty(2 * n)
-                new_m = np.empty(2 * n)
-            count = 0
-            for i in range(n):
-                v = sv[s + i] + d
-                h = sh[s + i] + d
-                if not (v <= lim_v[j] and h <= lim_h[j]):
-                    continue
-                w = sm[s + i]
-                for branch in range(2):
-                    if branch == 0:
-                        if not p > 0.0:
-                            continue
-                        share = w * p
-                        if kj == KIND_V:
-                            bv, bh = 0.0, h
-                        elif kj == KIND_H:
-                            bv, bh = v, 0.0
-                        else:
-                            bv, bh = v, h
-                    else:
-                        if not q > 0.0:
-                            continue
-                        share = w * q
-                        if kj == KIND_V:
-                            bv, bh = min(v, residual_m), h
-                        elif kj == KIND_H:
-                            bv, bh = v, min(h, residual_m)
-                        else:
-                            bv, bh = v, h
-                    hit = -1
-                    for c in range(count):
-                        if new_v[c] == bv and new_h[c] == bh:
-                            hit = c
-                            break
-                    if hit >= 0:
-                        new_m[hit] = new_m[hit] + share
-                    else:
-                        new_v[count] = bv
-                        new_h[count] = bh
-                        new_m[count] = 0.0 + share
-                        count += 1
+                new_v, new_h, new_m = np.empty(2 * n), np.empty(2 * n), np.empty(2 * n)
+            kj = kind[j]
+            count = _propagate(
+                sv, sh, sm, s, n, d, kj, unreliable[j], p_success, residual_m, lim_v[j],
+                lim_h[j], new_v, new_h, new_m,
+            )  # fmt: skip
             if count == 0:
                 continue
             new_mass = 0.0
@@ -378,29 +342,17 @@ def search(
                     for i in range(len(points)):
                         path[i] = points[len(points) - 1 - i]
                     _add_found(inc_len, inc_k, inc_p, inc_path, alive, nL, k, arrive, path)
-                    a_len, a_k, a_p, _ = _found_arrays(inc_len, inc_k, inc_p, alive)
-                    order = np.argsort(a_p, kind="mergesort")
-                    probs_sorted = a_p[order]
-                    best_rows = _best_rows(a_len, a_k, order, kmax)
+                    probs_sorted, best_rows = _incumbent_tables(
+                        inc_len, inc_k, inc_p, alive, kmax
+                    )
                 continue
-            e_min = np.inf
-            for c in range(count):
-                carried = new_h[c] if kj == KIND_V else new_v[c]
-                if carried < e_min:
-                    e_min = carried
-            r = _row(g_ptr, g_emax, j, e_min)
-            if r < 0:
-                continue
-            g_to = g_table[r]
             arc_in = lo + idx
-            if has_pairs:
-                pnode = node_of_arc[arc_in]
-                if pnode < 0:
-                    continue
-                r2 = _row(p_ptr, p_emax, pnode, e_min)
-                if r2 < 0:
-                    continue
-                g_to = _larger(g_to, p_table[r2])
+            g_to = _to_go_after(
+                new_v, new_h, count, kj, j, arc_in, g_ptr, g_emax, g_table, has_pairs,
+                node_of_arc, p_ptr, p_emax, p_table,
+            )  # fmt: skip
+            if len(g_to) == 0:
+                continue
             if _covers(nL, k + 1, g_to, best_rows[_likely(probs_sorted, new_mass)], kmax):
                 continue
             nv = np.inf
