@@ -408,6 +408,59 @@ def _forced(weight: float, gap: float, failures: int, q_fail: float) -> int:
 
 
 @njit(cache=True)
+def _first(links: Dict, key: tuple) -> int:
+    """The last entry kept at ``key`` (-1: none); entries link back from there."""
+    if key in links:
+        return links[key]
+    return -1
+
+
+@njit(cache=True)
+def _kept_dominates(
+    first: int,
+    nxt,  # noqa: ANN001 (list or array: the entries' links)
+    kL,  # noqa: ANN001
+    kk,  # noqa: ANN001
+    kmass,  # noqa: ANN001
+    karc,  # noqa: ANN001
+    kvmin,  # noqa: ANN001
+    khmin,  # noqa: ANN001
+    kss,  # noqa: ANN001
+    ksn,  # noqa: ANN001
+    pool_v: np.ndarray,
+    pool_h: np.ndarray,
+    pool_m: np.ndarray,
+    L: float,
+    k: int,
+    mass: float,
+    arc: int,
+    v: float,
+    h: float,
+    sv: np.ndarray,
+    sh: np.ndarray,
+    sm: np.ndarray,
+    s: int,
+    n: int,
+    has_pairs: bool,
+    node_of_arc: np.ndarray,
+    pair_ptr: np.ndarray,
+    pair_length: np.ndarray,
+) -> bool:
+    """Whether one of the kept partial routes linked from ``first`` (a search's archive at one
+    key, or the nogoods there) dominates the new one (``bnb._dominated_by``)."""
+    e = first
+    while e >= 0:
+        if _dominates(
+            kL[e], kk[e], kmass[e], karc[e], kvmin[e], khmin[e], pool_v, pool_h, pool_m,
+            kss[e], ksn[e], L, k, mass, arc, v, h, sv, sh, sm, s, n,
+            has_pairs, node_of_arc, pair_ptr, pair_length,
+        ):  # fmt: skip
+            return True
+        e = nxt[e]
+    return False
+
+
+@njit(cache=True)
 def _failure_rows(
     f_ptr: np.ndarray,
     f_emax: np.ndarray,
@@ -674,18 +727,13 @@ def probe(
                empty_i, empty_i, empty_f, empty_f, empty_f)  # fmt: skip
 
     # The partial route itself may be covered by a nogood already.
-    key = (o_node, o_mask_before)
-    if key in ng_head:
-        e = ng_head[key]
-        while e >= 0:
-            if _dominates(
-                ng_L[e], ng_k[e], ng_mass[e], ng_arc[e], ng_vmin[e], ng_hmin[e],
-                ng_sv, ng_sh, ng_sm, ng_ss[e], ng_sn[e],
-                o_L, o_k, mass0, o_arc, v0, h0, sv, sh, sm, 0, n0,
-                has_pairs, node_of_arc, pair_ptr, pair_length,
-            ):  # fmt: skip
-                return (True, 0, empty_i, *nothing)
-            e = ng_next[e]
+    if _kept_dominates(
+        _first(ng_head, (o_node, o_mask_before)), ng_next, ng_L, ng_k, ng_mass, ng_arc,
+        ng_vmin, ng_hmin, ng_ss, ng_sn, ng_sv, ng_sh, ng_sm,
+        o_L, o_k, mass0, o_arc, v0, h0, sv, sh, sm, 0, n0,
+        has_pairs, node_of_arc, pair_ptr, pair_length,
+    ):  # fmt: skip
+        return (True, 0, empty_i, *nothing)
 
     # (f, order of pushing, label); alone in the queue, the partial route's f is moot.
     heap = [(o_L, np.int64(-1), np.int64(0))]
@@ -777,32 +825,18 @@ def probe(
                 nv = min(nv, new_v[c])
                 nh = min(nh, new_h[c])
             key = (j, mask)
-            dominated = False
-            head = archive.get(key, -1)
-            e = head
-            while e >= 0:
-                if _dominates(
-                    lab_L[e], lab_k[e], lab_mass[e], lab_arc[e], lab_vmin[e], lab_hmin[e],
-                    sv, sh, sm, lab_ss[e], lab_sn[e],
-                    nL, k + 1, new_mass, arc_in, nv, nh, new_v, new_h, new_m, 0, count,
-                    has_pairs, node_of_arc, pair_ptr, pair_length,
-                ):  # fmt: skip
-                    dominated = True
-                    break
-                e = archive_next[e]
-            if not dominated and key in ng_head:
-                e = ng_head[key]
-                while e >= 0:
-                    if _dominates(
-                        ng_L[e], ng_k[e], ng_mass[e], ng_arc[e], ng_vmin[e], ng_hmin[e],
-                        ng_sv, ng_sh, ng_sm, ng_ss[e], ng_sn[e],
-                        nL, k + 1, new_mass, arc_in, nv, nh, new_v, new_h, new_m, 0, count,
-                        has_pairs, node_of_arc, pair_ptr, pair_length,
-                    ):  # fmt: skip
-                        dominated = True
-                        break
-                    e = ng_next[e]
-            if dominated:
+            head = _first(archive, key)
+            if _kept_dominates(
+                head, archive_next, lab_L, lab_k, lab_mass, lab_arc, lab_vmin, lab_hmin,
+                lab_ss, lab_sn, sv, sh, sm,
+                nL, k + 1, new_mass, arc_in, nv, nh, new_v, new_h, new_m, 0, count,
+                has_pairs, node_of_arc, pair_ptr, pair_length,
+            ) or _kept_dominates(
+                _first(ng_head, key), ng_next, ng_L, ng_k, ng_mass, ng_arc, ng_vmin, ng_hmin,
+                ng_ss, ng_sn, ng_sv, ng_sh, ng_sm,
+                nL, k + 1, new_mass, arc_in, nv, nh, new_v, new_h, new_m, 0, count,
+                has_pairs, node_of_arc, pair_ptr, pair_length,
+            ):  # fmt: skip
                 continue
             # A new label: kept in the archive and queued.
             child = len(lab_L)

@@ -27,8 +27,9 @@ from gcs_planner.core.probe_kernel import (
     PROB_EPS,
     _best_rows,
     _covers,
-    _dominates,
+    _first,
     _grow_f,
+    _kept_dominates,
     _likely,
     _propagate,
     _to_go_after,
@@ -361,20 +362,13 @@ def search(
                 nv = min(nv, new_v[c])
                 nh = min(nh, new_h[c])
             key = (j, mask)
-            head = archive.get(key, -1)
-            e = head
-            dominated = False
-            while e >= 0:
-                if _dominates(
-                    lab_L[e], lab_k[e], lab_mass[e], lab_arc[e], lab_vmin[e], lab_hmin[e],
-                    sv, sh, sm, lab_ss[e], lab_sn[e],
-                    nL, k + 1, new_mass, arc_in, nv, nh, new_v, new_h, new_m, 0, count,
-                    has_pairs, node_of_arc, pair_ptr, pair_length,
-                ):  # fmt: skip
-                    dominated = True
-                    break
-                e = archive_next[e]
-            if dominated:
+            head = _first(archive, key)
+            if _kept_dominates(
+                head, archive_next, lab_L, lab_k, lab_mass, lab_arc, lab_vmin, lab_hmin,
+                lab_ss, lab_sn, sv, sh, sm,
+                nL, k + 1, new_mass, arc_in, nv, nh, new_v, new_h, new_m, 0, count,
+                has_pairs, node_of_arc, pair_ptr, pair_length,
+            ):  # fmt: skip
                 continue
             child = len(lab_L)
             if used + count > len(sv):
