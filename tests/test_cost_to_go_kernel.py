@@ -32,7 +32,7 @@ def test_compiled_layers_make_the_same_table() -> None:
 def test_compiled_layers_make_the_same_table_over_expanded_graphs(monkeypatch) -> None:
     """The graphs whose nodes are not the points (the pairs of ``pair_bounds``, the copies per
     forced failure of ``failure_bounds``, with their own V flags and start errors), which the
-    compiled layers serve from COMPILED_FROM_NODES nodes once numba is loaded."""
+    compiled layers serve on large maps."""
     from test_probes import probed_scenario
 
     from gcs_planner.core import cost_to_go as module

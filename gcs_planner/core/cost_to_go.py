@@ -26,7 +26,6 @@ no longer than any walk): weaker, still admissible, so a search over it stays ex
 from __future__ import annotations
 
 import bisect
-import sys
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -35,11 +34,6 @@ import numpy as np
 from gcs_planner.core.reach import ReachGraph, use_compiled
 from gcs_planner.core.search import _summarise, not_dominated, staircase
 from gcs_planner.scenario.model import Kind, Scenario
-
-# Nodes from which a graph whose nodes are not the points (pairs, copies per forced failure) is
-# worth the compiled layers once numba is loaded (dataset 2's bounds per probability level over
-# pairs: 65,715 nodes, 0.53 -> 0.25 s; over its 12,637 pairs numpy is faster).
-COMPILED_FROM_NODES = 40_000
 
 
 @dataclass(frozen=True)
@@ -107,8 +101,6 @@ def cost_to_go(
     makes the table admissible without them (``cut_at``)."""
     if stop is not None and stop():  # not even B's own arcs: the straight distance alone
         return _table(graph, [], [], [], [], 0)
-    if compiled is None and graph.n >= COMPILED_FROM_NODES and "numba" in sys.modules:
-        compiled = True  # a large expanded graph, and numba loaded already: no load to pay
     compiled = use_compiled(scenario.n, compiled)
     if compiled:
         from gcs_planner.core.cost_to_go_kernel import (
