@@ -8,7 +8,7 @@ import numpy as np
 from test_probes import assert_same_front, dfs_front, front_of, probed_scenario
 
 from gcs_planner.core import bnb
-from gcs_planner.geometry.airplane import _tan, airplane_legs
+from gcs_planner.geometry.airplane import airplane_legs, slope_tan
 from gcs_planner.geometry.airplane_kernel import airplane_lengths
 from gcs_planner.geometry.dubins import cs_lengths
 from gcs_planner.geometry.dubins_kernel import cs_lengths as compiled_cs_lengths
@@ -30,7 +30,8 @@ def test_compiled_airplane_legs_equal_numpys_to_a_few_ulp() -> None:
             ends[1] = start - np.array([500 * heading[0], 500 * heading[1], -10.0])
             ends[2] = start
         want = airplane_legs(start, heading, ends, radius, climb, descent)
-        length, head = airplane_lengths(start, heading, ends, radius, _tan(climb), _tan(descent))
+        tangents = slope_tan(climb), slope_tan(descent)
+        length, head = airplane_lengths(start, heading, ends, radius, *tangents)
         np.testing.assert_array_equal(np.isinf(length), np.isinf(want.length))
         np.testing.assert_array_equal(np.isnan(head), np.isnan(want.heading))
         ok = np.isfinite(want.length)

@@ -43,7 +43,7 @@ from gcs_planner.core.probability import propagate, success_probability
 from gcs_planner.core.proof import PROB_EPS, lower_bounds, settled
 from gcs_planner.core.reach import ReachGraph, build_reach_graph
 from gcs_planner.core.route import Leg, Route, evaluate_route
-from gcs_planner.geometry.airplane import _tan
+from gcs_planner.geometry.airplane import slope_tan
 from gcs_planner.geometry.legs import (
     AirplaneLegs,
     CS3DLegs,
@@ -1073,8 +1073,8 @@ def _compiled_search(
             np.empty((0, 1)) if pairs is None else pairs.G.table,
             np.ascontiguousarray(scenario.xyz, float),
             float(model.radius) if airplane or isinstance(model, CS3DLegs) else 0.0,
-            _tan(model.max_climb_angle) if airplane else math.inf,
-            _tan(model.max_descent_angle) if airplane else math.inf,
+            slope_tan(model.max_climb_angle) if airplane else math.inf,
+            slope_tan(model.max_descent_angle) if airplane else math.inf,
             heading_a is not None,
             np.zeros(3) if heading_a is None else np.asarray(heading_a, float),
             np.array([f.length for f in inc.found], float),

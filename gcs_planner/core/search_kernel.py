@@ -34,9 +34,7 @@ from gcs_planner.core.probe_kernel import (
     _propagate,
     _to_go_after,
 )
-from gcs_planner.geometry.airplane import STEEP_SLACK_M
-from gcs_planner.geometry.airplane_kernel import airplane_lengths
-from gcs_planner.geometry.dubins import COINCIDENT_M, TWO_PI
+from gcs_planner.geometry.airplane_kernel import airplane_lengths, free_airplane_lengths
 from gcs_planner.geometry.dubins_kernel import cs_lengths
 
 LEGS_ARRAYS, LEGS_PAIRS, LEGS_AIRPLANE, LEGS_CS3D = 0, 1, 2, 3
@@ -54,34 +52,6 @@ def tick(labels: int, queued: int, found: int, bound: float) -> bool:
     if budget.due():
         budget.report(labels, queued, found, bound)
     return budget.expired()
-
-
-@njit(cache=True)
-def _free_airplane_lengths(
-    start: np.ndarray, ends: np.ndarray, radius: float, tan_climb: float, tan_descent: float
-) -> tuple[np.ndarray, np.ndarray]:
-    """``airplane_legs`` with no heading (at A, when none is given): straight horizontal
-    paths, helices where too steep, the heading out along the chord."""
-    m = ends.shape[0]
-    length = np.empty(m)
-    head = np.empty((m, 3))
-    for i in range(m):
-        wx = ends[i, 0] - start[0]
-        wy = ends[i, 1] - start[1]
-        h = math.hypot(wx, wy)
-        if h > COINCIDENT_M:
-            head[i, 0], head[i, 1], head[i, 2] = wx / h, wy / h, 0.0 / h
-        else:
-            head[i, 0], head[i, 1], head[i, 2] = 1.0, 0.0, 0.0
-        dz = ends[i, 2] - start[2]
-        g = tan_climb if dz > 0 else tan_descent
-        need = 0.0 if math.isinf(g) else abs(dz) / g
-        k = 0.0
-        if need - h > STEEP_SLACK_M:
-            k = max(math.ceil((need - h - STEEP_SLACK_M) / (TWO_PI * radius)), 0.0)
-        flat = h + TWO_PI * radius * k
-        length[i] = math.sqrt(flat * flat + dz * dz)
-    return length, head
 
 
 @njit(cache=True)
@@ -270,7 +240,7 @@ def search(
                     xyz[node], lab_head[lab], ends, radius, tan_climb, tan_descent
                 )
             else:
-                flown, heads = _free_airplane_lengths(
+                flown, heads = free_airplane_lengths(
                     xyz[node], ends, radius, tan_climb, tan_descent
                 )
         elif legs_mode == LEGS_CS3D:

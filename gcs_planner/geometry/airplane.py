@@ -37,10 +37,11 @@ STEEP_SLACK_M = 1e-9
 def slope_limit(climb_deg: float, descent_deg: float, dz: np.ndarray | float) -> np.ndarray:
     """tan(gamma) for each dz (climb limit for dz > 0, descent for dz < 0); inf for 90 deg."""
     dz = np.asarray(dz, dtype=float)
-    return np.where(dz > 0, _tan(climb_deg), _tan(descent_deg))
+    return np.where(dz > 0, slope_tan(climb_deg), slope_tan(descent_deg))
 
 
-def _tan(angle_deg: float) -> float:
+def slope_tan(angle_deg: float) -> float:
+    """tan of a climb or descent limit in degrees; inf for 90 (no limit)."""
     return math.inf if angle_deg >= 90.0 else math.tan(math.radians(angle_deg))
 
 

@@ -16,7 +16,7 @@ import numpy as np
 from numba import njit
 
 from gcs_planner.geometry.airplane import STEEP_SLACK_M
-from gcs_planner.geometry.dubins import TWO_PI
+from gcs_planner.geometry.dubins import COINCIDENT_M, TWO_PI
 from gcs_planner.geometry.dubins_kernel import cs_core
 
 
@@ -46,14 +46,42 @@ def airplane_lengths(
             length[i] = math.inf
             head[i, 0], head[i, 1], head[i, 2] = np.nan, np.nan, np.nan
             continue
-        # Helix turns where the leg is too steep for its horizontal path.
-        dz = ends[i, 2] - start[2]
-        g = tan_climb if dz > 0 else tan_descent
-        need = 0.0 if math.isinf(g) else abs(dz) / g
-        k = 0.0
-        if need - horizontal > STEEP_SLACK_M:
-            k = max(math.ceil((need - horizontal - STEEP_SLACK_M) / (TWO_PI * radius)), 0.0)
-        flat = horizontal + TWO_PI * radius * k
-        length[i] = math.sqrt(flat * flat + dz * dz)
+        length[i] = _flown(horizontal, ends[i, 2] - start[2], radius, tan_climb, tan_descent)
         head[i, 0], head[i, 1], head[i, 2] = hx, hy, hz
     return length, head
+
+
+@njit(cache=True)
+def free_airplane_lengths(
+    start: np.ndarray, ends: np.ndarray, radius: float, tan_climb: float, tan_descent: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """``airplane_legs`` with no heading (at A, when none is given): straight horizontal
+    paths, helices where too steep, the heading out along the chord."""
+    m = ends.shape[0]
+    length = np.empty(m)
+    head = np.empty((m, 3))
+    for i in range(m):
+        wx = ends[i, 0] - start[0]
+        wy = ends[i, 1] - start[1]
+        h = math.hypot(wx, wy)
+        if h > COINCIDENT_M:
+            head[i, 0], head[i, 1], head[i, 2] = wx / h, wy / h, 0.0 / h
+        else:
+            head[i, 0], head[i, 1], head[i, 2] = 1.0, 0.0, 0.0
+        length[i] = _flown(h, ends[i, 2] - start[2], radius, tan_climb, tan_descent)
+    return length, head
+
+
+@njit(cache=True)
+def _flown(
+    horizontal: float, dz: float, radius: float, tan_climb: float, tan_descent: float
+) -> float:
+    """The flown length of a leg of ``horizontal`` metres and climb ``dz``: with the whole
+    helix turns it needs where too steep (``airplane.helix_turns``)."""
+    g = tan_climb if dz > 0 else tan_descent
+    need = 0.0 if math.isinf(g) else abs(dz) / g
+    k = 0.0
+    if need - horizontal > STEEP_SLACK_M:
+        k = max(math.ceil((need - horizontal - STEEP_SLACK_M) / (TWO_PI * radius)), 0.0)
+    flat = horizontal + TWO_PI * radius * k
+    return math.sqrt(flat * flat + dz * dz)

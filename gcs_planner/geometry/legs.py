@@ -24,10 +24,10 @@ import numpy as np
 
 from gcs_planner.geometry.airplane import (
     AirplaneLeg,
-    _tan,
     airplane_leg,
     airplane_legs,
     lower_bounds,
+    slope_tan,
 )
 from gcs_planner.geometry.dubins import CSLeg, cs_leg, cs_lengths, straight_leg
 
@@ -139,8 +139,8 @@ class AirplaneLegs:
         from gcs_planner.geometry.airplane_kernel import airplane_lengths
 
         return airplane_lengths(
-            start, heading, ends, self.radius, _tan(self.max_climb_angle),
-            _tan(self.max_descent_angle),
+            start, heading, ends, self.radius, slope_tan(self.max_climb_angle),
+            slope_tan(self.max_descent_angle),
         )  # fmt: skip
 
     def lower_bounds(self, start, ends):
