@@ -14,10 +14,10 @@ faster. Two things are left out because they cannot change an answer: the whole-
 (``prefilter.covered_fan`` drops only arcs the per-arc test drops) and the memo of the bounds
 per probability level.
 
-Layout: a partial route is a row of label arrays; its error states a slice of a state pool;
-its bounds to go (G per further correction) a slice of a float pool. The nogoods live across
-probes in a store of the same layout (``NogoodStore``), linked per (point, critical points
-visited) through a typed dict.
+Layout: a partial route is a row of the label lists (``_keep``, shared with ``search_kernel``);
+its error states a slice of a state pool; its bound to go (G per further correction) an array
+of its own. The nogoods live across probes in arrays of the same layout (``CompiledProbes``),
+linked per (point, critical points visited) through a typed dict.
 """
 
 from __future__ import annotations
@@ -613,6 +613,57 @@ def _covers_by_level(
 
 
 @njit(cache=True)
+def _keep(
+    store: tuple,
+    pool: tuple,
+    used: int,
+    new_v: np.ndarray,
+    new_h: np.ndarray,
+    new_m: np.ndarray,
+    count: int,
+    L: float,
+    k: int,
+    node: int,
+    arc: int,
+    parent: int,
+    mask: int,
+    mass: float,
+    vmin: float,
+    hmin: float,
+    to_go: np.ndarray,
+    link: int,
+) -> tuple[tuple, int]:
+    """Keep a new partial route: its row in ``store`` (the lists L, k, point, arc flown last,
+    parent, critical points on its path, first state, states, mass, least v, least h, bound to
+    go, next kept at its key) and its error states at ``used`` in ``pool`` (v, h, mass arrays,
+    grown when full). Returns the pool and how much of it is used."""
+    lab_L, lab_k, lab_node, lab_arc, lab_parent, lab_mask, lab_ss, lab_sn = store[:8]
+    lab_mass, lab_vmin, lab_hmin, lab_to_go, links = store[8:]
+    sv, sh, sm = pool
+    if used + count > len(sv):
+        sv = _grow_f(sv, used + count)
+        sh = _grow_f(sh, used + count)
+        sm = _grow_f(sm, used + count)
+    sv[used : used + count] = new_v[:count]
+    sh[used : used + count] = new_h[:count]
+    sm[used : used + count] = new_m[:count]
+    lab_ss.append(used)
+    lab_sn.append(count)
+    lab_L.append(L)
+    lab_k.append(k)
+    lab_node.append(node)
+    lab_arc.append(arc)
+    lab_parent.append(parent)
+    lab_mask.append(mask)
+    lab_mass.append(mass)
+    lab_vmin.append(vmin)
+    lab_hmin.append(hmin)
+    lab_to_go.append(to_go)
+    links.append(link)
+    return (sv, sh, sm), used + count
+
+
+@njit(cache=True)
 def probe(
     # the reach graph and the model
     indptr: np.ndarray,
@@ -719,6 +770,8 @@ def probe(
     lab_hmin = [h0]
     lab_to_go = [o_to_go.copy()]
     archive_next = [-1]
+    store = (lab_L, lab_k, lab_node, lab_arc, lab_parent, lab_mask, lab_ss, lab_sn, lab_mass,
+             lab_vmin, lab_hmin, lab_to_go, archive_next)  # fmt: skip
     archive = Dict.empty(key_type=_KEY, value_type=types.int64)
     empty_i = np.empty(0, np.int64)
     empty_f = np.empty(0)
@@ -840,28 +893,12 @@ def probe(
                 continue
             # A new label: kept in the archive and queued.
             child = len(lab_L)
-            if used + count > len(sv):
-                sv = _grow_f(sv, used + count)
-                sh = _grow_f(sh, used + count)
-                sm = _grow_f(sm, used + count)
-            sv[used : used + count] = new_v[:count]
-            sh[used : used + count] = new_h[:count]
-            sm[used : used + count] = new_m[:count]
-            lab_ss.append(used)
-            lab_sn.append(count)
-            used += count
-            lab_L.append(nL)
-            lab_k.append(k + 1)
-            lab_node.append(j)
-            lab_arc.append(arc_in)
-            lab_parent.append(lab)
-            lab_mask.append(mask | (np.int64(1) << bit) if bit >= 0 else mask)
+            (sv, sh, sm), used = _keep(
+                store, (sv, sh, sm), used, new_v, new_h, new_m, count, nL, k + 1, j, arc_in,
+                lab, mask | (np.int64(1) << bit) if bit >= 0 else mask, new_mass, nv, nh, g,
+                head,
+            )  # fmt: skip
             lab_kmask.append(mask)
-            lab_mass.append(new_mass)
-            lab_vmin.append(nv)
-            lab_hmin.append(nh)
-            lab_to_go.append(g)
-            archive_next.append(head)
             archive[key] = child
             heapq.heappush(heap, (nL + g[len(g) - 1], np.int64(counter), np.int64(child)))
             counter += 1

@@ -28,7 +28,7 @@ from gcs_planner.core.probe_kernel import (
     _best_rows,
     _covers,
     _first,
-    _grow_f,
+    _keep,
     _kept_dominates,
     _likely,
     _propagate,
@@ -183,6 +183,8 @@ def search(
     lab_head = [heading_a.copy()]
     lab_has_head = [has_heading_a]
     archive_next = [np.int64(-1)]
+    store = (lab_L, lab_k, lab_node, lab_arc, lab_parent, lab_mask, lab_ss, lab_sn, lab_mass,
+             lab_vmin, lab_hmin, lab_to_go, archive_next)  # fmt: skip
     archive = Dict.empty(key_type=_KEY, value_type=types.int64)
     sv = np.zeros(256)
     sh = np.zeros(256)
@@ -341,33 +343,17 @@ def search(
             ):  # fmt: skip
                 continue
             child = len(lab_L)
-            if used + count > len(sv):
-                sv = _grow_f(sv, used + count)
-                sh = _grow_f(sh, used + count)
-                sm = _grow_f(sm, used + count)
-            sv[used : used + count] = new_v[:count]
-            sh[used : used + count] = new_h[:count]
-            sm[used : used + count] = new_m[:count]
-            lab_ss.append(used)
-            lab_sn.append(count)
-            used += count
-            lab_L.append(nL)
-            lab_k.append(k + 1)
-            lab_node.append(j)
-            lab_arc.append(arc_in)
-            lab_parent.append(lab)
-            lab_mask.append(mask | (np.int64(1) << bit) if bit >= 0 else mask)
-            lab_mass.append(new_mass)
-            lab_vmin.append(nv)
-            lab_hmin.append(nh)
-            lab_to_go.append(g_to)
+            (sv, sh, sm), used = _keep(
+                store, (sv, sh, sm), used, new_v, new_h, new_m, count, nL, k + 1, j, arc_in,
+                lab, mask | (np.int64(1) << bit) if bit >= 0 else mask, new_mass, nv, nh, g_to,
+                head,
+            )  # fmt: skip
             if legs_mode == LEGS_AIRPLANE or legs_mode == LEGS_CS3D:
                 lab_head.append(heads[idx].copy())
                 lab_has_head.append(True)
             else:
                 lab_head.append(heading_a)
                 lab_has_head.append(False)
-            archive_next.append(head)
             archive[key] = child
             heapq.heappush(heap, (nL + g_to[len(g_to) - 1], np.int64(counter), np.int64(child)))
             counter += 1
