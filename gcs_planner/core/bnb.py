@@ -563,8 +563,8 @@ class _Prober:
             return False, 0
         if self._compile:
             if self.compiled is None:
-                # Numba compiles the kernel on its first use after installing (about half a
-                # minute on a small machine) and loads it from its cache after that.
+                # Numba compiles the kernel on its first use after installing (20 to 30 s on a
+                # 2-core machine) and loads it from its cache after that.
                 budget.setup("the compiled probes (compiled once after installing)")
                 from gcs_planner.core.probe_kernel import CompiledProbes
 
@@ -1010,8 +1010,8 @@ def _ending(
 
 def _legs_mode(ctx: _Context, critical: frozenset[int] | None) -> int | None:
     """How ``search_kernel`` flies the legs of a search over walks (None: it cannot, the
-    search stays in Python): arrays of heading-free legs, the pair relaxation's, or airplane
-    legs from the heading."""
+    search stays in Python): 0 heading-free legs, 1 the pair relaxation's, 2 airplane or 3
+    cs3d legs from the heading (``search_kernel.LEGS_*``)."""
     if critical is None or ctx.open_order or not COMPILED_SEARCH:
         return None
     if len(critical) > MAX_COMPILED_CRITICAL:
@@ -1035,8 +1035,8 @@ def _compiled_search(
     """``_search`` over walks run by ``search_kernel`` (see there), with the same result."""
     t0 = time.perf_counter()
     if "gcs_planner.core.search_kernel" not in sys.modules:
-        # Numba compiles the kernel on its first use after installing (about half a minute
-        # on a small machine) and loads it from its cache after that.
+        # Numba compiles the kernel on its first use after installing (20 to 30 s on a
+        # 2-core machine) and loads it from its cache after that.
         budget.setup("the compiled search (compiled once after installing)")
     from gcs_planner.core import search_kernel as sk
 
