@@ -5,7 +5,7 @@ them from its first label."""
 from __future__ import annotations
 
 import numpy as np
-from test_probes import assert_same_front, dfs_front, front_of, probed_scenario
+from test_probes import assert_same_front, front_of, probed_front, probed_scenario
 
 from gcs_planner.core import bnb
 from gcs_planner.geometry.airplane import airplane_legs, slope_tan
@@ -57,7 +57,7 @@ def test_fronts_flying_compiled_legs_from_the_first_label(monkeypatch) -> None:
                 monkeypatch.setattr(bnb, "COMPILED_LEGS", True)
                 assert got.optimal and numpy.optimal
                 assert [f.points for f in got.front] == [f.points for f in numpy.front]
-                want = dfs_front(scenario, probability)
+                want = probed_front(seed, legs, probability)
                 assert_same_front(front_of(got, probability), want, (legs, seed, probability))
 
 

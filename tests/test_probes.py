@@ -11,6 +11,7 @@ itself checked against the plain enumeration on small scenarios."""
 from __future__ import annotations
 
 import collections
+import functools
 
 import numpy as np
 import pytest
@@ -85,6 +86,13 @@ def probed_scenario(seed: int, legs: str):
     return scenario.with_vehicle(leg_model="cs3d") if legs == "cs3d" else scenario
 
 
+@functools.cache
+def probed_front(seed: int, legs: str, probability: bool) -> list[tuple[float, int, float]]:
+    """``dfs_front`` of ``probed_scenario(seed, legs)``, enumerated once per test session (the
+    tests of the probes and of the compiled searches ask for the same scenarios)."""
+    return dfs_front(probed_scenario(seed, legs), probability)
+
+
 def front_of(result, probability: bool) -> list[tuple[float, int, float]]:
     return [
         (round(f.length, 6), f.corrections, round(-f.probability, 12) if probability else 0.0)
@@ -132,7 +140,7 @@ def test_fronts_with_probes_equal_enumeration(probe_outcomes) -> None:
             scenario = probed_scenario(seed, legs)
             result = bnb.bnb_front(scenario, probability=True, max_labels=10**6)
             assert result.optimal
-            want = dfs_front(scenario, True)
+            want = probed_front(seed, legs, True)
             assert_same_front(front_of(result, True), want, (legs, seed))
             nonempty += bool(want)
     assert nonempty >= 15
@@ -147,5 +155,6 @@ def test_two_objective_fronts_with_probes_equal_enumeration(probe_outcomes) -> N
             scenario = probed_scenario(seed, legs)
             result = bnb.bnb_front(scenario, probability=False, max_labels=10**6)
             assert result.optimal
-            assert_same_front(front_of(result, False), dfs_front(scenario, False), (legs, seed))
+            want = probed_front(seed, legs, False)
+            assert_same_front(front_of(result, False), want, (legs, seed))
     assert probe_outcomes["open"] >= 20, probe_outcomes

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import collections
 
-from test_probes import assert_same_front, dfs_front, front_of, probed_scenario
+from test_probes import assert_same_front, front_of, probed_front, probed_scenario
 
 from gcs_planner.core import bnb, search_kernel
 from gcs_planner.core.budget import Budget
@@ -56,7 +56,7 @@ def test_compiled_searches_equal_the_python_ones_and_enumeration(monkeypatch) ->
             for probability in (True, False) if seed < 4 else (True,):
                 compiled, python = _pair(scenario, probability, monkeypatch)
                 _same(compiled, python, (legs, seed, probability))
-                want = dfs_front(scenario, probability)
+                want = probed_front(seed, legs, probability)
                 assert_same_front(front_of(compiled, probability), want, (legs, seed))
     # Every kind of legs ran compiled: heading-free, the pair relaxation's, airplane, cs3d.
     assert modes[0] >= 20 and modes[1] >= 10 and modes[2] >= 10 and modes[3] >= 5, modes
