@@ -31,7 +31,7 @@ from numba.typed import Dict
 PROB_EPS = 1e-12  # as proof.PROB_EPS (asserted equal in the tests)
 MASS_SLACK = 1e-13  # as failure_bounds._MASS_SLACK
 MAX_UNIONS = 256  # as bnb.MAX_UNIONS
-KIND_V, KIND_H, KIND_B = 2, 3, 1
+KIND_V, KIND_H = 2, 3
 
 _KEY = types.UniTuple(types.int64, 2)
 
@@ -43,15 +43,6 @@ def new_key_dict() -> Dict:
 
 @njit(cache=True)
 def _grow_f(a: np.ndarray, need: int) -> np.ndarray:
-    if need <= len(a):
-        return a
-    out = np.empty(max(need, 2 * len(a)), a.dtype)
-    out[: len(a)] = a
-    return out
-
-
-@njit(cache=True)
-def _grow_i(a: np.ndarray, need: int) -> np.ndarray:
     if need <= len(a):
         return a
     out = np.empty(max(need, 2 * len(a)), a.dtype)
