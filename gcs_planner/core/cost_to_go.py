@@ -257,10 +257,22 @@ def _table(
     table = np.full((len(a_R), layers), np.inf)
     table[np.arange(len(a_R)), a_layer] = a_R
     np.minimum.accumulate(table, axis=1, out=table)
-    for j in np.flatnonzero(np.diff(indptr)):
-        lo, hi = indptr[j], indptr[j + 1]
-        table[lo:hi] = np.minimum.accumulate(table[lo:hi][::-1], axis=0)[::-1]
+    _suffix_minima(table, indptr[a_node + 1])
     return CostToGo(indptr, a_E, table, cut_at)
+
+
+def _suffix_minima(table: np.ndarray, row_end: np.ndarray) -> None:
+    """Each row of ``table`` becomes the minimum of itself and the rows after it up to its
+    ``row_end`` (exclusive; rows of one point are consecutive and share it), in place. By
+    doubling: after the step of ``shift`` a row holds the minimum over the next 2 ``shift``
+    rows of its point, so log2 of the most rows a point has steps do it, each over the whole
+    table at once (one minimum per point and step took 20,000 numpy calls over pairs). Minima
+    are exact: the same table as row by row."""
+    live, shift = np.arange(len(table)), 1
+    while len(live):
+        live = live[live + shift < row_end[live]]
+        table[live] = np.minimum(table[live], table[live + shift])
+        shift *= 2
 
 
 def _filter(
