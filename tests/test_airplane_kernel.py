@@ -83,3 +83,33 @@ def test_compiled_cs3d_legs_equal_numpys_to_a_few_ulp() -> None:
         unreachable += int((~ok).sum())
         straight += int(np.isclose(want[ok], np.linalg.norm(ends - start, axis=1)[ok]).sum())
     assert unreachable >= 100 and straight >= 100, (unreachable, straight)
+
+
+def test_seed_routes_flown_compiled_as_flown_route_flies_them() -> None:
+    """``bnb._compiled_flight`` (seed routes' legs after the first flown compiled) against
+    ``flown_route``: random routes, repeated points (coincident legs) and targets inside the
+    turning circle included, with a free heading at A and a given one."""
+    import numba  # noqa: F401  (loaded: the compiled flight is what a long search uses)
+
+    rng = np.random.default_rng(11)
+    unreachable = 0
+    for legs in ("airplane", "airplane, climb limits", "cs3d"):
+        for seed in range(8):
+            scenario = probed_scenario(seed, legs)
+            if seed % 2:
+                scenario = scenario.with_vehicle(heading_at_a=tuple(rng.normal(size=3)))
+            model = bnb.scenario_leg_model(scenario)
+            inner = [i for i in range(scenario.n) if i not in (scenario.start, scenario.end)]
+            for _ in range(30):
+                middle = list(rng.choice(inner, int(rng.integers(1, len(inner))), replace=False))
+                if rng.random() < 0.2:
+                    middle.insert(int(rng.integers(0, len(middle))), middle[0])
+                points = (scenario.start, *map(int, middle), scenario.end)
+                got = bnb._compiled_flight(scenario, points, model)
+                want = [s.leg.length for s in bnb.flown_route(scenario, points).stops[1:]]
+                assert got is not None and len(got) == len(want)
+                np.testing.assert_array_equal(np.isinf(got), np.isinf(want))
+                ok = np.isfinite(want)
+                np.testing.assert_allclose(np.array(got)[ok], np.array(want)[ok], rtol=1e-13)
+                unreachable += int((~ok).any())
+    assert unreachable >= 20, unreachable
