@@ -760,6 +760,9 @@ def _search(
     fan = FanBound(G, scenario.n)
     is_v_point = scenario.kind == Kind.V
     fast_legs = getattr(model, "compiled_lengths", None) if COMPILED_LEGS else None
+    # Once numba is loaded (a search before this one needed it) the compiled legs cost
+    # nothing to start: from the first label.
+    legs_from = -1 if "numba" in sys.modules else COMPILED_LEGS_FROM
     # Per (point, critical points visited): the partial routes kept (``_kept``), sorted by
     # length, and their lengths.
     archive: dict[tuple[int, frozenset[int]], tuple[list[float], list[tuple]]] = {}
@@ -885,7 +888,7 @@ def _search(
         elif model.carries_heading:
             # Compiled airplane legs once the search proves long (numba loads in a fraction
             # of a second: short searches never pay for it).
-            if fast_legs is not None and heading is not None and labels > COMPILED_LEGS_FROM:
+            if fast_legs is not None and heading is not None and labels > legs_from:
                 flown, headings = fast_legs(xyz[node], heading, xyz[targets])
             else:
                 flown, headings = model.lengths(xyz[node], heading, xyz[targets])
