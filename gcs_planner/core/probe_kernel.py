@@ -374,9 +374,8 @@ def _dominates(
     pair_ptr: np.ndarray,
     pair_length: np.ndarray,
 ) -> bool:
-    """One kept partial route against a new one (bnb._dominated_by's loop body)."""
-    if aL > L or ak > k or am < mass - PROB_EPS or av > v or ah > h:
-        return False
+    """One kept partial route against a new one (bnb._dominated_by's loop body), once the
+    scalars allow it (``_kept_dominates`` tests them first)."""
     shift = _margin(has_pairs, node_of_arc, pair_ptr, pair_length, a_arc, arc)
     return (
         aL + shift <= L
@@ -441,7 +440,12 @@ def _kept_dominates(
     key, or the nogoods there) dominates the new one (``bnb._dominated_by``)."""
     e = first
     while e >= 0:
-        if _dominates(
+        # The scalars first, here: most kept routes fail them, and a call with the arrays
+        # costs an atomic reference count per array and call (numba does not inline it).
+        if (
+            kL[e] <= L and kk[e] <= k and kmass[e] >= mass - PROB_EPS and kvmin[e] <= v
+            and khmin[e] <= h
+        ) and _dominates(
             kL[e], kk[e], kmass[e], karc[e], kvmin[e], khmin[e], pool_v, pool_h, pool_m,
             kss[e], ksn[e], L, k, mass, arc, v, h, sv, sh, sm, s, n,
             has_pairs, node_of_arc, pair_ptr, pair_length,
@@ -770,9 +774,12 @@ def probe(
     nothing = (empty_i, empty_i, empty_f, empty_i, empty_f, empty_i, empty_f, empty_f,
                empty_i, empty_i, empty_f, empty_f, empty_f)  # fmt: skip
 
-    # The partial route itself may be covered by a nogood already.
-    if _kept_dominates(
-        _first(ng_head, (o_node, o_mask_before)), ng_next, ng_L, ng_k, ng_mass, ng_arc,
+    # The partial route itself may be covered by a nogood already. (Each call is asked only
+    # where something is kept: a call with arrays costs an atomic reference count per array,
+    # which numba does not prune from a function with loops and early returns.)
+    first_ng = _first(ng_head, (o_node, o_mask_before))
+    if first_ng >= 0 and _kept_dominates(
+        first_ng, ng_next, ng_L, ng_k, ng_mass, ng_arc,
         ng_vmin, ng_hmin, ng_ss, ng_sn, ng_sv, ng_sh, ng_sm,
         o_L, o_k, mass0, o_arc, v0, h0, sv, sh, sm, 0, n0,
         has_pairs, node_of_arc, pair_ptr, pair_length,
@@ -870,17 +877,18 @@ def probe(
                 nh = min(nh, new_h[c])
             key = (j, mask)
             head = _first(archive, key)
-            if _kept_dominates(
+            first_ng = _first(ng_head, key)
+            if (head >= 0 and _kept_dominates(
                 head, archive_next, lab_L, lab_k, lab_mass, lab_arc, lab_vmin, lab_hmin,
                 lab_ss, lab_sn, sv, sh, sm,
                 nL, k + 1, new_mass, arc_in, nv, nh, new_v, new_h, new_m, 0, count,
                 has_pairs, node_of_arc, pair_ptr, pair_length,
-            ) or _kept_dominates(
-                _first(ng_head, key), ng_next, ng_L, ng_k, ng_mass, ng_arc, ng_vmin, ng_hmin,
+            )) or (first_ng >= 0 and _kept_dominates(
+                first_ng, ng_next, ng_L, ng_k, ng_mass, ng_arc, ng_vmin, ng_hmin,
                 ng_ss, ng_sn, ng_sv, ng_sh, ng_sm,
                 nL, k + 1, new_mass, arc_in, nv, nh, new_v, new_h, new_m, 0, count,
                 has_pairs, node_of_arc, pair_ptr, pair_length,
-            ):  # fmt: skip
+            )):  # fmt: skip
                 continue
             # A new label: kept in the archive and queued.
             child = len(lab_L)

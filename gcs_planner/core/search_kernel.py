@@ -335,7 +335,7 @@ def search(
                 nh = min(nh, new_h[c])
             key = (j, mask)
             head = _first(archive, key)
-            if _kept_dominates(
+            if head >= 0 and _kept_dominates(  # (asked only where something is kept)
                 head, archive_next, lab_L, lab_k, lab_mass, lab_arc, lab_vmin, lab_hmin,
                 lab_ss, lab_sn, sv, sh, sm,
                 nL, k + 1, new_mass, arc_in, nv, nh, new_v, new_h, new_m, 0, count,
