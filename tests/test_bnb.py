@@ -256,7 +256,7 @@ def test_front_is_exact_with_a_cost_to_go_cut_short(monkeypatch, probability: bo
     monkeypatch.setattr(bnb, "cost_to_go", cut_short)
     monkeypatch.setattr(pair_bounds, "cost_to_go", cut_short)
     monkeypatch.setattr(failure_bounds, "cost_to_go", cut_short)
-    monkeypatch.setattr(bnb, "FAILURE_BOUNDS_FROM", 0)  # made (and cut) at once
+    monkeypatch.setattr(bnb, "FAILURE_BOUNDS_PER_ARC", 0.0)  # made (and cut) at once
     cut = failures_cut = 0
     for seed in range(20):
         layers = seed % 2

@@ -8,6 +8,7 @@ from helpers import mixed_scenario
 from gcs_planner.core.cost_to_go import cost_to_go
 from gcs_planner.core.reach import build_reach_graph
 from gcs_planner.scenario.generate import random_scenario
+from gcs_planner.scenario.model import Kind
 
 
 def test_compiled_layers_make_the_same_table() -> None:
@@ -46,16 +47,20 @@ def test_compiled_layers_make_the_same_table_over_expanded_graphs(monkeypatch) -
         graph = build_reach_graph(scenario)
         pairs = pair_bounds(scenario, graph, scenario_leg_model(scenario))
         assert pairs is not None
-        for over, point_of in ((graph, None), (pairs.graph, pairs.point)):
+        is_v = scenario.kind[pairs.point] == Kind.V
+        for over in (graph, pairs.graph):
             tables = []
             for compiled in (False, True):
                 monkeypatch.setattr(module, "use_compiled", lambda n, c, on=compiled: on)
-                bounds = failure_bounds(scenario, over, point_of=point_of)
-                assert bounds is not None
-                tables.append(bounds.G)
+                if over is graph:  # the copies per forced failure
+                    bounds = failure_bounds(scenario, graph)
+                    assert bounds is not None
+                    tables.append(bounds.G)
+                else:
+                    tables.append(module.cost_to_go(scenario, pairs.graph, is_v=is_v))
             a, b = tables
             np.testing.assert_array_equal(a.indptr, b.indptr)
             np.testing.assert_array_equal(a.e_max, b.e_max)
             np.testing.assert_array_equal(a.table, b.table)
-            expanded += a.table.shape[0] > over.n
-    assert expanded >= 6
+            expanded += a.table.shape[0] > scenario.n
+    assert expanded >= 12

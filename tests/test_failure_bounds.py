@@ -159,7 +159,7 @@ def test_fronts_with_the_failure_bounds_from_the_first_label_equal_enumeration(
 ) -> None:
     """The search makes the failure bounds only once it has expanded many labels, which small
     scenarios never reach: here it makes them at once, and the fronts must stay exact."""
-    monkeypatch.setattr(bnb, "FAILURE_BOUNDS_FROM", 0)
+    monkeypatch.setattr(bnb, "FAILURE_BOUNDS_PER_ARC", 0.0)
     nonempty = 0
     for seed in range(24):
         scenario = (

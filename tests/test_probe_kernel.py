@@ -34,9 +34,10 @@ def _same_search(a: bnb.BnbResult, b: bnb.BnbResult, case) -> None:
 
 @pytest.fixture
 def asked(monkeypatch) -> collections.Counter:
-    """Probes from the first label, counting what the compiled ones answered and the critical
-    points of the probers."""
+    """Probes from the first label, with the failure bounds, counting what the compiled ones
+    answered and the critical points of the probers."""
     monkeypatch.setattr(bnb, "PROBE_FROM", 0)
+    monkeypatch.setattr(bnb, "FAILURE_BOUNDS_PER_ARC", 0.0)
     seen: collections.Counter[str] = collections.Counter()
     call = probe_kernel.CompiledProbes.__call__
 
@@ -54,9 +55,12 @@ def asked(monkeypatch) -> collections.Counter:
 
 
 def test_compiled_probes_search_as_the_python_ones(asked, monkeypatch) -> None:
+    """Half the searches with the failure bounds from the first probe, half making them once
+    the probes have spent a label per arc (mid-search: both probes must switch together)."""
     for legs in ("airplane", "airplane, climb limits", "cs3d"):
         for seed in range(12):
             scenario = probed_scenario(seed, legs)
+            monkeypatch.setattr(bnb, "FAILURE_BOUNDS_PER_ARC", 0.0 if seed % 2 else 1.0)
             for probability in (True, False) if seed < 4 else (True,):
                 compiled = _run(scenario, probability, True, monkeypatch)
                 python = _run(scenario, probability, False, monkeypatch)

@@ -53,7 +53,7 @@ _MASS_SLACK = 1e-13
 @dataclass(frozen=True)
 class FailureBounds:
     G: CostToGo  # over the expanded graph
-    n: int  # nodes of the graph it was made over (the scenario's points, or pairs)
+    n: int  # the scenario's points
     failures: int  # copies 0 .. failures
     q_fail: float  # 1 - p
     is_v: np.ndarray  # per node: its point is a V point
@@ -104,20 +104,17 @@ def failure_bounds(
     scenario: Scenario,
     graph: ReachGraph,
     failures: int = MAX_FAILURES,
-    point_of: np.ndarray | None = None,
     stop: Callable[[], bool] | None = None,
 ) -> FailureBounds | None:
-    """The bounds G^0 .. G^failures of ``scenario`` over ``graph`` (None when no correction can
-    fail: every point reliable, or p = 1). ``point_of``: the scenario point of each node of
-    ``graph`` when its nodes are not the points (the pairs of ``pair_bounds``). ``stop``: see
-    ``cost_to_go`` (a table cut short is weaker, still a lower bound)."""
+    """The bounds G^0 .. G^failures of ``scenario`` over its reach ``graph`` (None when no
+    correction can fail: every point reliable, or p = 1). ``stop``: see ``cost_to_go`` (a
+    table cut short is weaker, still a lower bound)."""
     p = scenario.params.p_success
-    point = np.arange(graph.n) if point_of is None else np.asarray(point_of)
-    unreliable = np.asarray(scenario.unreliable, dtype=bool)[point]
+    unreliable = np.asarray(scenario.unreliable, dtype=bool)
     if p >= 1.0 or not unreliable.any() or failures <= 0:
         return None
     n, end, start = graph.n, graph.end, graph.start
-    is_v_pt = scenario.kind[point] == Kind.V
+    is_v_pt = scenario.kind == Kind.V
     src = np.repeat(np.arange(n), graph.degree())
     dst = graph.target.astype(np.int64)
     length = graph.length

@@ -811,10 +811,9 @@ def probe(
         if _covers(L, k, to_go, best, kmax):
             continue
         if has_fail or has_ceil:
-            at = node_of_arc[lab_arc[lab]] if has_pairs else node
             if _covers_by_level(
                 L, k, mass, to_go, kmax, levels, level_best, next_bad, has_ceil, ceil_rows,
-                has_fail, f_ptr, f_emax, f_table, f_n, f_failures, f_qfail, f_isv, at,
+                has_fail, f_ptr, f_emax, f_table, f_n, f_failures, f_qfail, f_isv, node,
                 sv, sh, sm, s, n,
             ):  # fmt: skip
                 continue
@@ -1007,6 +1006,7 @@ class CompiledProbes:
             t0 if pairs is None else pairs.G.table,
         )
         self._failures: tuple | None = None
+        self._bounds: object = None  # the FailureBounds they were made of (None: none yet)
         self._found: object = None
         self._incumbents: tuple = ()
         # The nogood store: (point, mask) -> last entry, entries linked back.
@@ -1016,8 +1016,11 @@ class CompiledProbes:
         self.store = _empty_store(256, 1024)
 
     def _failure_args(self) -> tuple:
-        if self._failures is None:
-            fb = self.ctx.failures()
+        """The failure bounds' arrays, asked again until the bounds are made (``bnb._Context
+        .failures``: once the probes have spent enough labels)."""
+        fb = self.ctx.failures(0)  # (the prober's: it counts the probes' labels itself)
+        if self._failures is None or fb is not self._bounds:
+            self._bounds = fb
             if fb is None:
                 self._failures = (
                     False, np.zeros(1, np.int64), np.empty(0), np.empty((0, 1)), 0, 0, 0.0,
