@@ -801,11 +801,9 @@ def _search(
         states: dict,
         mass: float,
         to_go: np.ndarray | None,
-        arc: int,
     ) -> bool:
         """Whether found routes cover the partial route, tested per probability level.
-        ``to_go``: the label's bound over every continuation (it holds for each level too);
-        ``arc``: the arc of the reach graph it flew last."""
+        ``to_go``: the label's bound over every continuation (it holds for each level too)."""
         if (relaxed and not probe) or j == start:
             return False
         failures = ctx.failures(labels)  # (a probe's: the probes' labels before it)
@@ -866,7 +864,7 @@ def _search(
             if least > f:  # queued before routes that now cover its shortest continuations
                 heapq.heappush(heap, (least, *entry[1:]))
                 continue
-        elif inc.covers(L, k, to_go, mass) or by_level(L, k, node, states, mass, to_go, arc):
+        elif inc.covers(L, k, to_go, mass) or by_level(L, k, node, states, mass, to_go):
             continue
         if prober is not None and node != start and labels >= PROBE_FROM:
             covered, spent = prober(entry, inc, budget)
@@ -984,7 +982,7 @@ def _search(
         (e[0], e[2], e[4], e[8], sum(e[5].values()))
         for e in heap
         if not inc.covers(e[2], e[4], e[8], sum(e[5].values()))
-        and not by_level(e[2], e[4], e[3], e[5], sum(e[5].values()), e[8], e[9])
+        and not by_level(e[2], e[4], e[3], e[5], sum(e[5].values()), e[8])
     ]
     return _ending(ctx, inc, live, labels, t0, exhausted, probe_labels)
 
