@@ -61,8 +61,9 @@ if TYPE_CHECKING:
 # Labels a search over simple routes and its probes spend, per arc of the reach graph, before
 # the failure bounds are made (over the reach graph: their cost-to-go has a copy of each arc
 # per forced failure). A search that proves its front in fewer never pays for them: dataset 2
-# with turns proves in about 17,000 probe labels with them, 21,000 without, and made at once
-# they cost a third of its time; on random 1,500 points they cost 0.7 s to save 50 labels.
+# with turns proves in about 17,600 probe labels with them, 21,500 without, and made over the
+# pairs at the first probe they cost a quarter of its time; on random 1,500 points they cost
+# 0.7 s to save 50 labels.
 FAILURE_BOUNDS_PER_ARC = 1.0
 # How many times the heading-free floor's labels the pair floor is expected to need at most.
 PAIR_FLOOR_COST = 4
@@ -539,8 +540,9 @@ class _Prober:
         probe.ceiling = ctx.ceiling
         # The same bounds, made once: once the probes before (not the search) have spent
         # enough, so that a probe, compiled or not, has them throughout or not at all.
-        probe.failures = lambda _spent: ctx.failures(self.spent)  # type: ignore[method-assign]
+        self.root = ctx
         self.spent = 0  # labels of the probes so far
+        probe.failures = self.failures  # type: ignore[method-assign]
         probe.prober = None
         self.ctx = probe
         # Walks that revisit none of these points: the floor's, under which it was exact.
@@ -557,6 +559,11 @@ class _Prober:
         # completion is no longer than the route and at least as likely), so it is expanded
         # unprobed (skipping a probe is always sound).
         self.hopeful: set[tuple[int, ...]] = set()
+
+    def failures(self, _spent: int = 0) -> FailureBounds | None:
+        """The search's failure bounds for a probe, by the labels of the probes before it (a
+        probe's own labels do not count: it has them throughout or not at all)."""
+        return self.root.failures(self.spent)
 
     def hope(self, points: Sequence[int], after: int = 1) -> None:
         """Mark the prefixes of ``points`` longer than ``after`` points (not the whole route)
@@ -1139,8 +1146,8 @@ def _compiled_flight(
     scenario: Scenario, points: tuple[int, ...], model: LegModel
 ) -> list[float] | None:
     """The flown length of each leg of a route as ``flown_route`` flies it, the legs after the
-    first with the model's compiled legs (within a few ulp; 3 µs a leg instead of 300); None
-    where that would load numba (it loads in about a second: only once a search has) or the
+    first with the model's compiled legs (within a few ulp; about 3 µs a leg instead of about
+    260); None where that would load numba (only once a search has loaded it) or the
     model has no compiled legs. The first leg is ``flown_route``'s own (a free heading at A
     has its own rules), the heading carried from it."""
     fast = getattr(model, "compiled_lengths", None) if COMPILED_LEGS else None
