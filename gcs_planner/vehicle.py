@@ -5,7 +5,7 @@ ids, parameter names) the link and the mock vehicle speak.
 This module imports nothing of the planner, the link or the simulator, so every room can import
 it (``sim/`` included) without the flow of data turning back.
 
-The flight envelope (MODEL.md, "Airplane legs"): a fixed wing turns by banking, so its turning
+The flight envelope (docs/model.md, "Airplane legs"): a fixed wing turns by banking, so its turning
 radius at airspeed V and bank limit phi is R = V^2 / (g tan phi); it climbs at most at gamma_c and
 descends at most at gamma_d (degrees, 90 = unlimited, the contest's model). A user gives either R
 or V and phi; :func:`turn_radius_from` and :func:`bank_angle_for` convert between them.
@@ -19,8 +19,8 @@ from dataclasses import dataclass
 # Standard gravity (m/s^2), as both autopilots use for the bank/turn-rate relation.
 G = 9.80665
 
-# The leg models (MODEL.md, "Leg geometry"). "airplane" is the default whenever R > 0; "cs3d" is
-# the tilted-plane Dubins leg kept to reproduce earlier figures; with R = 0 legs are straight.
+# The leg models (docs/model.md, "Leg geometry"). "airplane" is the default whenever R > 0;
+# "cs3d" is the tilted-plane Dubins leg kept to reproduce earlier figures; with R = 0 legs are straight.
 LEG_MODELS = ("airplane", "cs3d")
 DEFAULT_LEG_MODEL = "airplane"
 

@@ -13,7 +13,7 @@ nominal path the report compares the flight with: a chord under an arc of angle 
 than the arc by the factor sin(a/2)/(a/2), at most 0.33 % for the exporter's 16 degree steps,
 plus 2 cm per waypoint for the degE7 quantisation of latitude/longitude.
 
-Error model (MODEL.md). Every metre flown adds delta to both errors. Whenever the flown track
+Error model (docs/model.md). Every metre flown adds delta to both errors. Whenever the flown track
 passes within ``capture_radius`` (3D: the landmark's CAPTURE radius, not the autopilot's waypoint
 ACCEPTANCE radius) of a correction point of the database that has not been used yet, the
 vehicle arrives there: the limits of that kind must hold (else the vehicle is lost), then the

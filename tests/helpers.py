@@ -16,7 +16,7 @@ def contest_params(**changes: float) -> Parameters:
 
 def corridor_scenario(seed: int, n_min: int = 4, n_max: int = 7) -> Scenario:
     """Sparse scenarios in a narrow corridor with random limits: few chains are feasible, and
-    now and then only walks that revisit a point are (the elementarity cases of MODEL.md)."""
+    now and then only walks that revisit a point are (the elementarity cases of docs/model.md)."""
     rng = np.random.default_rng(seed)
     n = int(rng.integers(n_min, n_max + 1))
     a1, a2, b1, b2, th = rng.uniform(5, 20, 5)

@@ -1,5 +1,5 @@
-"""Airplane legs (MODEL.md, "Airplane legs") against an independent flight of their geometry, and
-the search under them against enumeration of every simple route."""
+"""Airplane legs (docs/model.md, "Airplane legs") against an independent flight of their
+geometry, and the search under them against enumeration of every simple route."""
 
 from __future__ import annotations
 

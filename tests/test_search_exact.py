@@ -98,7 +98,8 @@ def test_contest_fronts_are_feasible_simple_and_beat_the_paper(dataset_paths, wh
     ks = [fp.corrections for fp in result.front]
     lengths = [fp.length for fp in result.front]
     assert ks == sorted(set(ks)) and lengths == sorted(lengths, reverse=True)
-    # MODEL.md, known figures: the exact solver beats the paper by > 10 % with fewer corrections.
+    # docs/model.md, "Known figures": the exact solver beats the paper by > 10 % with fewer
+    # corrections.
     paper_length, paper_k = {1: (116_861, 12), 2: (140_131, 15)}[which]
     best = min((fp for fp in result.front if fp.corrections < paper_k), key=lambda fp: fp.length)
     assert best.length < 0.9 * paper_length

@@ -1,4 +1,4 @@
-"""Choosing one route from a Pareto front (MODEL.md, "Objectives"; the paper's Section 4)."""
+"""Choosing one route from a Pareto front (docs/model.md, "Objectives"; the paper's Section 4)."""
 
 from __future__ import annotations
 

@@ -92,7 +92,7 @@ def cone_half_angles(h: np.ndarray, radius: float) -> np.ndarray:
 
 def horizontal_lengths(w: np.ndarray, psi: np.ndarray, radius: float) -> np.ndarray:
     """The horizontal CS length from the origin, heading angle ``psi``, to each horizontal
-    offset ``w`` (rows x, y), for targets outside the turning circle (MODEL.md, "Leg geometry";
+    offset ``w`` (rows x, y), for targets outside the turning circle (docs/model.md, "Leg geometry";
     the construction of ``dubins._core`` in the plane)."""
     ux, uy = np.cos(psi), np.sin(psi)
     wx, wy = w[:, 0], w[:, 1]

@@ -1,4 +1,5 @@
-"""Success probability of a route under uncertain corrections (MODEL.md, "Uncertain corrections").
+"""Success probability of a route under uncertain corrections (docs/model.md, "Uncertain
+corrections").
 
 At an unreliable point the correction succeeds with probability p; on failure the component it
 corrects becomes min(component, r). Outcomes are independent, so the errors after each point form

@@ -1,6 +1,6 @@
 """A route and its table: the INS error model applied along a given chain of points.
 
-This is the one place that states the error model (MODEL.md, "INS error model") for a fixed
+This is the one place that states the error model (docs/model.md, "INS error model") for a fixed
 route. The searches use their own vectorised form of the same rules; tests hold the two equal.
 """
 

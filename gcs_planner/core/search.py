@@ -11,7 +11,7 @@ Layer k+1 is made from layer k in one numpy expansion over the reach graph, then
 * dominance at the same point: (L', e') <= (L, e) from a layer <= k+1 dominates, because a
   smaller carried error is never less feasible and the earlier layer has fewer corrections.
 
-Routes must be simple (MODEL.md), but a label (point, L, e) does not know where it has been, so
+Routes must be simple (docs/model.md), but a label (point, L, e) does not know where it has been, so
 the search above solves a relaxation over walks. Decremental state-space relaxation closes the
 gap exactly: if a front walk repeats a point, that point becomes *critical*, labels carry a bit
 per critical point visited, a label may not re-enter a critical point it visited, and labels

@@ -1,4 +1,4 @@
-"""Airplane legs (MODEL.md, "Airplane legs"; Owen, Beard & McLain's Dubins airplane).
+"""Airplane legs (docs/model.md, "Airplane legs"; Owen, Beard & McLain's Dubins airplane).
 
 The aircraft's heading is horizontal. A leg from Pi (horizontal unit heading u) to Pj is:
 

@@ -1,6 +1,6 @@
 """3D Dubins "CS" legs: a turn on a circle of radius R, then the straight tangent to the target.
 
-MODEL.md, "Leg geometry". For a leg from Pi (unit heading u) to Pj, with w = Pj - Pi:
+docs/model.md, "Leg geometry". For a leg from Pi (unit heading u) to Pj, with w = Pj - Pi:
 
     a = w.u,  b = |w - a u| >= 0,  n = (w - a u) / b        (in-plane normal towards j)
 

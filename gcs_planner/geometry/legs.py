@@ -80,8 +80,8 @@ class StraightLegs:
 
 @dataclass(frozen=True)
 class CS3DLegs:
-    """The tilted-plane 3D Dubins CS leg (MODEL.md), kept to reproduce earlier figures. It plans
-    without climb limits."""
+    """The tilted-plane 3D Dubins CS leg (docs/model.md, "Leg geometry"), kept to reproduce
+    earlier figures. It plans without climb limits."""
 
     radius: float
     name: str = "cs3d"
@@ -116,7 +116,7 @@ class CS3DLegs:
 @dataclass(frozen=True)
 class AirplaneLegs:
     """Horizontal turns of radius R, a constant flight-path angle within the climb and descent
-    limits, helices where a leg is too steep (MODEL.md, "Airplane legs")."""
+    limits, helices where a leg is too steep (docs/model.md, "Airplane legs")."""
 
     radius: float
     max_climb_angle: float = 90.0

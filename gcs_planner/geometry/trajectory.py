@@ -1,5 +1,5 @@
 """The flown path of a whole route: one CS leg per hop, each starting with the heading the previous
-one ended with (MODEL.md, "Leg geometry"), and its JSON-ready form for the exporters.
+one ended with (docs/model.md, "Leg geometry"), and its JSON-ready form for the exporters.
 
 Pure numpy, no I/O. A route whose Dubins form has a target inside a turning circle still gives a
 ``Trajectory`` (its length is inf and ``reachable`` is False) so that the caller can say which leg

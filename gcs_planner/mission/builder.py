@@ -12,7 +12,8 @@ one route of its front into MAVLink mission items (MISSION_ITEM_INT semantics, c
 * Each Dubins arc densified into NAV_WAYPOINTs at most 16 degrees apart and close enough that a
   chord stays within 2 m of the arc (sagitta R(1 - cos(step/2)) <= 2 m), so the autopilot flies
   the planned turn and not its own shortcut. Straight legs need no intermediate item.
-* A helix (airplane legs: whole turns on the leg's turning circle to gain or lose height, MODEL.md)
+* A helix (airplane legs: whole turns on the leg's turning circle to gain or lose height,
+  docs/model.md, "Airplane legs")
   becomes a loiter at the circle's centre whose radius is the turning radius, signed by the turn's
   sense (positive = clockwise, MAVLink's convention), with the exit cross-track flag set (param4 =
   1: leave on the tangent towards the next item, not through the centre). The aircraft starts the

@@ -6,7 +6,7 @@ import numpy as np
 
 from gcs_planner.scenario.model import Kind, Parameters, Scenario
 
-# The paper's Table 2, dataset 1 and dataset 2 (MODEL.md).
+# The paper's Table 2, dataset 1 and dataset 2 (docs/model.md).
 DATASET1 = Parameters(alpha1=25, alpha2=15, beta1=20, beta2=25, theta=30, delta=0.001)
 DATASET2 = Parameters(alpha1=20, alpha2=10, beta1=15, beta2=20, theta=20, delta=0.001)
 

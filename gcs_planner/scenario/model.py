@@ -30,7 +30,7 @@ PARAMETER_NAMES = ("alpha1", "alpha2", "beta1", "beta2", "theta", "delta")
 
 @dataclass(frozen=True)
 class Parameters:
-    """The model's parameters (MODEL.md, "Scenario"). Error limits are in error units.
+    """The model's parameters (docs/model.md, "Scenario"). Error limits are in error units.
 
     ``turn_radius`` 0 means straight legs. ``p_success`` and ``fail_residual`` only matter at
     points flagged unreliable.
@@ -45,14 +45,14 @@ class Parameters:
     turn_radius: float = 200.0
     p_success: float = 0.8
     fail_residual: float = 5.0
-    # Largest climb and descent (flight-path) angles in degrees; 90 = unlimited (MODEL.md,
+    # Largest climb and descent (flight-path) angles in degrees; 90 = unlimited (docs/model.md,
     # "Airplane legs"). Only the airplane leg model plans with them.
     max_climb_angle: float = 90.0
     max_descent_angle: float = 90.0
     # Flight reserve in metres: plan so that every error stays within its limit even when the
     # aircraft flies this much more than planned between two resets of that error (an aircraft
     # under its autopilot never flies the planned legs exactly: it enters turns late and leaves
-    # loiters where its guidance does). 0 is the model of MODEL.md as it stands.
+    # loiters where its guidance does). 0 is the model of docs/model.md as it stands.
     reserve: float = 0.0
 
     def validate(self) -> list[str]:
