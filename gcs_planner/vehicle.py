@@ -20,7 +20,8 @@ from dataclasses import dataclass
 G = 9.80665
 
 # The leg models (docs/model.md, "Leg geometry"). "airplane" is the default whenever R > 0;
-# "cs3d" is the tilted-plane Dubins leg kept to reproduce earlier figures; with R = 0 legs are straight.
+# "cs3d" is the tilted-plane Dubins leg kept to reproduce earlier figures; with R = 0 legs are
+# straight.
 LEG_MODELS = ("airplane", "cs3d")
 DEFAULT_LEG_MODEL = "airplane"
 
