@@ -1,7 +1,7 @@
 """Section 10: long corridors, straight legs, three objectives. Routes of 24 and more
 corrections whose lengths differ by metres, many of them trading corrections against the
 probability of arriving: the case where a proof is hardest. Each row is one ``plan()`` with the
-default label budget and a time limit, and says whether the front is proven and whether its
+time limit and no label limit (the default), and says whether the front is proven and whether its
 fewest-corrections end is the two-objective front's (which it must contain).
 
     python -m benchmarks.corridors 3000 20000

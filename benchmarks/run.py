@@ -240,7 +240,7 @@ def run(cfg: Config) -> str:
         "arrive, the steepest leg of any front route and the helix turns the front flies. "
         "Proof: 'proven' is an exhausted search; otherwise the largest gap between a front "
         "route and its proven lower bound, how many routes are unsettled and below which length "
-        "the front is complete (default label budget).\n\n" + flyable.render(frows)
+        "the front is complete (default budget: no label limit, 60 s).\n\n" + flyable.render(frows)
     )
     print(sections[-1], flush=True)
 
@@ -275,9 +275,9 @@ def run(cfg: Config) -> str:
     sections.append(
         "## 10. Long corridors: straight legs, three objectives\n\n"
         "`plan(load_case('corridor-N'), objectives=(length, corrections, probability), "
-        f"time_limit={cfg.corridor_limit:g})`, one run each, the default label budget: N points in "
-        "a 300 × 20 × 2 km corridor (`benchmarks/corridors.py`). Proof as in section 3; the "
-        "fewest-corrections end of the front against the two-objective front's, which the "
+        f"time_limit={cfg.corridor_limit:g})`, one run each, no label limit (the default): N "
+        "points in a 300 × 20 × 2 km corridor (`benchmarks/corridors.py`). Proof as in section "
+        "3; the fewest-corrections end of the front against the two-objective front's, which the "
         "three-objective front must contain.\n\n"
         + corridors.render(corridors.run_corridors(list(cfg.corridor_sizes), cfg.corridor_limit))
     )

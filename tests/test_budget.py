@@ -20,9 +20,10 @@ from test_bnb import enumerate_front, turning_scenario
 from gcs_planner import plan_json
 from gcs_planner.cli import main
 from gcs_planner.core.bnb import bnb_front
-from gcs_planner.core.budget import Budget, Progress, terminal_progress
+from gcs_planner.core.budget import Budget, Progress
 from gcs_planner.core.planner import plan
 from gcs_planner.errors import InfeasibleError
+from gcs_planner.progress import SearchProgress
 from gcs_planner.scenario.generate import random_scenario
 from gcs_planner.scenario.model import Parameters
 
@@ -207,7 +208,7 @@ def test_progress_reports_bound_open_routes_and_routes_found() -> None:
     assert all(0 < p.bound < math.inf and p.open_routes >= 0 for p in seen)
     assert seen[-1].routes_found >= 1
     out = io.StringIO()
-    show = terminal_progress(out)
+    show = SearchProgress(out, force=True)  # --progress into a log: plain lines
     show(seen[-1])
     show.finish()
     line = out.getvalue()
@@ -229,7 +230,7 @@ def test_progress_shows_the_set_up_before_the_search() -> None:
     assert not any(p.setup.startswith("cost-to-go") for p in seen[first_label:])
     assert res.optimal and not res.cut  # no time limit: nothing cut
     out = io.StringIO()
-    show = terminal_progress(out)
+    show = SearchProgress(out, force=True)
     show(seen[0])
     assert out.getvalue() == f"set-up: cost-to-go, layer 0, {seen[0].seconds:.1f} s\n"
 

@@ -8,7 +8,7 @@ import math
 import sys
 from typing import TYPE_CHECKING
 
-from gcs_planner.core.budget import DEFAULT_MAX_LABELS, terminal_progress
+from gcs_planner.core.budget import DEFAULT_TIME_LIMIT
 from gcs_planner.errors import InputError
 from gcs_planner.policy import DEFAULT_MIN_PROBABILITY
 from gcs_planner.vehicle import LEG_MODELS
@@ -131,27 +131,41 @@ def add_plan_arguments(parser: argparse.ArgumentParser) -> None:
     budget.add_argument(
         "--time-limit",
         type=_seconds,
+        default=DEFAULT_TIME_LIMIT,
         metavar="SECONDS",
-        help="stop the branch and bound after this many seconds in all (default: no limit); "
-        "past it the bounds built before the search are cut short or skipped (the statement "
-        "says which); reading the scenario and building its reach graph are not interrupted",
+        help=f"stop the branch and bound after this many seconds in all (default "
+        f"{DEFAULT_TIME_LIMIT:g}; 'none' for no limit); past it the bounds built before the "
+        "search are cut short or skipped, and the statement says what stopped it; reading the "
+        "scenario and building its reach graph are not interrupted",
     )
     budget.add_argument(
         "--max-labels",
         type=_labels,
         metavar="N",
-        help=f"partial routes each search may expand (default {DEFAULT_MAX_LABELS:,}; "
-        "0: no limit, then --time-limit bounds the search); with turns each expanded route may "
-        "first be probed, up to 1,000 labels of the floor's relaxation, counted apart",
+        help="partial routes each search may expand (default and 0: no limit, --time-limit "
+        "bounds the search); with turns each expanded route may first be probed, up to 1,000 "
+        "labels of the floor's relaxation, counted apart",
     )
     budget.add_argument(
         "--progress",
         action="store_true",
-        help="show the search's progress on stderr (default: only when stderr is a terminal)",
+        help="show the search's progress on stderr even when it is not a terminal (plain "
+        "lines, one every 10 s; default: only on a terminal)",
+    )
+    add_quiet_argument(budget)
+
+
+def add_quiet_argument(parser: argparse.ArgumentParser | argparse._ArgumentGroup) -> None:
+    """``--quiet``, the same on every command that shows progress (plan, dry-run, upload,
+    download, sweep)."""
+    parser.add_argument(
+        "--quiet", action="store_true", help="no progress display on stderr (even on a terminal)"
     )
 
 
-def _seconds(text: str) -> float:
+def _seconds(text: str) -> float | None:
+    if text.strip().lower() in ("none", "inf"):
+        return None  # no time limit
     try:
         value = float(text)
     except ValueError:
@@ -195,11 +209,15 @@ def plan_from_args(args: argparse.Namespace, scenario: Scenario) -> Plan:
         raise InputError(
             f"{args.min_probability:g} is not a probability (0 to 1)", field="--min-probability"
         )
+    from gcs_planner.progress import SearchProgress
+
+    # The CLI's 0 is "no limit", as unset is (the library's max_labels=0 allows no label).
     max_labels = getattr(args, "max_labels", None)
-    if max_labels is None:
-        max_labels = DEFAULT_MAX_LABELS
-    show = getattr(args, "progress", False) or sys.stderr.isatty()
-    progress = terminal_progress(sys.stderr) if show else None
+    progress = SearchProgress(
+        sys.stderr,
+        quiet=getattr(args, "quiet", False),
+        force=getattr(args, "progress", False),
+    )
     try:
         return plan(
             scenario,
@@ -209,11 +227,10 @@ def plan_from_args(args: argparse.Namespace, scenario: Scenario) -> Plan:
             max_corrections=args.max_corrections,
             min_probability=args.min_probability,
             max_labels=max_labels or None,
-            time_limit=getattr(args, "time_limit", None),
-            progress=progress,
+            time_limit=getattr(args, "time_limit", DEFAULT_TIME_LIMIT),
+            progress=progress if progress.enabled else None,
         )
     except ValueError as exc:
         raise InputError(str(exc)) from None
     finally:
-        if progress is not None:
-            progress.finish()
+        progress.finish()

@@ -6,6 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from gcs_planner.cli.common import add_quiet_argument
 from gcs_planner.errors import InputError
 
 
@@ -39,6 +40,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         default="127.0.0.1:0",
         help="the local cluster's dashboard (default: a free port on 127.0.0.1, printed)",
     )
+    add_quiet_argument(p)
     p.set_defaults(func=run)
 
 
@@ -64,6 +66,7 @@ def run(args: argparse.Namespace) -> int:
         resume=args.resume,
         dashboard_address=args.dashboard_address,
         stream=sys.stdout,
+        quiet=args.quiet,
     )
     print(
         f"{result.ran} cells run ({result.failed} failed, {result.infeasible} infeasible), "

@@ -7,6 +7,7 @@ import sys
 from collections.abc import Callable
 from pathlib import Path
 
+from gcs_planner.cli.common import add_quiet_argument
 from gcs_planner.errors import LinkError
 from gcs_planner.link.connection import open_link
 from gcs_planner.link.mission_client import FIRMWARES, MissionClient
@@ -53,7 +54,7 @@ def add_link_arguments(p: argparse.ArgumentParser) -> None:
     g.add_argument(
         "--wait", type=float, default=15.0, help="seconds to wait for a heartbeat (default 15)"
     )
-    g.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_quiet_argument(g)
 
 
 def id_in(low: int, high: int) -> Callable[[str], int]:
@@ -86,7 +87,8 @@ def connect_client(args: argparse.Namespace) -> MissionClient:
     quiet = args.quiet
 
     def progress(label: str, total: int) -> Progress:
-        return Progress(label, total, enabled=None if not quiet else False)
+        # Items done of the mission's count, with tqdm's rate and time left, on stderr.
+        return Progress(label, total, stream=sys.stderr, enabled=False if quiet else None)
 
     client = MissionClient(
         link,

@@ -12,7 +12,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 
 from gcs_planner.core.bnb import DEFAULT_MAX_LABELS, PROB_EPS, bnb_front, flown_route
-from gcs_planner.core.budget import Budget, ProgressCallback
+from gcs_planner.core.budget import DEFAULT_TIME_LIMIT, Budget, ProgressCallback
 from gcs_planner.core.choose import choose as choose_route
 from gcs_planner.core.focus import focus, large
 from gcs_planner.core.probability import success_probability
@@ -99,7 +99,7 @@ def plan(
     max_corrections: int | None = None,
     max_labels: int | None = DEFAULT_MAX_LABELS,
     min_probability: float = DEFAULT_MIN_PROBABILITY,
-    time_limit: float | None = None,
+    time_limit: float | None = DEFAULT_TIME_LIMIT,
     progress: ProgressCallback | None = None,
 ) -> Plan:
     """Plan a scenario. Raises InfeasibleError (with the reason) when no route exists.

@@ -1,15 +1,18 @@
-"""A one-line progress bar on stderr for long transfers; silent when stderr is not a terminal
-or the user asked for quiet, so that logs and pipes stay clean."""
+"""The transfer bar of upload and download: items sent or read out of the mission's count, the
+rate and the time left, on stderr (see :mod:`gcs_planner.progress`, the one display of every
+command); silent when stderr is not a terminal or the user asked for quiet."""
 
 from __future__ import annotations
 
-import sys
-import time
 from typing import TextIO
 
+from gcs_planner.progress import Counter
 
-class Progress:
-    """``update(done)`` redraws at most 10 times a second; ``close()`` ends the line."""
+
+class Progress(Counter):
+    """``update(done)`` redraws at most 10 times a second; ``close()`` ends the line.
+    ``enabled`` False: silent (``--quiet``); None or True: drawn when the stream is a terminal.
+    Missions under ``min_total`` items go by too fast for a bar."""
 
     def __init__(
         self,
@@ -20,31 +23,6 @@ class Progress:
         enabled: bool | None = None,
         min_total: int = 20,
     ) -> None:
-        self.stream = stream if stream is not None else sys.stderr
-        if enabled is None:
-            isatty = getattr(self.stream, "isatty", None)
-            enabled = bool(isatty and isatty())
-        self.enabled = enabled and total >= min_total
-        self.label = label
-        self.total = max(0, total)
-        self._last = 0.0
-        self._drawn = False
-
-    def update(self, done: int) -> None:
-        if not self.enabled:
-            return
-        now = time.monotonic()
-        if done < self.total and now - self._last < 0.1:
-            return
-        self._last = now
-        width = 30
-        frac = done / self.total if self.total else 1.0
-        bar = "#" * int(frac * width)
-        self.stream.write(f"\r{self.label} [{bar:<{width}}] {done}/{self.total}")
-        self.stream.flush()
-        self._drawn = True
-
-    def close(self) -> None:
-        if self.enabled and self._drawn:
-            self.stream.write("\n")
-            self.stream.flush()
+        super().__init__(
+            label, total, unit="item", stream=stream, quiet=enabled is False, min_total=min_total
+        )

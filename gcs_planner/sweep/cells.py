@@ -12,7 +12,7 @@ import hashlib
 import json
 from dataclasses import dataclass
 
-from gcs_planner.core.bnb import DEFAULT_MAX_LABELS
+from gcs_planner.core.budget import DEFAULT_MAX_LABELS, DEFAULT_TIME_LIMIT
 from gcs_planner.sweep.spec import FileSource, GeneratedSource, SweepSpec
 
 
@@ -23,7 +23,8 @@ class Cell:
     values: tuple[tuple[str, object], ...]  # swept keys and their values, in the spec's order
     objectives: tuple[str, ...] | None = None  # None: as `gcs-planner plan` (see task)
     choice: str = "compromise"
-    max_labels: int = DEFAULT_MAX_LABELS
+    max_labels: int | None = DEFAULT_MAX_LABELS
+    time_limit: float | None = DEFAULT_TIME_LIMIT
     dry_run_runs: int = 0
     dry_run_seed: int = 0
 
@@ -35,6 +36,7 @@ class Cell:
             "objectives": list(self.objectives) if self.objectives else None,
             "choice": self.choice,
             "max_labels": self.max_labels,
+            "time_limit": self.time_limit,
             "dry_run": [self.dry_run_runs, self.dry_run_seed],
         }
         text = json.dumps(identity, sort_keys=True, separators=(",", ":"))
@@ -64,6 +66,7 @@ def expand(spec: SweepSpec) -> list[Cell]:
                     objectives=spec.objectives,
                     choice=spec.choice,
                     max_labels=spec.max_labels,
+                    time_limit=spec.time_limit,
                     dry_run_runs=spec.dry_run_runs,
                     dry_run_seed=spec.dry_run_seed,
                 )

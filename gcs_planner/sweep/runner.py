@@ -34,6 +34,7 @@ from pathlib import Path
 from typing import TextIO
 
 from gcs_planner.errors import InputError
+from gcs_planner.progress import Counter
 from gcs_planner.sweep.cells import Cell, expand
 from gcs_planner.sweep.spec import SweepSpec, read_spec
 from gcs_planner.sweep.task import cell_inputs, finish_row, run_cell
@@ -80,54 +81,6 @@ class SweepResult:
     files: tuple[Path, ...]
 
 
-class Progress:
-    """Cells done, failed and the ETA on one line: rewritten in place on a terminal, a new line
-    every ``every`` seconds otherwise (a log file should not fill with carriage returns)."""
-
-    def __init__(self, stream: TextIO | None, total: int, every: float = 10.0) -> None:
-        self.stream = stream
-        self.total = total
-        self.tty = bool(stream is not None and stream.isatty())
-        self.every = 0.5 if self.tty else every
-        self.started = time.perf_counter()
-        self.last = 0.0
-
-    def line(self, done: int, failed: int) -> str:
-        elapsed = time.perf_counter() - self.started
-        eta = "-"
-        if 0 < done < self.total:
-            eta = _duration(elapsed / done * (self.total - done))
-        return (
-            f"cells {done}/{self.total} done, {failed} failed, "
-            f"elapsed {_duration(elapsed)}, ETA {eta}"
-        )
-
-    def update(self, done: int, failed: int, final: bool = False) -> None:
-        if self.stream is None:
-            return
-        now = time.perf_counter()
-        if not final and now - self.last < self.every:
-            return
-        self.last = now
-        text = self.line(done, failed)
-        if self.tty:
-            self.stream.write("\r" + text + ("\n" if final else ""))
-        else:
-            self.stream.write(text + "\n")
-        self.stream.flush()
-
-
-def _duration(seconds: float) -> str:
-    seconds = int(round(seconds))
-    if seconds < 60:
-        return f"{seconds}s"
-    minutes, seconds = divmod(seconds, 60)
-    if minutes < 60:
-        return f"{minutes}m{seconds:02d}s"
-    hours, minutes = divmod(minutes, 60)
-    return f"{hours}h{minutes:02d}m"
-
-
 def run_sweep(
     spec: SweepSpec | str | Path,
     out: str | Path,
@@ -140,13 +93,17 @@ def run_sweep(
     save_interval: float = 1.0,
     stream: TextIO | None = None,
     task: Callable[[Cell], list[dict]] = run_cell,
+    quiet: bool = False,
+    progress_stream: TextIO | None = None,
 ) -> SweepResult:
     """Run the sweep ``spec`` (a SweepSpec or the path of its TOML) into the folder ``out``.
 
     ``scheduler``: the address of an existing Dask scheduler (``tcp://host:8786``); without it a
     LocalCluster of ``workers`` processes is started and closed. ``resume``: keep the finished
-    cells of an earlier run in ``out`` and run only the others. ``stream``: where progress lines
-    go (None: nowhere). ``task`` runs one cell on a worker; it must be importable there.
+    cells of an earlier run in ``out`` and run only the others. ``stream``: where its messages
+    go (None: nowhere). ``task`` runs one cell on a worker; it must be importable there. The
+    cells done, failed and the time left are one line on ``progress_stream`` (default stderr)
+    when it is a terminal and ``quiet`` is False.
     """
     from gcs_planner.sweep.summary import summary_png
     from gcs_planner.sweep.table import CSV, PARQUET, ResultTable
@@ -172,8 +129,11 @@ def run_sweep(
             dashboard = client.dashboard_link or ""
             where = scheduler or f"a local cluster of {workers} worker processes"
             say(f"running on {where}; dashboard: {dashboard or '(none)'}")
-            progress = Progress(stream, len(todo))
-            ran, failed, infeasible = _run(client, todo, table, task, progress, save_interval)
+            progress = Counter("cells", len(todo), unit="cell", stream=progress_stream, quiet=quiet)
+            try:
+                ran, failed, infeasible = _run(client, todo, table, task, progress, save_interval)
+            finally:
+                progress.close()  # ends the line, interrupted or not, before anything is said
         except BaseException:
             try:
                 table.save()
@@ -261,7 +221,7 @@ def _disconnect(client, cluster) -> None:
             cluster.close()
 
 
-def _run(client, todo: list[Cell], table, task, progress: Progress, save_interval: float):
+def _run(client, todo: list[Cell], table, task, progress: Counter, save_interval: float):
     from distributed import as_completed
 
     token = uuid.uuid4().hex[:8]  # keys unique across sweeps sent to one long-lived scheduler
@@ -318,7 +278,7 @@ def _collect(submit, futures, as_completed, table, progress, save_interval, inte
             status = rows[0].get("status")
             failed += status == "error"
             infeasible += status == "infeasible"
-        progress.update(done, failed)
+        progress.update(done, failed=failed)
         if time.perf_counter() - last_save >= wait:
             t0 = time.perf_counter()
             table.save()
@@ -326,7 +286,6 @@ def _collect(submit, futures, as_completed, table, progress, save_interval, inte
             wait = max(save_interval, SAVE_BUDGET * (last_save - t0))
     if interrupted.is_set():
         raise KeyboardInterrupt
-    progress.update(done, failed, final=True)
     return done, failed, infeasible
 
 

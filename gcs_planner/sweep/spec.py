@@ -10,7 +10,8 @@ the terminal and not a thousand failed cells. Errors name the spec file, its lin
     [plan]                                    # optional: how every cell plans
     objectives = ["length", "corrections"]    # default: as `gcs-planner plan`
     choice = "compromise"
-    max_labels = 200000
+    time_limit = 60                           # seconds per cell (default 60)
+    max_labels = 200000                       # labels per search (default: no limit)
 
     [[scenarios]]                             # a scenario file (.toml, .csv, .xlsx) ...
     file = "example/scenario.toml"            # relative to the spec
@@ -43,7 +44,7 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-from gcs_planner.core.bnb import DEFAULT_MAX_LABELS
+from gcs_planner.core.budget import DEFAULT_MAX_LABELS, DEFAULT_TIME_LIMIT
 from gcs_planner.core.choose import CHOICES
 from gcs_planner.core.planner import OBJECTIVES
 from gcs_planner.errors import InputError
@@ -59,7 +60,7 @@ else:  # pragma: no cover - exercised only on Python 3.10
     pass
 
 TOP_KEYS = ("name", "plan", "scenarios", "grid", "cases", "dry_run")
-PLAN_KEYS = ("objectives", "choice", "max_labels")
+PLAN_KEYS = ("objectives", "choice", "max_labels", "time_limit")
 FILE_KEYS = ("file",)
 GENERATOR_KEYS = (
     "generate",
@@ -127,7 +128,8 @@ class SweepSpec:
     swept: tuple[str, ...]
     objectives: tuple[str, ...] | None = None
     choice: str = "compromise"
-    max_labels: int = DEFAULT_MAX_LABELS
+    max_labels: int | None = DEFAULT_MAX_LABELS
+    time_limit: float | None = DEFAULT_TIME_LIMIT
     dry_run_runs: int = 0
     dry_run_seed: int = 0
 
@@ -186,7 +188,7 @@ def read_spec(path: str | Path) -> SweepSpec:
     if not isinstance(name, str):
         raise where.error("must be a string", "", "name")
 
-    objectives, choice, max_labels = _plan(doc, where)
+    objectives, choice, max_labels, time_limit = _plan(doc, where)
     scenarios = _scenarios(doc, where, path.parent)
     value_sets, swept = _value_sets(doc, where)
     runs, seed = _dry_run(doc, where)
@@ -199,6 +201,7 @@ def read_spec(path: str | Path) -> SweepSpec:
         objectives=objectives,
         choice=choice,
         max_labels=max_labels,
+        time_limit=time_limit,
         dry_run_runs=runs,
         dry_run_seed=seed,
     )
@@ -230,7 +233,7 @@ def _is_number(value: object) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
 
 
-def _plan(doc: dict, where: _Where) -> tuple[tuple[str, ...] | None, str, int]:
+def _plan(doc: dict, where: _Where) -> tuple[tuple[str, ...] | None, str, int | None, float | None]:
     table = _table(doc, "plan", where)
     _unknown(table, PLAN_KEYS, where, "plan")
     objectives = None
@@ -242,9 +245,12 @@ def _plan(doc: dict, where: _Where) -> tuple[tuple[str, ...] | None, str, int]:
             f"unknown choice {choice!r}: one of {', '.join(CHOICES)}", "plan", "choice"
         )
     max_labels = table.get("max_labels", DEFAULT_MAX_LABELS)
-    if not _is_int(max_labels) or max_labels < 1:
+    if max_labels is not None and (not _is_int(max_labels) or max_labels < 1):
         raise where.error(f"must be a whole number >= 1 (got {max_labels!r})", "plan", "max_labels")
-    return objectives, choice, max_labels
+    time_limit = table.get("time_limit", DEFAULT_TIME_LIMIT)
+    if time_limit is not None and (not _is_number(time_limit) or time_limit <= 0):
+        raise where.error(f"must be seconds > 0 (got {time_limit!r})", "plan", "time_limit")
+    return objectives, choice, max_labels, time_limit
 
 
 def _objectives(value: object, where: _Where, table: str, key: str, index=None) -> tuple[str, ...]:

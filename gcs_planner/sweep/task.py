@@ -99,7 +99,11 @@ def run_cell(cell: Cell) -> list[dict]:
 
         t0 = time.perf_counter()
         result = plan(
-            scenario, objectives=objectives, choice=cell.choice, max_labels=cell.max_labels
+            scenario,
+            objectives=objectives,
+            choice=cell.choice,
+            max_labels=cell.max_labels,
+            time_limit=cell.time_limit,
         )
         plan_seconds = time.perf_counter() - t0
         replay = _replay(result, cell) if cell.dry_run_runs > 0 else {}
