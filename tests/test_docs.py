@@ -172,3 +172,101 @@ def test_a_likely_lost_route_is_not_exported_unasked(tmp_path, capsys):
     strict = ["--min-probability", "0.99", "--out", str(tmp_path / "n.plan")]
     assert main(["export", str(plan_json), "--format", "plan", *strict]) == 3
     assert not (tmp_path / "n.plan").exists()
+
+
+# --- links, the model's sections, and nothing cited from outside the repository -------------
+
+DOCS = [ROOT / "README.md", ROOT / "missions" / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+MODEL_DOC = ROOT / "docs" / "model.md"
+# Where the code and the documents cite the model (and where nothing may cite outside files).
+CITING = ["gcs_planner", "sim", "tests", "missions", "docs", "benchmarks"]
+# Built, not written out, so that a grep of the repository for them finds only what it should.
+OUTSIDE = ("MODEL" + ".md", "../shared/" + "docs")
+LINK = re.compile(r"!?\[[^\]]*\]\(([^)\s]+)\)")
+
+
+def prose(path: Path) -> str:
+    """A markdown file without its fenced code blocks (their '#' lines are no headings)."""
+    return re.sub(r"^```.*?^```", "", path.read_text(encoding="utf-8"), flags=re.S | re.M)
+
+
+def slug(heading: str) -> str:
+    """GitHub's anchor for a heading: lower case, punctuation dropped, spaces to hyphens."""
+    text = re.sub(r"[`*_]", "", heading.strip().lower())
+    return re.sub(r"[^\w\- ]", "", text).replace(" ", "-")
+
+
+def headings(path: Path) -> list[str]:
+    return [m.group(1).strip() for m in re.finditer(r"^#{1,6}\s+(.+)$", prose(path), re.M)]
+
+
+def source_files() -> list[Path]:
+    files = []
+    for folder in CITING:
+        for path in sorted((ROOT / folder).rglob("*")):
+            if path.suffix in (".py", ".md", ".toml") and "results" not in path.parts:
+                files.append(path)
+    return files
+
+
+@pytest.mark.parametrize("doc", DOCS, ids=lambda p: str(p.relative_to(ROOT)))
+def test_relative_links_resolve_inside_the_repository(doc):
+    links = [t for t in LINK.findall(prose(doc)) if not re.match(r"[a-z]+:", t)]
+    for target in links:
+        file, _, anchor = target.partition("#")
+        path = (doc.parent / file).resolve() if file else doc
+        assert path.is_relative_to(ROOT), f"{doc.name}: {target} leaves the repository"
+        assert path.exists(), f"{doc.name}: {target} does not exist"
+        if anchor and path.suffix == ".md":
+            anchors = {slug(h) for h in headings(path)}
+            assert anchor in anchors, f"{doc.name}: {target}: no heading #{anchor}"
+
+
+def test_every_citation_of_the_model_names_one_of_its_sections():
+    sections = headings(MODEL_DOC)
+    names = {h.lower() for h in sections}
+    cited = 0
+    for path in source_files():
+        text = path.read_text(encoding="utf-8")
+        # The file, a comma and a quoted heading, across a line break and a comment marker too.
+        for m in re.finditer(r'docs/model\.md,\s*(?:#\s*)?"([^"]+)"', text):
+            name = " ".join(m.group(1).replace("#", " ").split())  # a name broken over lines
+            assert name.lower() in names, f"{path.relative_to(ROOT)} cites {name!r}"
+            cited += 1
+        for m in re.finditer(r"docs/model\.md,\s*(Table \d+)", text):
+            assert any(m.group(1) in h for h in sections), f"{path.relative_to(ROOT)}: {m[1]}"
+            cited += 1
+    assert cited >= 15  # the code does cite it: a broken pattern would pass vacuously
+
+
+def test_the_model_has_the_sections_the_code_relies_on():
+    names = set(headings(MODEL_DOC))
+    for section in ("Scenario", "INS error model", "Objectives", "Leg geometry", "Airplane legs",
+                    "Flight in the real world", "Uncertain corrections", "Contingency policies",
+                    "Known figures"):  # fmt: skip
+        assert section in names
+    assert any(h.startswith("Table 2") for h in names)
+
+
+def test_nothing_cites_a_document_outside_the_repository():
+    for path in [*source_files(), ROOT / "README.md"]:
+        text = path.read_text(encoding="utf-8")
+        for outside in OUTSIDE:
+            assert outside not in text, f"{path.relative_to(ROOT)} cites {outside}"
+
+
+def test_readme_is_a_users_guide():
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    first_screen = "\n".join(text.splitlines()[:40])
+    assert "GMCM" in first_screen and "../shared/data/gmcm2019f/" in first_screen
+    found = headings(ROOT / "README.md")
+    for section in ("Set-up", "Planning", "Export", "Upload", "Dry run", "Library use",
+                    "Scenario formats", "Exit codes", "Speed"):  # fmt: skip
+        assert found.count(section) == 1, section
+    # No lab notebook: commit hashes and "the run before" belong in CHANGELOG.md.
+    commit = r"\b(?=[0-9a-f]*\d)(?=[0-9a-f]*[a-f])[0-9a-f]{7,40}\b"
+    assert not re.search(commit, prose(ROOT / "README.md"))
+    assert "run before" not in text and "this session" not in text
+    # The benchmark's command and its main table stay in README.
+    assert any("python -m benchmarks" in b for b in blocks(ROOT / "README.md", "sh"))
+    assert "| dataset 1 | " in text and "plain label search" in text
