@@ -79,7 +79,8 @@ def plan_to_dict(plan: Plan) -> dict[str, Any]:
             "source": s.source,
             "points": s.n,
             "origin": origin,
-            "origin_is_default": False,
+            # No origin: readers place the frame at the default one (and warn); say so.
+            "origin_is_default": origin is None,
             "heading_at_a": None if s.heading_at_a is None else list(s.heading_at_a),
         },
         "parameters": s.params.to_dict(),
@@ -148,7 +149,10 @@ def load_plan(path: str | Path) -> dict[str, Any]:
     front = data.get("front")
     if not isinstance(front, list) or not front:
         raise InputError("the plan has no routes", file=str(path), field="front")
-    chosen = data.get("chosen")
-    if not isinstance(chosen, int) or not 0 <= chosen < len(front):
-        raise InputError("'chosen' is not an index into 'front'", file=str(path), field="chosen")
+    # What every reader needs (docs/plan-json.md): the georeference, the parameters, each
+    # route's points and legs. The mission builder owns the checks, so an upload of a plan
+    # JSON (which reads it without this function) refuses the same damage.
+    from gcs_planner.mission.builder import check_plan
+
+    check_plan(data, str(path))
     return data

@@ -42,6 +42,8 @@ from gcs_planner.scenario.model import Kind, Origin, Scenario
 
 GEOD = pyproj.Geod(ellps="WGS84")
 ORIGIN = Origin(lat=31.2, lon=122.8, alt=12.5)
+# Where the aircraft is armed (a deck 4 m above the sea): relative altitudes are above it.
+HOME = Origin(lat=31.19, lon=122.79, alt=4.0)
 
 # A, five correction points, B: legs of 20-40 km that turn both ways, up to ~110 km from A.
 XYZ = np.array(
@@ -201,7 +203,7 @@ def test_correction_waypoints_are_on_the_true_wgs84_positions():
     plan = make_plan()
     table = {p["id"]: p for p in plan["points"]}
     for frame_name in ("amsl", "relative"):
-        m = build_mission(plan, altitude_frame=frame_name)
+        m = build_mission(plan, altitude_frame=frame_name, home=HOME)
         home_alt = m.home[2]
         for pid in m.route:
             it = m.items[m.seq_of(pid)]
@@ -219,13 +221,15 @@ def test_correction_waypoints_are_on_the_true_wgs84_positions():
 def test_relative_frame_altitudes_are_above_home():
     plan = make_plan()
     amsl = build_mission(plan)
-    rel = build_mission(plan, altitude_frame="relative")
+    rel = build_mission(plan, altitude_frame="relative", home=HOME)
     assert rel.items[0].frame == MAV_FRAME_GLOBAL  # home always AMSL
+    assert rel.home == (HOME.lat, HOME.lon, HOME.alt)
     for a, r in zip(amsl.items[2:], rel.items[2:], strict=True):
         if a.frame == MAV_FRAME_GLOBAL:
             assert r.frame == MAV_FRAME_GLOBAL_RELATIVE_ALT
-            assert r.z == pytest.approx(a.z - amsl.home[2], abs=1e-9)
-    assert rel.items[rel.seq_of("A0")].z == pytest.approx(0.0, abs=1e-9)
+            assert r.z == pytest.approx(a.z - HOME.alt, abs=1e-9)
+    # A is in the air: its altitude above the stated home, not 0.
+    assert rel.items[rel.seq_of("A0")].z == pytest.approx(amsl.home[2] - HOME.alt, abs=1e-9)
 
 
 def test_arcs_are_densified_within_16_degrees_and_2_m_of_the_planned_arc():
@@ -313,7 +317,7 @@ def test_end_actions():
     plan = make_plan()
     rtl = build_mission(plan, at_end="rtl")
     assert rtl.items[-1].command == MAV_CMD_NAV_RETURN_TO_LAUNCH
-    land = build_mission(plan, at_end="land", altitude_frame="relative")
+    land = build_mission(plan, at_end="land", altitude_frame="relative", home=HOME)
     assert land.items[-1].command == MAV_CMD_NAV_LAND
     assert land.items[-1].z == pytest.approx(-land.home[2])  # sea level, relative to home
     b = land.items[land.seq_of("B9")]

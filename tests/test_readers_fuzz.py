@@ -20,7 +20,7 @@ from hypothesis import strategies as st
 from gcs_planner.errors import InputError
 from gcs_planner.scenario.generate import DATASET1
 from gcs_planner.scenario.model import PARAMETER_NAMES, Kind, Origin, Parameters, Scenario
-from gcs_planner.scenario.readers import load_scenario
+from gcs_planner.scenario.readers import MAX_COORDINATE, load_scenario
 from gcs_planner.vehicle import DEFAULT_RESERVE_M, DEFAULT_RESERVE_MAX_SHARE
 
 REQUIRED = {k: getattr(DATASET1, k) for k in PARAMETER_NAMES}
@@ -130,6 +130,8 @@ def expected_points(records: list[dict[str, str]]) -> list[tuple] | None:
             continue  # a blank record is skipped like a blank line
         point_id = cells["id"]
         xyz = [_number(cells[c]) for c in "xyz"]
+        # The reader's bounds (readers.MAX_COORDINATE): farther is a typo, not a place.
+        xyz = [v if v is None or abs(v) <= lim else None for v, lim in zip(xyz, MAX_COORDINATE)]
         kind = KIND_WORDS.get(unicodedata.normalize("NFKC", cells["kind"]).upper())
         flag = FLAG_WORDS.get(cells["unreliable"].upper())
         if not point_id or point_id in seen or None in xyz or kind is None or flag is None:

@@ -18,7 +18,7 @@ from mavsdk import ComponentType, Configuration, Mavsdk
 from mavsdk.plugins.mission_raw import MissionRaw
 from pymavlink import mavwp
 from pymavlink.dialects.v20 import common as mavlink2
-from test_mission_builder import make_plan, steep_scenario
+from test_mission_builder import HOME, make_plan, steep_scenario
 
 from gcs_planner.mission.builder import build_mission
 from gcs_planner.mission.items import MAV_FRAME_MISSION
@@ -30,13 +30,24 @@ AUTOPILOT = {
     "px4": mavlink2.MAV_AUTOPILOT_PX4,
 }
 OPTIONS = [
-    {"firmware": fw, "altitude_frame": fr, "at_end": end}
+    {
+        "firmware": fw,
+        "altitude_frame": fr,
+        "at_end": end,
+        "home": HOME if fr == "relative" else None,
+    }
     for fw in ("ardupilot", "px4")
     for fr in ("amsl", "relative")
     for end in ("loiter", "rtl", "land")
 ]
+# PX4 missions are not written as .waypoints (mission/waypoints.py; tests/test_altitude_frames.py).
+WAYPOINTS_OPTIONS = [o for o in OPTIONS if o["firmware"] == "ardupilot"]
 # The plain tiny plan, and one whose climbs need helices (loiter items in the mission).
 PLANS = {"flat": lambda: make_plan(), "helices": lambda: make_plan(steep_scenario())}
+
+
+def option_id(opts: dict) -> str:
+    return "-".join(v for v in opts.values() if isinstance(v, str))
 
 
 @pytest.fixture(scope="module")
@@ -76,7 +87,7 @@ def assert_same(theirs, ours) -> None:
 
 
 @pytest.mark.parametrize("plan", PLANS)
-@pytest.mark.parametrize("opts", OPTIONS, ids=lambda o: "-".join(o.values()))
+@pytest.mark.parametrize("opts", OPTIONS, ids=option_id)
 def test_mavsdk_imports_every_plan(tmp_path, mission_raw, opts, plan):
     m = build_mission(PLANS[plan](), **opts)
     assert any(it.command in (18, 31) for it in m.items) == (plan == "helices")
@@ -99,35 +110,29 @@ def test_mavsdk_imports_every_plan(tmp_path, mission_raw, opts, plan):
 
 
 @pytest.mark.parametrize("plan", PLANS)
-@pytest.mark.parametrize("opts", OPTIONS, ids=lambda o: "-".join(o.values()))
+@pytest.mark.parametrize("opts", WAYPOINTS_OPTIONS, ids=option_id)
 def test_mavsdk_imports_every_waypoints_file(tmp_path, mission_raw, opts, plan):
     m = build_mission(PLANS[plan](), **opts)
     assert any(it.command in (18, 31) for it in m.items) == (plan == "helices")
     path = write_waypoints(m, tmp_path / "mission.waypoints")
     items = mission_raw[m.firmware].import_mission_planner_mission(str(path)).mission_items
     rows = len(path.read_text().splitlines()) - 1
-    if m.firmware == "ardupilot":
-        assert rows == len(m.items)
-        assert len(items) == rows + 1  # MAVSDK's extra copy of home in front
-        assert (items[0].x, items[0].y) == (items[1].x, items[1].y)
-        assert_same(items[1:], m.items)
-    else:
-        assert rows == len(m.items) + 1  # row 0 records home; PX4 has no home item
-        assert len(items) == rows
-        assert (items[0].x, items[0].y) == (round(m.home[0] * 1e7), round(m.home[1] * 1e7))
-        assert_same(items[1:], m.items)
+    assert rows == len(m.items)
+    assert len(items) == rows + 1  # MAVSDK's extra copy of home in front
+    assert (items[0].x, items[0].y) == (items[1].x, items[1].y)
+    assert_same(items[1:], m.items)
     assert [it.seq for it in items] == list(range(len(items)))
 
 
 @pytest.mark.parametrize("plan", PLANS)
-@pytest.mark.parametrize("opts", OPTIONS, ids=lambda o: "-".join(o.values()))
+@pytest.mark.parametrize("opts", WAYPOINTS_OPTIONS, ids=option_id)
 def test_pymavlink_loads_every_waypoints_file(tmp_path, opts, plan):
     m = build_mission(PLANS[plan](), **opts)
     assert any(it.command in (18, 31) for it in m.items) == (plan == "helices")
     path = write_waypoints(m, tmp_path / "mission.waypoints")
     loader = mavwp.MAVWPLoader()
     count = loader.load(str(path))
-    offset = 0 if m.firmware == "ardupilot" else 1  # PX4: row 0 is home, not an item
+    offset = 0  # ArduPilot: row k is seq k, row 0 home
     assert count == len(m.items) + offset
     home = loader.wp(0)
     assert (home.x, home.y) == pytest.approx(m.home[:2], abs=0.5e-7)

@@ -28,10 +28,15 @@ def plan_json(tmp_path_factory) -> Path:
 
 
 def test_a_px4_waypoints_file_is_uploaded_to_a_px4_vehicle(plan_json, tmp_path, capsys):
+    # gcs-planner no longer writes PX4 .waypoints (readers disagree on row 0); files written by
+    # earlier releases (row 0 home, the items from row 1) are still uploaded as QGC reads them.
+    from gcs_planner.mission.builder import build_mission
+    from gcs_planner.mission.waypoints import dumps_items
+    from gcs_planner.plan_json import load_plan
+
+    m = build_mission(load_plan(plan_json), firmware="px4")
     wp = tmp_path / "px4.waypoints"
-    code = main(["export", str(plan_json), "--format", "waypoints", "--firmware", "px4",
-                 "--out", str(wp)])  # fmt: skip
-    assert code == 0
+    wp.write_text(dumps_items(m.items, "px4", m.home))
     port = free_udp_port()
     with MockVehicle(f"udpin:127.0.0.1:{port}", flavour="px4") as vehicle:
         conn = ["--connect", f"udpout:127.0.0.1:{port}", "--quiet"]

@@ -15,7 +15,7 @@ from gcs_planner.mission.builder import (
     FIRMWARES,
 )
 from gcs_planner.mission.export import FORMATS, export
-from gcs_planner.mission.georef import DEFAULT_ORIGIN_WARNING, parse_origin
+from gcs_planner.mission.georef import DEFAULT_ORIGIN_WARNING, parse_home, parse_origin
 from gcs_planner.policy import DEFAULT_MIN_PROBABILITY
 
 
@@ -29,7 +29,13 @@ def add_mission_arguments(p: argparse.ArgumentParser) -> None:
         choices=tuple(ALTITUDE_FRAMES),
         default="amsl",
         help="amsl: MAV_FRAME_GLOBAL (default); relative: MAV_FRAME_GLOBAL_RELATIVE_ALT, "
-        "above home at A",
+        "metres above the home given with --home (required with relative)",
+    )
+    g.add_argument(
+        "--home",
+        metavar="LAT,LON,ALT",
+        help="where the aircraft is armed (ALT: metres above mean sea level): the home the "
+        "mission files carry and what relative altitudes are measured from (default: A)",
     )
     # The autopilot's waypoint ACCEPTANCE radius (param2), not the landmark's CAPTURE radius;
     # --capture-radius is its old, misleading name, kept as a deprecated alias.
@@ -61,6 +67,7 @@ def mission_options(args: argparse.Namespace, source: str = "") -> dict:
         "cruise_speed": args.cruise_speed,
         "at_end": args.at_end,
         "origin": None if args.origin is None else parse_origin(args.origin),
+        "home": None if args.home is None else parse_home(args.home),
         "source": source,
     }
 

@@ -7,6 +7,7 @@ from __future__ import annotations
 import argparse
 import signal
 import sys
+from collections.abc import Callable
 
 from gcs_planner.cli.common import add_scenario_arguments, load_scenario_from_args
 from gcs_planner.cli.upload import id_in
@@ -35,6 +36,21 @@ def _speedup(text: str) -> float:
     if not (value >= 0 and value < float("inf")):
         raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}")
     return value
+
+
+def _count(low: int, what: str) -> Callable[[str], int]:
+    """An argparse type: a whole number >= ``low`` (refused by argparse with one line)."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+        if value < low:
+            raise argparse.ArgumentTypeError(f"expected {what} >= {low}, got {text!r}")
+        return value
+
+    return parse
 
 
 def run(args: argparse.Namespace) -> int:
@@ -104,8 +120,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         default=1,
         help="autopilot component id (default 1, MAV_COMP_ID_AUTOPILOT1)",
     )
-    p.add_argument("--capacity", type=int, default=5000, help="most items it stores")
-    p.add_argument("--baud", type=int, default=57600)
+    p.add_argument("--capacity", type=_count(0, "items"), default=5000, help="most items it stores")
+    p.add_argument("--baud", type=_count(1, "a baud rate"), default=57600)
     p.add_argument("--signing-key", metavar="PASSPHRASE", help="sign and require signatures")
     p.add_argument(
         "--capture-radius",

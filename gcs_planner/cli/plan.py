@@ -51,7 +51,9 @@ def run(args: argparse.Namespace) -> int:
     from gcs_planner.policy import check_exportable
 
     if args.out:
-        check_output_dir(args.out)  # before the search, not after it
+        from gcs_planner.mission.export import ALL_FILES
+
+        check_output_dir(args.out, replaceable=ALL_FILES)  # before the search, not after it
     apply_vehicle_from(args)
     scenario = load_scenario_from_args(args)
     result = plan_from_args(args, scenario)
@@ -81,13 +83,11 @@ def run(args: argparse.Namespace) -> int:
 
 def write_outputs(result: Plan, plan_dict: dict, text: str, out: Path) -> list[Path]:
     """plan.json beside the mission files of the chosen route (default mission options; the
-    `export` command takes the others)."""
-    from gcs_planner.atomic import write_atomic
+    `export` command takes the others), written as one folder: all of it or none (a Ctrl-C
+    part-way leaves the previous folder, or none)."""
     from gcs_planner.mission.export import write_all
 
-    written = write_all(plan_dict, out)  # renders everything first: a bad plan writes nothing
-    written.append(write_atomic(out / "plan.json", text))
-    return written
+    return write_all(plan_dict, out, extra=(("plan.json", text),))
 
 
 COLUMNS = (

@@ -40,8 +40,13 @@ one route of its front into MAVLink mission items (MISSION_ITEM_INT semantics, c
   the turning radius (positive = clockwise, MAVLink's convention), RTL, or LAND at B at sea level.
 
 Altitudes: MAV_FRAME_GLOBAL (metres above mean sea level) by default, or
-MAV_FRAME_GLOBAL_RELATIVE_ALT (metres above home, i.e. above A). ArduPlane and PX4 both accept
-both frames; any other name is refused.
+MAV_FRAME_GLOBAL_RELATIVE_ALT (metres above home). Relative altitudes need a stated home (where
+the aircraft is armed, e.g. a ship's deck): A is the mission's first point, in the air, and the
+autopilot takes as home wherever it was armed, so altitudes relative to A would put every item
+A's altitude too low (down to -1,283 m in the coast example). Without one the relative frame is
+refused. The home (given, or A when none is) is what the files carry as home (.plan's
+plannedHomePosition, .waypoints row 0, ArduPilot's seq 0). ArduPlane and PX4 both accept both
+frames; any other name is refused.
 """
 
 from __future__ import annotations
@@ -161,6 +166,66 @@ def check_plan(plan: Any, source: str = "") -> None:
     front = plan.get("front")
     if not isinstance(front, list) or not front:
         raise _bad("the plan has no route: 'front' must be a non-empty list", source, "front")
+    chosen = plan.get("chosen")
+    if isinstance(chosen, bool) or not isinstance(chosen, int) or not 0 <= chosen < len(front):
+        raise _bad(
+            f"'chosen' must be an index into 'front' (0..{len(front) - 1}), got {chosen!r}",
+            source,
+            "chosen",
+        )
+    scenario = plan.get("scenario")
+    if not isinstance(scenario, dict):
+        raise _bad("'scenario' must be an object (docs/plan-json.md)", source, "scenario")
+    # A plan that lost its origin must not be exported to the default one: that puts the
+    # mission tens of kilometres from its landmarks. `null` is how a plan says it has none.
+    if "origin" not in scenario:
+        raise _bad(
+            "the plan has lost its georeference: 'scenario.origin' must be there, an object "
+            "{lat, lon, alt} or null (re-run `gcs-planner plan` to write it again)",
+            source,
+            "scenario.origin",
+        )
+    is_default = scenario.get("origin_is_default", False)
+    if not isinstance(is_default, bool):
+        raise _bad(
+            f"'scenario.origin_is_default' must be true or false, got {is_default!r}",
+            source,
+            "scenario.origin_is_default",
+        )
+    resolve_origin(plan, None, source)  # an origin of numbers in range, not contradicted
+    params = plan.get("parameters")
+    if not isinstance(params, dict):
+        raise _bad("'parameters' must be an object (docs/plan-json.md)", source, "parameters")
+    if "turn_radius" not in params:
+        raise _bad("'parameters.turn_radius' is missing", source, "parameters.turn_radius")
+    points = plan.get("points")
+    if points is not None and not isinstance(points, list):
+        raise _bad("'points' must be a list of points", source, "points")
+    ids = None if points is None else {str(q.get("id")) for q in points if isinstance(q, dict)}
+    for k, entry in enumerate(front):
+        _check_entry(entry, k, ids, source)
+
+
+def _check_entry(entry: Any, k: int, ids: set[str] | None, source: str) -> None:
+    """One route of the front: its points and one leg per point after A, each point in the
+    plan's points table (a route through a point the plan does not have contradicts it)."""
+    if not isinstance(entry, dict):
+        raise _bad(f"front[{k}] is not an object", source, "front")
+    route, legs = entry.get("route"), entry.get("legs")
+    if not isinstance(route, list) or len(route) < 2:
+        raise _bad(f"front[{k}].route must list at least A and B", source, f"front[{k}].route")
+    if not isinstance(legs, list) or len(legs) != len(route) - 1:
+        raise _bad(
+            f"front[{k}].legs must have one leg per point after A", source, f"front[{k}].legs"
+        )
+    if ids is not None:
+        missing = [str(pid) for pid in route if str(pid) not in ids]
+        if missing:
+            raise _bad(
+                f"front[{k}].route goes through point {missing[0]!r}, which 'points' does not have",
+                source,
+                f"front[{k}].route",
+            )
 
 
 def route_entry(plan: dict, route_index: int | None = None, source: str = "") -> tuple[int, dict]:
@@ -224,14 +289,31 @@ def resolve_origin(plan: dict, origin: Origin | None, source: str = "") -> tuple
         return validate_origin(origin, file=source, field="--origin"), False
     scen = plan.get("scenario") if isinstance(plan.get("scenario"), dict) else {}
     o = scen.get("origin")
+    field = "scenario.origin"
     if isinstance(o, dict):
         try:
-            given = Origin(float(o["lat"]), float(o["lon"]), float(o.get("alt", 0.0)))
-        except (KeyError, TypeError, ValueError) as exc:
-            raise _bad(f"scenario.origin must have numbers lat, lon[, alt]: {o!r}", source) from exc
-        return validate_origin(given, file=source), bool(scen.get("origin_is_default", False))
+            lat, lon = o["lat"], o["lon"]
+            alt = o.get("alt", 0.0)
+            if any(isinstance(v, bool) or not isinstance(v, (int, float)) for v in (lat, lon, alt)):
+                raise TypeError
+            given = Origin(float(lat), float(lon), float(alt))
+        except (KeyError, TypeError) as exc:
+            raise _bad(
+                f"scenario.origin must have numbers lat, lon[, alt]: {o!r}", source, field
+            ) from exc
+        given = validate_origin(given, file=source, field=field)
+        is_default = bool(scen.get("origin_is_default", False))
+        if is_default and given != DEFAULT_ORIGIN:
+            raise _bad(
+                f"scenario.origin {given.lat}, {given.lon} contradicts "
+                "'origin_is_default': true (the default origin is "
+                f"{DEFAULT_ORIGIN.lat}, {DEFAULT_ORIGIN.lon})",
+                source,
+                "scenario.origin_is_default",
+            )
+        return given, is_default
     if o is not None:
-        raise _bad(f"scenario.origin must be an object or null, got {o!r}", source, "origin")
+        raise _bad(f"scenario.origin must be an object or null, got {o!r}", source, field)
     return DEFAULT_ORIGIN, True
 
 
@@ -359,15 +441,28 @@ def build_mission(
     cruise_speed: float = DEFAULT_CRUISE_SPEED,
     at_end: str = "loiter",
     origin: Origin | None = None,
+    home: Origin | None = None,
     source: str = "",
 ) -> Mission:
     """The mission for route ``route_index`` of ``plan`` (default: the plan's chosen route).
 
     ``origin`` overrides the scenario's; without either the default origin is used and
-    ``Mission.origin_is_default`` is True (the caller warns). ``source`` names the plan file in
+    ``Mission.origin_is_default`` is True (the caller warns). ``home`` (lat, lon, alt AMSL) is
+    where the aircraft is armed: the files' home, and what relative altitudes are measured from
+    (``altitude_frame="relative"`` is refused without it). ``source`` names the plan file in
     error messages.
     """
     speed = _check_options(firmware, altitude_frame, at_end, cruise_speed)
+    if home is not None:
+        home = validate_origin(home, field="--home")
+    elif altitude_frame == "relative":
+        raise _bad(
+            "relative altitudes need a stated home: give --home LAT,LON,ALT (where the "
+            "aircraft is armed, ALT in metres above mean sea level); A is in the air, and "
+            "altitudes relative to it would be wrong by A's altitude",
+            "",
+            "--home",
+        )
     capture = _whole_metres(acceptance_radius, "acceptance-radius")
     k, entry = route_entry(plan, route_index, source)
     legs = route_legs(entry, source)
@@ -383,7 +478,10 @@ def build_mission(
     if not math.isfinite(radius) or radius < 0:
         raise _bad(f"parameters.turn_radius must be >= 0, got {radius!r}", source, "turn_radius")
 
-    home_lat, home_lon, home_alt = frame.to_geodetic(*xyz[0])
+    if home is None:
+        home_lat, home_lon, home_alt = frame.to_geodetic(*xyz[0])
+    else:
+        home_lat, home_lon, home_alt = home.lat, home.lon, home.alt
     mav_frame = ALTITUDE_FRAMES[altitude_frame]
     alt_offset = home_alt if altitude_frame == "relative" else 0.0
 

@@ -11,7 +11,7 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
-from gcs_planner.atomic import write_atomic
+from gcs_planner.atomic import write_atomic, write_folder_atomic
 from gcs_planner.errors import InputError
 from gcs_planner.mission.builder import Mission, build_mission
 from gcs_planner.mission.geo_exports import csv_text, geojson_text, kml_text
@@ -56,11 +56,32 @@ def export(
     return write_atomic(out, render(plan, fmt, mission)), mission
 
 
-def write_all(plan: dict, out_dir: str | os.PathLike[str], **mission_options: Any) -> list[Path]:
-    """Write mission.plan, mission.waypoints, route.geojson, route.kml, route.csv, route.png,
-    front.png and error_budget.png into ``out_dir``. Everything is rendered before the first
-    file is written, so a bad plan or option leaves the folder as it was."""
+# The files `write_all` writes, with what its caller may add (plan.json): an existing output
+# folder holding only these is an earlier run's, which `plan --out` may replace.
+ALL_FILES = (*(name for name, _ in FORMATS.values()), "plan.json")
+
+
+def render_all(plan: dict, **mission_options: Any) -> list[tuple[str, str | bytes]]:
+    """(file name, content) of every export of ``plan``; raises before anything is written."""
     mission = build_mission(plan, **mission_options)
-    contents = [(name, fn(plan, mission)) for name, fn in FORMATS.values()]
-    out = Path(out_dir)
-    return [write_atomic(out / name, data) for name, data in contents]
+    return [
+        (name, fn(plan, mission))
+        for fmt, (name, fn) in FORMATS.items()
+        # PX4 missions have no .waypoints (mission.waypoints explains why): .plan is theirs.
+        if fmt != "waypoints" or mission.firmware == "ardupilot"
+    ]
+
+
+def write_all(
+    plan: dict,
+    out_dir: str | os.PathLike[str],
+    extra: tuple[tuple[str, str | bytes], ...] = (),
+    **mission_options: Any,
+) -> list[Path]:
+    """Write mission.plan, mission.waypoints (ArduPilot only), route.geojson, route.kml,
+    route.csv, route.png, front.png and error_budget.png (and ``extra`` files) as the folder
+    ``out_dir``, all or
+    nothing: rendered first, then written into a temporary folder beside it that replaces it
+    (see ``atomic.write_folder_atomic``). An interruption leaves the previous folder."""
+    contents = render_all(plan, **mission_options) + list(extra)
+    return write_folder_atomic(out_dir, contents)

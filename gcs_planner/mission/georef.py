@@ -60,6 +60,15 @@ def parse_origin(text: str, *, field: str = "--origin") -> Origin:
     return validate_origin(Origin(*values), field=field)
 
 
+def parse_home(text: str, *, field: str = "--home") -> Origin:
+    """Parse ``LAT,LON,ALT`` (degrees, degrees, metres AMSL): all three, since relative
+    altitudes are measured from ALT and a silent 0 would shift every item."""
+    parts = [p.strip() for p in str(text).split(",")]
+    if len(parts) != 3:
+        raise InputError(f"expected LAT,LON,ALT (ALT in metres AMSL), got {text!r}", field=field)
+    return parse_origin(text, field=field)
+
+
 class LocalFrame:
     """The azimuthal equidistant frame on WGS84 centred on ``origin`` (see module docstring)."""
 

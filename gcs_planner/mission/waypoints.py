@@ -5,9 +5,17 @@ One header line ``QGC WPL 110``, then one line per item, tab-separated, LF line 
     INDEX  CURRENT  FRAME  COMMAND  P1  P2  P3  P4  LAT  LON  ALT  AUTOCONTINUE
 
 Row 0 is always home (the ArduPilot convention Mission Planner follows), with CURRENT 1 as Mission
-Planner writes it. For ArduPilot row k is seq k; a PX4 mission has no home item, so its seq k is
-row k + 1 and row 0 only records home. Latitude and longitude carry 8 decimals (about 1 mm),
-altitudes and parameters 6.
+Planner writes it, and row k is ArduPilot's seq k. Latitude and longitude carry 8 decimals
+(about 1 mm), altitudes and parameters 6.
+
+A PX4 mission is not written as .waypoints: PX4 has no home item, and the readers disagree on
+row 0. QGroundControl reads row 0 of a "QGC WPL 110" file as the planned home and leaves it out
+of the mission (MissionController::_loadTextMissionFile), while pymavlink's MAVWPLoader,
+MAVProxy's `wp load` and MAVSDK's importer upload every row, row 0 as item 0. Whatever row 0
+holds, one side flies a mission the other does not: with a home on the surface, the second
+would fly to it at sea level first. A .plan says where home is (plannedHomePosition) and which
+firmware it is for, and every reader agrees on it. Reading still takes a PX4 file written by
+earlier releases (row 0 home, seq k at row k + 1), as QGroundControl reads it.
 """
 
 from __future__ import annotations
@@ -73,7 +81,17 @@ def _row(index: int, current: int, item: MissionItem) -> str:
     return "\t".join(cells)
 
 
+PX4_REFUSED = (
+    "a PX4 mission is not written as .waypoints: QGroundControl reads its row 0 as home and "
+    "leaves it out of the mission, pymavlink, MAVProxy and MAVSDK upload row 0 as item 0, so "
+    "no row 0 means the same to all of them; use --format plan (QGroundControl .plan)"
+)
+
+
 def dumps_waypoints(mission: Mission) -> str:
+    """The mission as a .waypoints text; ArduPilot only (module docstring)."""
+    if mission.firmware != "ardupilot":
+        raise InputError(PX4_REFUSED, field="--firmware")
     return dumps_items(mission.items, mission.firmware, mission.home)
 
 

@@ -335,7 +335,7 @@ def _points(
         first_row[point_id] = row
         ids.append(point_id)
         for axis, column in enumerate(("x", "y", "z")):
-            value, why = _coordinate(cells[column])
+            value, why = _coordinate(cells[column], MAX_COORDINATE[axis])
             if why:
                 raise fail(why, column)
             xyz[i, axis] = value
@@ -392,7 +392,15 @@ def _point_id(value: object) -> str:
     return str(value).strip()
 
 
-def _coordinate(value: object) -> tuple[float, str]:
+# Largest magnitude of a coordinate, metres (x east, y north, z up; for a geographic file the
+# same cells hold degrees, checked again by their own ranges). Beyond these a number is a typo
+# or a unit mix-up, not a place: no point on Earth is farther than half its circumference
+# (20,004 km) from the origin, and 100 km up is space. A 1e300 would otherwise reach the
+# search's distance tables and fail there ("p too large") with no row named.
+MAX_COORDINATE = (2.0e7, 2.0e7, 1.0e5)
+
+
+def _coordinate(value: object, limit: float = math.inf) -> tuple[float, str]:
     """The coordinate in metres, and why it is invalid ("" when valid)."""
     if isinstance(value, bool):
         return 0.0, f"not a number: {value!r}"
@@ -411,6 +419,8 @@ def _coordinate(value: object) -> tuple[float, str]:
         return 0.0, f"not a number: {value!r}"
     if not math.isfinite(number):
         return 0.0, f"coordinate must be finite (got {value!r})"
+    if abs(number) > limit:
+        return 0.0, f"coordinate {number:g} m is out of range (at most {limit:,.0f} m either way)"
     return number, ""
 
 
