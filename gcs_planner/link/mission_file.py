@@ -11,6 +11,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from gcs_planner.errors import InputError
+from gcs_planner.link.validate import item_problem
 from gcs_planner.mission.items import MissionItem
 
 
@@ -26,7 +27,41 @@ def load_mission_file(
 ) -> MissionToUpload:
     """Read ``path`` by its suffix. ``firmware`` numbers a .waypoints file and builds a plan
     JSON's mission (default ardupilot); a .plan says its own."""
-    path = Path(path)
+    mission = _load(Path(path), firmware, route_index)
+    _check_items(Path(path), mission)
+    return mission
+
+
+def _check_items(path: Path, mission: MissionToUpload) -> None:
+    """Refuse, before anything is sent, an item no vehicle can be sent or should fly, naming
+    the file, the row (of a .waypoints) or the item, and the field."""
+    rows: list[int] | None = None
+    for item in mission.items:
+        problem = item_problem(item)
+        if problem is None:
+            continue
+        if path.suffix.lower() == ".waypoints":
+            if rows is None:
+                rows = _waypoints_rows(path)
+            # Row 0 is home: ArduPilot's item 0, before PX4's first item.
+            index = item.seq if mission.firmware == "ardupilot" else item.seq + 1
+            if index < len(rows):
+                raise InputError(problem.reason, file=str(path), row=rows[index],
+                                 field=problem.field)  # fmt: skip
+        raise InputError(
+            f"mission item {item.seq}: {problem.reason}", file=str(path), field=problem.field
+        )
+
+
+def _waypoints_rows(path: Path) -> list[int]:
+    """The line number of each data row of a .waypoints file, as its reader counts them."""
+    lines = path.read_text(encoding="utf-8").splitlines()
+    return [
+        n for n, line in enumerate(lines[1:], start=2) if line.strip() and not line.startswith("#")
+    ]
+
+
+def _load(path: Path, firmware: str | None, route_index: int | None) -> MissionToUpload:
     suffix = path.suffix.lower()
     if not path.is_file():
         raise InputError("no such file", file=str(path))
