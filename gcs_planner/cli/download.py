@@ -9,7 +9,8 @@ from pathlib import Path
 
 from gcs_planner.atomic import check_output_file, write_atomic
 from gcs_planner.cli.upload import add_link_arguments, connect_client
-from gcs_planner.errors import InputError
+from gcs_planner.errors import InputError, LinkError
+from gcs_planner.link.validate import GLOBAL_FRAMES, POSITION_COMMANDS
 from gcs_planner.mission.items import MissionItem
 from gcs_planner.mission.waypoints import dumps_items
 
@@ -33,6 +34,8 @@ def run(args: argparse.Namespace) -> int:
     try:
         items = client.download()
         firmware = client.firmware or "generic"
+    except LinkError as exc:
+        raise LinkError(f"{exc}; nothing was written to {out}") from None
     finally:
         client.link.close()
     if suffix == ".json":
@@ -45,11 +48,12 @@ def run(args: argparse.Namespace) -> int:
 
 def _home(items: list[MissionItem], firmware: str) -> tuple[float, float, float]:
     """Row 0 of a .waypoints file is home. ArduPilot sends it as item 0; PX4 has no home item,
-    so the first item's position stands in for it (what a reader of the file sees as home)."""
-    if not items:
-        return (0.0, 0.0, 0.0)
-    first = items[0]
-    return (first.x / 1e7, first.y / 1e7, first.z)
+    so the first position item's stands in for it (what a reader of the file sees as home)."""
+    # The first item with a position: a DO_ item's x/y are parameters, not a latitude.
+    for it in items:
+        if it.command in POSITION_COMMANDS and it.frame in GLOBAL_FRAMES:
+            return (it.x / 1e7, it.y / 1e7, it.z)
+    return (0.0, 0.0, 0.0)
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:

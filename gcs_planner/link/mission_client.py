@@ -8,12 +8,13 @@ only reported done after the mission has been read back and found equal to what 
 
 from __future__ import annotations
 
+import struct
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from gcs_planner.errors import LinkError
+from gcs_planner.errors import InputError, LinkError
 from gcs_planner.link.connection import Link, mavlink
 from gcs_planner.link.params import read_parameter, set_loiter_radius
 from gcs_planner.link.progress import Progress
@@ -28,6 +29,7 @@ from gcs_planner.link.protocol import (
     mission_differences,
 )
 from gcs_planner.link.rtt import RoundTrip
+from gcs_planner.link.validate import item_problem
 from gcs_planner.mission.items import MAV_MISSION_TYPE_MISSION, MissionItem
 from gcs_planner.vehicle import FIRMWARE_OF_AUTOPILOT, FIRMWARES, LOITER_RADIUS_PARAM
 
@@ -36,8 +38,19 @@ from gcs_planner.vehicle import FIRMWARE_OF_AUTOPILOT, FIRMWARES, LOITER_RADIUS_
 DOWNLOAD_WINDOW = 8
 MIN_RESEND_S = 0.03
 _LEFTOVER_ACKS = (mavlink.MAV_MISSION_ACCEPTED, mavlink.MAV_MISSION_INVALID_SEQUENCE)
+# Refusals of a MISSION_COUNT that mean "busy with another transfer": ArduPilot DENIED, PX4
+# ERROR ("Mission upload busy"), and a cancel of the transfer it was in that crossed our count.
+_BUSY = (
+    mavlink.MAV_MISSION_DENIED,
+    mavlink.MAV_MISSION_ERROR,
+    mavlink.MAV_MISSION_OPERATION_CANCELLED,
+)
 _COMMAND_OK = (mavlink.MAV_RESULT_ACCEPTED, mavlink.MAV_RESULT_IN_PROGRESS)
 _NOT_VEHICLES = {mavlink.MAV_TYPE_GCS, mavlink.MAV_TYPE_GIMBAL, mavlink.MAV_TYPE_ADSB}
+
+
+def _span(first: int, last: int) -> str:
+    return str(first) if first == last else f"{first}..{last}"
 
 
 @dataclass(frozen=True)
@@ -146,10 +159,12 @@ class MissionClient:
                 f"refused {self.link.refused_signature} message(s) from the other end: they "
                 "are unsigned or signed with another key (check --signing-key)"
             )
-        raise LinkError(
-            f"no vehicle heartbeat on {self.link.connection} within {timeout:g} s"
-            + (" (messages refused for their signature)" if self.link.refused_signature else "")
-        )
+        if self.link.refused_datagrams:
+            raise LinkError(
+                f"no vehicle heartbeat on {self.link.connection} within {timeout:g} s: its "
+                "host refused our datagrams (nothing listens on that port)"
+            )
+        raise LinkError(f"no vehicle heartbeat on {self.link.connection} within {timeout:g} s")
 
     def _target(self) -> tuple[int, int]:
         if self.target_system is None or self.target_component is None:
@@ -223,9 +238,16 @@ class MissionClient:
         its request for the next one was lost: the next one is sent without waiting for the
         vehicle's own re-request (ArduPilot's comes only after a second). Any other error result
         ends the transfer with that result in words.
+
+        A vehicle still inside an earlier upload of ours (one that died mid-transfer) is
+        restarted: requests it makes for that transfer before asking for item 0 of this one are
+        not ours and are ignored, and a MISSION_COUNT it refuses as busy is followed by a
+        MISSION_ACK OPERATION_CANCELLED and the count again, once (PX4 restarts only after a
+        cancel; ArduPilot restarts on the count of the same ids).
         """
         ts, tc = self._target()
         items = [it.with_seq(i) if it.seq != i else it for i, it in enumerate(items)]
+        self._check_packable(items, ts, tc)
         count = len(items)
         count_msg = self.mav.mission_count_encode(ts, tc, count, mission_type)
         self.link.send(count_msg)
@@ -236,6 +258,10 @@ class MissionClient:
         highest = -1  # the highest item the vehicle asked for
         sent_upto = -1  # the highest item sent, asked for or inferred
         last_progress = time.monotonic()
+        cancelled_once = False  # a busy refusal of the count has been answered with a cancel
+        last_ack: int | None = None  # the last MISSION_ACK the vehicle sent that we went past
+        early_ack_waits = -1  # timeouts since an ACCEPTED came before the last item was sent
+        stale: int | None = None  # a request of an earlier transfer, ignored
         try:
             while True:
                 wait = self.timeout if requested is None else self._rtt.timeout
@@ -244,9 +270,10 @@ class MissionClient:
                 )
                 now = time.monotonic()
                 if msg is None:
-                    if now - last_progress > self._stall_limit():
-                        where = "MISSION_COUNT" if requested is None else f"item {requested}"
-                        raise self._give_up(f"upload stalled after {where}")
+                    if early_ack_waits >= 0:
+                        early_ack_waits += 1
+                    if early_ack_waits > 2 or now - last_progress > self._stall_limit():
+                        raise self._upload_stalled(requested, sent_upto, count, last_ack, stale)
                     self.retry_count += 1
                     resent, sent_at = True, now
                     if requested is None:
@@ -258,8 +285,15 @@ class MissionClient:
                     if msg.type == mavlink.MAV_MISSION_ACCEPTED:
                         if count == 0 or sent_upto == count - 1:
                             return
-                        continue  # a late acknowledgement of an earlier transfer
+                        if highest >= 0:
+                            # Our transfer is under way and the vehicle says it is over: either
+                            # a late copy of an earlier transfer's answer (a request follows)
+                            # or the vehicle ended ours early (nothing follows).
+                            last_ack = msg.type
+                            early_ack_waits = max(early_ack_waits, 0)
+                        continue  # before our first request: an earlier transfer's answer
                     if msg.type == mavlink.MAV_MISSION_INVALID_SEQUENCE:
+                        last_ack = msg.type
                         # In reply to a resent item j: the vehicle has j (it would have taken it
                         # otherwise) and its request for j + 1 was lost. A wrong guess costs
                         # only a refusal; the vehicle's own re-request sets us right.
@@ -269,36 +303,116 @@ class MissionClient:
                             resent, sent_at = False, now
                             self.link.send(item_to_message(self.mav, items[requested], ts, tc))
                         continue
-                    raise LinkError(f"upload refused: {describe_result(msg.type)}")
+                    if requested is None and not cancelled_once and msg.type in _BUSY:
+                        # Refused before it asked for anything: most often it is still inside
+                        # an earlier upload of ours that died. Cancel that one and count again.
+                        cancelled_once = True
+                        self._cancel_stray(msg, mission_type)
+                        self.link.send(count_msg)
+                        sent_at = last_progress = now
+                        continue
+                    where = "MISSION_COUNT" if requested is None else f"item {sent_upto}"
+                    raise LinkError(
+                        f"upload refused after {where}: MISSION_ACK {describe_result(msg.type)}"
+                    )
                 seq = int(msg.seq)
                 if not 0 <= seq < count:
-                    raise LinkError(f"the vehicle asked for item {seq} of a {count}-item mission")
-                if seq > sent_upto + 1:
-                    # The vehicle holds items we never sent: someone with our ids is feeding it.
+                    if highest < 0:
+                        stale = seq
+                        continue  # a request of an earlier, longer transfer
                     raise LinkError(
-                        f"the vehicle asked for item {seq} but was sent only up to item "
-                        f"{sent_upto}: another ground station with the same ids "
-                        f"({self.mav.srcSystem}/{self.mav.srcComponent}) is uploading; give "
-                        "each its own --source-system"
+                        f"the vehicle requested item {seq} of a {count}-item mission"
+                    )
+                if seq > sent_upto + 1:
+                    if highest < 0:
+                        # It has not asked for item 0 of this transfer yet: a re-request left
+                        # over from an earlier one, which our count is about to restart.
+                        stale = seq
+                        continue
+                    raise LinkError(
+                        f"the vehicle requested item {seq} after item {sent_upto}: it skipped "
+                        f"item{'s' if seq - sent_upto > 2 else ''} "
+                        f"{_span(sent_upto + 1, seq - 1)}, which it was never sent (a vehicle "
+                        "asks for every item in turn); the upload was cancelled"
                     )
                 if requested is not None and seq == requested + 1 and not resent:
                     self._rtt.sample(now - sent_at)
                 if seq > highest:
                     last_progress = now
+                    early_ack_waits = -1
                 requested = seq
                 highest = max(highest, seq)
                 sent_upto = max(sent_upto, seq)
                 resent, sent_at = False, now
                 self.link.send(item_to_message(self.mav, items[seq], ts, tc))
                 bar.update(highest + 1)
+        except LinkError:
+            # Leave the vehicle idle rather than waiting out its upload timeout (PX4 honours
+            # the cancel; to a vehicle not receiving from us it means nothing).
+            self._cancel_upload(mission_type)
+            raise
         finally:
             bar.close()
 
+    def _check_packable(self, items: Sequence[MissionItem], ts: int, tc: int) -> None:
+        """Refuse, before the count goes out, an item MISSION_ITEM_INT cannot carry (a latitude
+        in degE7 given as degrees overflows its int32): the caller's input, named by item."""
+        for item in items:
+            try:
+                item_to_message(self.mav, item, ts, tc).pack(self.mav)
+            except (struct.error, OverflowError, ValueError, TypeError):
+                problem = item_problem(item)
+                reason = f"{problem.field}: {problem.reason}" if problem else "does not pack"
+                raise InputError(
+                    f"mission item {item.seq} cannot be sent in MISSION_ITEM_INT: {reason}"
+                ) from None
+
+    def _cancel_upload(self, mission_type: int) -> None:
+        ts, tc = self._target()
+        self.link.send(
+            self.mav.mission_ack_encode(
+                ts, tc, mavlink.MAV_MISSION_OPERATION_CANCELLED, mission_type
+            )
+        )
+
+    def _upload_stalled(
+        self,
+        requested: int | None,
+        sent_upto: int,
+        count: int,
+        last_ack: int | None,
+        stale: int | None,
+    ) -> LinkError:
+        if last_ack == mavlink.MAV_MISSION_ACCEPTED:
+            return LinkError(
+                f"the vehicle ended the upload early, after item {sent_upto} of items 0.."
+                f"{count - 1}, with MISSION_ACK {describe_result(last_ack)}, and asked for no "
+                "more: what it holds is unknown (run `gcs-planner download` to see)"
+            )
+        where = "MISSION_COUNT" if requested is None else f"item {requested}"
+        error = self._give_up(f"upload stalled after {where}")
+        extra = ""
+        if last_ack is not None:
+            extra = f"; the vehicle's last answer was MISSION_ACK {describe_result(last_ack)}"
+        elif requested is None and stale is not None:
+            extra = (
+                f"; the vehicle asked only for item {stale}, never for item 0: it did not "
+                "restart its earlier transfer"
+            )
+        return LinkError(str(error) + extra)
+
     # Download ---------------------------------------------------------------------------------
-    def download(self, mission_type: int = MAV_MISSION_TYPE_MISSION) -> list[MissionItem]:
+    def download(
+        self, mission_type: int = MAV_MISSION_TYPE_MISSION, *, validate: bool = True
+    ) -> list[MissionItem]:
         """The vehicle's mission (MISSION_REQUEST_LIST, MISSION_COUNT, MISSION_REQUEST_INT for
         each item with up to ``window`` requests outstanding, as MAVProxy does, then our
-        MISSION_ACK)."""
+        MISSION_ACK).
+
+        With ``validate`` (the default) an item no mission file may hold (validate.py: unknown
+        frame or command, a position out of range or not set, a non-finite altitude or
+        parameter) is a :class:`LinkError` naming its seq and field: what a vehicle sends is
+        input like any other. The read-back after an upload compares instead."""
         ts, tc = self._target()
         count = self._download_count(ts, tc, mission_type)
         got: dict[int, MissionItem] = {}
@@ -351,7 +465,16 @@ class MissionClient:
             bar.close()
         done = self.mav.mission_ack_encode(ts, tc, mavlink.MAV_MISSION_ACCEPTED, mission_type)
         self.link.send(done)
-        return [got[seq] for seq in range(count)]
+        mission = [got[seq] for seq in range(count)]
+        if validate:
+            for item in mission:
+                problem = item_problem(item)
+                if problem is not None:
+                    raise LinkError(
+                        f"the vehicle sent an invalid mission item: seq {item.seq}, field "
+                        f"{problem.field!r}: {problem.reason}"
+                    )
+        return mission
 
     def _request_item(self, ts: int, tc: int, seq: int, mission_type: int) -> None:
         self.link.send(self.mav.mission_request_int_encode(ts, tc, seq, mission_type))
@@ -440,13 +563,15 @@ class MissionClient:
         read-back that fails is said as such: "could not read it back" is not "it differs"."""
         for attempt in range(attempts):
             try:
-                return self.download()
+                return self.download(validate=False)
             except LinkError as exc:
                 if attempt == attempts - 1:
+                    # An acknowledgement is not a read-back: what the vehicle holds is unknown.
                     raise LinkError(
                         "the vehicle acknowledged the whole upload (MISSION_ACK ACCEPTED) but "
-                        f"it could not be read back to verify it: {exc}; it most likely holds "
-                        "the mission: run `gcs-planner download` to check"
+                        f"it could not be read back to verify it: {exc}. The read-back failed, "
+                        "so whether the vehicle holds this mission is unknown: run "
+                        "`gcs-planner download` to check"
                     ) from None
         raise AssertionError("unreachable")
 
