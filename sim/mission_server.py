@@ -4,7 +4,20 @@ What a real autopilot does, modelled from ArduPilot's ``MissionItemProtocol`` an
 ``MavlinkMissionManager``:
 
 * one transfer at a time, bound to the ground station that started it: anyone else (other
-  system/component ids, or the same ids from another network address) is DENIED until it ends;
+  system/component ids, or the same ids from another network address) is DENIED until it ends.
+  The address is this mock's addition (both autopilots bind a transfer to ids alone), kept so
+  that two processes with the same ids are caught rather than mixed;
+* a MISSION_COUNT from the uploader itself mid-transfer, as a ground station restarting after
+  its upload died: ArduPilot restarts (``MissionItemProtocol::handle_mission_count`` in
+  libraries/GCS_MAVLink/MissionItemProtocol.cpp: same sysid/compid, "we will allow them to
+  restart"), whatever address it now comes from, since ArduPilot cannot tell; PX4 restarts only
+  while it still waits for item 0, and otherwise answers MAV_MISSION_ERROR "Mission upload
+  busy" (``MavlinkMissionManager::handle_mission_count``, src/modules/mavlink/
+  mavlink_mission.cpp) until the ground station cancels it with MISSION_ACK
+  OPERATION_CANCELLED from the same ids (``handle_mission_ack``, which checks ids, not where
+  the message came from). MissionItemProtocol.cpp has no handler for a ground station's
+  MISSION_ACK; this mock's ArduPilot ends an upload on any refusal from the uploader's ids, as
+  it did before, which a restart by MISSION_COUNT makes moot;
 * an upload is a restartable series of requests: ArduPilot asks with the legacy MISSION_REQUEST;
   PX4 with MISSION_REQUEST_INT until a ground station speaks the legacy messages to it, then with
   MISSION_REQUEST (its ``_int_mode``); an item not received within ``request_timeout`` is asked for
@@ -271,13 +284,15 @@ class MissionServer:
             self.on_request(msg, peer)
         elif kind == "MISSION_ACK":
             up = self.upload
-            if (
-                up is not None
-                and peer == up.peer
-                and msg.type != mavlink.MAV_MISSION_ACCEPTED
-                and address == up.address
-            ):
-                self.upload = None  # the ground station cancelled the upload
+            cancels = (
+                msg.type == mavlink.MAV_MISSION_OPERATION_CANCELLED
+                if self.flavour == "px4"
+                else msg.type != mavlink.MAV_MISSION_ACCEPTED
+            )
+            if up is not None and peer == up.peer and cancels:
+                # By ids alone, as PX4 checks: a restarted ground station (a new process on a
+                # new port) may cancel the upload its predecessor left.
+                self.upload = None
         elif kind == "MISSION_CLEAR_ALL":
             self.on_clear_all(msg, peer)
         elif kind == "MISSION_SET_CURRENT":
@@ -293,10 +308,17 @@ class MissionServer:
             # FENCE and RALLY: this vehicle has no fence or rally points; others do not exist.
             self.ack(peer, mavlink.MAV_MISSION_UNSUPPORTED, mtype)
             return
-        if self.upload is not None and not self._transfer_owner(peer, address):
-            self.ack(peer, mavlink.MAV_MISSION_DENIED, mtype)
-            return
-        self.upload = None  # the same sender may restart (ArduPilot does the same)
+        up = self.upload
+        if up is not None:
+            restart_by_ids = self.flavour == "ardupilot" and up.peer == peer
+            if not (restart_by_ids or self._transfer_owner(peer, address)):
+                self.ack(peer, mavlink.MAV_MISSION_DENIED, mtype)
+                return
+            if self.flavour == "px4" and up.expected > 0:
+                self.statustext("Mission upload busy", mavlink.MAV_SEVERITY_CRITICAL)
+                self.ack(peer, mavlink.MAV_MISSION_ERROR, mtype)
+                return
+        self.upload = None  # the same sender restarts
         self.completed = None
         count = int(msg.count)
         if count > self.capacity:

@@ -99,6 +99,13 @@ def connect_client(args: argparse.Namespace) -> MissionClient:
         retries=args.retries,
         progress=progress,
     )
+    if not quiet:
+        # Said at once: the wait may be long, and silence looks like a hang.
+        print(
+            f"waiting for a vehicle heartbeat on {args.connect} (up to {args.wait:g} s)...",
+            file=sys.stderr,
+            flush=True,
+        )
     try:
         client.connect(timeout=args.wait)
     except BaseException:

@@ -27,7 +27,7 @@ if getattr(mavutil.mavlink, "WIRE_PROTOCOL_VERSION", "1.0") != "2.0":
     os.environ["MAVLINK20"] = "1"
     mavutil.set_dialect("ardupilotmega")
 
-from gcs_planner.errors import InputError  # noqa: E402
+from gcs_planner.errors import InputError, LinkError  # noqa: E402
 from gcs_planner.link.signing import enable_signing  # noqa: E402
 
 mavlink = mavutil.mavlink
@@ -118,17 +118,7 @@ class Link:
                 raise InputError(f"{name} {value} is not in {low}..255")
         self.connection = connection
         _check_port_free(connection)
-        try:
-            self.conn = mavutil.mavlink_connection(
-                connection,
-                baud=baud,
-                source_system=source_system,
-                source_component=source_component,
-                autoreconnect=False,
-            )
-        except (OSError, ValueError) as exc:
-            reason = getattr(exc, "strerror", None) or str(exc)
-            raise InputError(f"cannot open {connection!r}: {reason}", field="--connect") from None
+        self.conn = _open(connection, baud, source_system, source_component)
         self.mav = self.conn.mav
         # The UDP address the last datagram came from (udpin only; None otherwise): a vehicle
         # binds a transfer to it, since two ground stations may use the same ids.
@@ -141,7 +131,18 @@ class Link:
         self.refused_signature = 0  # messages refused for a missing or wrong signature
         self.peer_signed = 0  # signed frames heard while we do not sign: the peer wants a key
         self.bad_data = 0
+        # Datagrams the other end's host refused (ICMP port unreachable on udpout): nothing
+        # listens there, which the heartbeat wait can say instead of only "no heartbeat".
+        self.refused_datagrams = 0
+        self.peer_closed = False  # a TCP peer reset or closed the connection
+        if isinstance(self.conn, mavutil.mavtcp):
+            # pymavlink prints these on stdout; ours is a flag the client's errors name.
+            self.conn.handle_disconnect = self._on_peer_closed
+            self.conn.handle_eof = self._on_peer_closed
         self._send_lock = threading.Lock()
+
+    def _on_peer_closed(self) -> None:
+        self.peer_closed = True
 
     def _udp_recv(self, n: int | None = None) -> bytes:
         """pymavlink's mavudp.recv, keeping the sender's address, and knowing that MAVLink frames
@@ -151,7 +152,10 @@ class Link:
         try:
             data, sender = conn.port.recvfrom(65535)
         except OSError as exc:
-            if exc.errno in (errno.EAGAIN, errno.EWOULDBLOCK, errno.ECONNREFUSED):
+            if exc.errno == errno.ECONNREFUSED:
+                self.refused_datagrams += 1
+                return b""
+            if exc.errno in (errno.EAGAIN, errno.EWOULDBLOCK):
                 return b""
             raise
         if conn.udp_server:
@@ -224,6 +228,42 @@ class Link:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+# A TCP peer that refuses may be starting: this many attempts, a second apart, before giving up.
+TCP_ATTEMPTS = 3
+
+
+def _open(connection: str, baud: int, source_system: int, source_component: int) -> Any:
+    """pymavlink's connection, with its "Connection refused sleeping" retries replaced by
+    ours: pymavlink prints each on stdout (mavutil.mavtcp.do_connect), which mixes with what a
+    command prints there, and ends with a bare exception."""
+    is_tcp = connection.lower().startswith("tcp:")
+    attempts = TCP_ATTEMPTS if is_tcp else 1
+    for attempt in range(attempts):
+        try:
+            return mavutil.mavlink_connection(
+                connection,
+                baud=baud,
+                source_system=source_system,
+                source_component=source_component,
+                autoreconnect=False,
+                retries=0,  # one attempt per call: pymavlink prints before each retry
+            )
+        except ConnectionRefusedError:
+            if attempt + 1 < attempts:
+                time.sleep(1.0)
+                continue
+            raise LinkError(
+                f"{connection} refused the connection ({attempts} attempts, 1 s apart): is "
+                "the vehicle or its MAVLink router listening there?"
+            ) from None
+        except (OSError, ValueError) as exc:
+            reason = getattr(exc, "strerror", None) or str(exc)
+            if is_tcp and isinstance(exc, OSError):
+                raise LinkError(f"cannot connect to {connection}: {reason}") from None
+            raise InputError(f"cannot open {connection!r}: {reason}", field="--connect") from None
+    raise AssertionError("unreachable")
 
 
 def _partial_frame_pending(mav: Any) -> bool:
