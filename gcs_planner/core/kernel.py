@@ -271,6 +271,7 @@ def layered_search(
     lim_v: np.ndarray,
     lim_h: np.ndarray,
     to_end: np.ndarray,
+    into_end: np.ndarray,
     is_v: np.ndarray,
     start: int,
     end: int,
@@ -278,7 +279,8 @@ def layered_search(
     bound: float,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, int, int, int]:
     """The layered label search of ``search._layered_search`` without critical points; labels
-    that cannot stay below ``bound`` (inf: none known) are dropped.
+    that cannot stay below ``bound`` (inf: none known) are dropped. ``to_end`` bounds the
+    length to B from each point; ``into_end`` is its arc into B (inf: none), the completion.
 
     Returns, per improvement of the best complete length at layer k: (k, length, last label);
     the label store (point, parent) to rebuild routes; the labels kept, the layers searched and
@@ -311,17 +313,18 @@ def layered_search(
     closest_d = to_end[start]
     k = 0
     while lo < hi and k <= kmax:
-        # Completions: straight on to B from every label of this layer.
+        # Completions: on to B along the arc into it (inf: none) from every label of this layer.
         layer_best = np.inf
         layer_label = -1
         for i in range(lo, hi):
             if dead[i]:
                 continue
             u = node[i]
-            d = to_end[u]
-            if es[i] + d <= lim_b and Ls[i] + d < layer_best:
-                layer_best = Ls[i] + d
+            last = into_end[u]
+            if es[i] + last <= lim_b and Ls[i] + last < layer_best:
+                layer_best = Ls[i] + last
                 layer_label = i
+            d = to_end[u]
             if d < closest_d:
                 closest_d = d
                 closest = u

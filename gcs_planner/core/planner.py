@@ -17,7 +17,7 @@ from gcs_planner.core.choose import choose as choose_route
 from gcs_planner.core.focus import focus, large
 from gcs_planner.core.probability import success_probability
 from gcs_planner.core.reach import build_reach_graph
-from gcs_planner.core.route import Route, evaluate_route
+from gcs_planner.core.route import Route
 from gcs_planner.core.search import straight_front
 from gcs_planner.core.seeding import certain_front, reliable_seeds
 from gcs_planner.errors import InfeasibleError
@@ -205,7 +205,9 @@ def _straight(scenario: Scenario, max_corrections: int | None):
     }
     if not res.front:
         return [], [], True, res.why_infeasible, stats
-    routes = [_with_probability(scenario, evaluate_route(scenario, fp.points)) for fp in res.front]
+    # Flown under the scenario's leg model (with R = 0 and climb limits, each leg's path angle
+    # and the limits' say on it), independently of the search's labels.
+    routes = [_with_probability(scenario, flown_route(scenario, fp.points)) for fp in res.front]
     statement = (
         "exact: the Pareto front of (length, corrections) over all simple feasible routes with "
         "straight legs (label search with dominance and bounds, elementarity by decremental "

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -36,13 +37,30 @@ class ReachGraph:
     length: np.ndarray  # (m,) float64, straight distance
     lim_v: np.ndarray  # (n,) float64: vertical arrival limit at each point, metres flown
     lim_h: np.ndarray  # (n,) float64
-    to_end: np.ndarray  # (n,) float64: straight distance to B (an admissible bound)
+    # (n,) float64: a lower bound on the length of any walk from each point to B (the straight
+    # distance, or the climb bound): what the searches prune with, never a leg they fly. The
+    # last leg of a route is an arc into B (``into_end``), which the leg model may forbid.
+    to_end: np.ndarray
     start: int
     end: int
 
     @property
     def n(self) -> int:
         return len(self.lim_v)
+
+    @cached_property
+    def into_end(self) -> np.ndarray:
+        """Per point, the length of its arc into B, inf where it has none: the completions of
+        the label searches. Not ``to_end``: with R = 0 and climb limits a direct leg to B that is
+        too steep cannot be flown (no helix), though ``to_end`` still bounds a walk through
+        other points from below. The arcs are the leg model's lower bounds (``_bounded``), so
+        whether a last leg can be flown is decided where every other leg's is."""
+        out = np.full(self.n, np.inf)
+        arcs = np.flatnonzero(self.target == self.end)
+        source = np.searchsorted(self.indptr, arcs, side="right") - 1
+        # (One arc per source into B; np.minimum.at would also take the least of several.)
+        np.minimum.at(out, source, self.length[arcs])
+        return out
 
     def degree(self) -> np.ndarray:
         return np.diff(self.indptr)

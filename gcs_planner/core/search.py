@@ -227,6 +227,7 @@ def _compiled_search(
         graph.lim_v,
         graph.lim_h,
         graph.to_end,
+        graph.into_end,
         is_v,
         graph.start,
         graph.end,
@@ -298,13 +299,16 @@ def _layered_search(
 
     deg = graph.degree()
     k = 0
+    into_end = graph.into_end
     while len(node) and k <= kmax:
         stats.layers += 1
-        # Completions: fly straight on to B from every label of this layer.
+        # Completions: fly on to B from every label of this layer, along its arc into B (the
+        # leg model may forbid one: a leg too steep for R = 0). ``to_end`` only bounds.
+        last_leg = into_end[node]
         d_end = graph.to_end[node]
-        ok = np.maximum(dv, dh) + d_end <= lim_b
+        ok = np.maximum(dv, dh) + last_leg <= lim_b
         if ok.any():
-            total = np.where(ok, L + d_end, np.inf)
+            total = np.where(ok, L + last_leg, np.inf)
             i = int(np.argmin(total))
             if total[i] < best:
                 best = float(total[i])
