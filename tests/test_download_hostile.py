@@ -12,7 +12,7 @@ import threading
 from pathlib import Path
 
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from gcs_planner.cli import main
@@ -23,14 +23,18 @@ from gcs_planner.mission.waypoints import loads_waypoints
 
 INT32_MAX = 2**31 - 1
 PX4 = mavlink.MAV_AUTOPILOT_PX4
+ARDUPILOT = mavlink.MAV_AUTOPILOT_ARDUPILOTMEGA
 
 
 class HostileVehicle:
     """Answers HEARTBEAT, MISSION_REQUEST_LIST and MISSION_REQUEST(_INT) as a vehicle does,
     with ``items`` as they are (``legacy`` items as float MISSION_ITEM, the rest _INT)."""
 
-    def __init__(self, items: list[MissionItem], legacy: frozenset[int] = frozenset()) -> None:
+    def __init__(
+        self, items: list[MissionItem], legacy: frozenset[int] = frozenset(), autopilot: int = PX4
+    ) -> None:
         self.items = items
+        self.autopilot = autopilot
         self.legacy = legacy
         self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         self.sock.bind(("127.0.0.1", 0))
@@ -58,7 +62,7 @@ class HostileVehicle:
     def _answer(self, msg: object, addr: object) -> None:
         kind = msg.get_type()  # type: ignore[attr-defined]
         if kind == "HEARTBEAT":
-            self._send(self.mav.heartbeat_encode(1, PX4, 0, 0, 3), addr)
+            self._send(self.mav.heartbeat_encode(1, self.autopilot, 0, 0, 3), addr)
         elif kind == "MISSION_REQUEST_LIST":
             self._send(self.mav.mission_count_encode(255, 190, len(self.items), 0), addr)
         elif kind in ("MISSION_REQUEST_INT", "MISSION_REQUEST"):
@@ -132,6 +136,11 @@ ITEMS = st.lists(
 )
 
 
+HOME = MissionItem(0, 0, 16, x=305_000_000, y=1_235_000_000, z=5.0)
+LEG = MissionItem(1, 3, 16, x=305_100_000, y=1_235_000_000, z=100.0)
+DO_JUMP = MissionItem(2, 2, 177, param1=1.0, param2=3.0)
+
+
 def _same(a: float, b: float) -> bool:
     return a == b or (math.isnan(a) and math.isnan(b))
 
@@ -141,11 +150,20 @@ def _same(a: float, b: float) -> bool:
     deadline=None,
     suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
 )
-@given(served=ITEMS, suffix=st.sampled_from([".json", ".waypoints"]))
-def test_download_writes_what_was_served_or_nothing(tmp_path_factory, capsys, served, suffix):
+@given(
+    served=ITEMS,
+    suffix=st.sampled_from([".json", ".waypoints"]),
+    autopilot=st.sampled_from([PX4, ARDUPILOT]),
+)
+# The writes a random draw rarely reaches: a valid ArduPilot mission to .waypoints and to JSON.
+@example(served=[HOME, LEG, DO_JUMP], suffix=".waypoints", autopilot=ARDUPILOT)
+@example(served=[HOME, LEG, DO_JUMP], suffix=".json", autopilot=PX4)
+def test_download_writes_what_was_served_or_nothing(
+    tmp_path_factory, capsys, served, suffix, autopilot
+):
     served = [it.with_seq(k) for k, it in enumerate(served)]
     out: Path = tmp_path_factory.mktemp("dl") / f"mission{suffix}"
-    vehicle = HostileVehicle(served)
+    vehicle = HostileVehicle(served, autopilot=autopilot)
     try:
         conn = f"udpout:127.0.0.1:{vehicle.port}"
         code = main(["download", "--connect", conn, "--quiet", "--timeout", "0.5", "--out",
@@ -154,6 +172,12 @@ def test_download_writes_what_was_served_or_nothing(tmp_path_factory, capsys, se
         vehicle.close()
     captured = capsys.readouterr()
     bad = [it.seq for it in served if not acceptable(it)]
+    as_waypoints = suffix == ".waypoints"
+    # ArduPilot's item 0 is home: in a .waypoints file it is row 0, which must be a place
+    # (asked once every item is valid).
+    home_bad = served and not is_place(served[0])
+    if not bad and as_waypoints and autopilot == ARDUPILOT and home_bad:
+        bad = [0]
     if bad:
         assert code == 4, captured
         assert not out.exists()
@@ -161,23 +185,36 @@ def test_download_writes_what_was_served_or_nothing(tmp_path_factory, capsys, se
         assert "\n" not in err and "Traceback" not in err
         assert f"seq {bad[0]}," in err, err
         return
+    if as_waypoints and autopilot == PX4:
+        # A PX4 mission is not written as .waypoints (readers disagree on its row 0): refused
+        # once the items are in, and nothing written.
+        assert code == 2 and not out.exists(), captured
+        assert "use --out FILE.json" in captured.err and "\n" not in captured.err.strip()
+        return
     assert code == 0, captured.err
-    if suffix == ".json":
+    if not as_waypoints:
         got = json.loads(out.read_text())["items"]
         assert len(got) == len(served)
         for row, it in zip(got, served, strict=True):
             for name, value in row.items():
                 want = getattr(it, name)
                 assert _same(float(value), float(want)), (name, value, want)
-    else:
-        read = loads_waypoints(out.read_text(), "px4")
-        assert abs(read.home[0]) <= 90 and abs(read.home[1]) <= 180  # row 0 is a real place
-        got_items = read.items
-        assert len(got_items) == len(served)
-        for g, it in zip(got_items, served, strict=True):
-            assert acceptable(g)
-            # .waypoints keeps 6 decimals of params and altitude: equal within them.
-            assert not item_differences(it, g, Tolerance(param_abs=1e-6, param_rel=1e-6)), (g, it)
+        return
+    read = loads_waypoints(out.read_text(), "ardupilot")
+    assert len(read.items) == max(1, len(served))  # row 0 is home even with no items
+    if served:
+        home = served[0]
+        assert read.home[0] * 1e7 == pytest.approx(home.x, abs=1) and read.home[2] == pytest.approx(
+            home.z, abs=1e-6
+        )
+    for g, it in zip(read.items[1:], served[1:], strict=True):
+        assert acceptable(g)
+        # .waypoints keeps 6 decimals of params and altitude: equal within them.
+        assert not item_differences(it, g, Tolerance(param_abs=1e-6, param_rel=1e-6)), (g, it)
+
+
+def is_place(it: MissionItem) -> bool:
+    return it.command in (16, 17, 18, 19, 21, 22, 31) and it.frame in (0, 3, 5, 6)
 
 
 @pytest.mark.parametrize("lat", [math.nan, math.inf, 1e30, 300.0])

@@ -12,7 +12,7 @@ from gcs_planner.cli.upload import add_link_arguments, connect_client
 from gcs_planner.errors import InputError, LinkError
 from gcs_planner.link.validate import GLOBAL_FRAMES, POSITION_COMMANDS
 from gcs_planner.mission.items import MissionItem
-from gcs_planner.mission.waypoints import dumps_items
+from gcs_planner.mission.waypoints import PX4_REFUSED, dumps_items
 
 
 def _items_json(items: list[MissionItem], firmware: str) -> str:
@@ -40,15 +40,37 @@ def run(args: argparse.Namespace) -> int:
         client.link.close()
     if suffix == ".json":
         write_atomic(out, _items_json(items, firmware))
+    elif firmware == "px4":
+        # The export's rule, for the same reason: readers disagree on a PX4 file's row 0.
+        raise InputError(
+            PX4_REFUSED.replace("use --format plan (QGroundControl .plan)", "use --out FILE.json")
+            + f"; nothing was written to {out}",
+            file=str(out),
+            field="--out",
+        )
     else:
-        write_atomic(out, dumps_items(items, firmware, _home(items, firmware)))
+        try:
+            home = _home(items, firmware)
+        except LinkError as exc:
+            raise LinkError(f"{exc}; nothing was written to {out}") from None
+        write_atomic(out, dumps_items(items, firmware, home))
     print(f"downloaded {len(items)} items from system {client.target_system} to {out}")
     return 0
 
 
 def _home(items: list[MissionItem], firmware: str) -> tuple[float, float, float]:
-    """Row 0 of a .waypoints file is home. ArduPilot sends it as item 0; PX4 has no home item,
-    so the first position item's stands in for it (what a reader of the file sees as home)."""
+    """Row 0 of a .waypoints file is home. ArduPilot sends it as item 0 (so item 0 must be a
+    place: any other item there would be lost, or a parameter read as a latitude); PX4 has no
+    home item, so the first position item's stands in for it (what a reader sees as home)."""
+    if firmware == "ardupilot" and items:
+        home = items[0]
+        if home.command not in POSITION_COMMANDS or home.frame not in GLOBAL_FRAMES:
+            raise LinkError(
+                "the vehicle sent an invalid mission item: seq 0, field 'command': ArduPilot's "
+                f"item 0 is home, a position, but it is command {home.command} in frame "
+                f"{home.frame}"
+            )
+        return (home.x / 1e7, home.y / 1e7, home.z)
     # The first item with a position: a DO_ item's x/y are parameters, not a latitude.
     for it in items:
         if it.command in POSITION_COMMANDS and it.frame in GLOBAL_FRAMES:
