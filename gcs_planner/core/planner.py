@@ -14,6 +14,7 @@ from dataclasses import dataclass, field, replace
 from gcs_planner.core.bnb import DEFAULT_MAX_LABELS, PROB_EPS, bnb_front, flown_route
 from gcs_planner.core.budget import DEFAULT_TIME_LIMIT, Budget, ProgressCallback
 from gcs_planner.core.choose import choose as choose_route
+from gcs_planner.core.diagnose import why_infeasible
 from gcs_planner.core.focus import focus, large
 from gcs_planner.core.probability import success_probability
 from gcs_planner.core.reach import build_reach_graph
@@ -204,7 +205,9 @@ def _straight(scenario: Scenario, max_corrections: int | None):
         "critical_points": len(res.stats.critical),
     }
     if not res.front:
-        return [], [], True, res.why_infeasible, stats
+        model = scenario.vehicle.describe()
+        why = f"no feasible route with {model} (exhaustive search): {res.why_infeasible}"
+        return [], [], True, why, stats
     # Flown under the scenario's leg model (with R = 0 and climb limits, each leg's path angle
     # and the limits' say on it), independently of the search's labels.
     routes = [_with_probability(scenario, flown_route(scenario, fp.points)) for fp in res.front]
@@ -305,7 +308,14 @@ def _branch_and_bound(
     heading_free = not scenario_leg_model(scenario).carries_heading
     if not res.front:
         if res.optimal:
-            return [], [], True, f"no feasible route with {model} (exhaustive search)", stats
+            # The reason, from the scenario the search ran over (its points keep their ids).
+            why = why_infeasible(
+                searched,
+                graph,
+                max_corrections,
+                probability=use_probability,
+            )
+            return [], [], True, f"no feasible route with {model} (exhaustive search): {why}", stats
         return (
             [],
             [],

@@ -28,6 +28,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from gcs_planner.core.diagnose import why_infeasible
 from gcs_planner.core.reach import (
     ReachGraph,
     arrival_limits_m,
@@ -64,7 +65,7 @@ class SearchStats:
 class FrontResult:
     front: tuple[FrontPoint, ...]
     stats: SearchStats
-    # When the front is empty: the diagnosis of why (see explain_infeasible).
+    # When the front is empty: the diagnosis of why (``diagnose.why_infeasible``).
     why_infeasible: str | None = None
     # The reach graph over every point, when the search made it or was given it (None when it
     # searched a focused subset only): a caller that needs it too need not build it again.
@@ -122,7 +123,14 @@ def straight_front(
         critical.extend(repeated)
     stats.critical = critical
     stats.seconds = time.perf_counter() - t0
-    why = None if front else explain_infeasible(scenario, graph, closest)
+    why = None
+    if not front:
+        # A search bounded by ``upper_bound`` proves only that no route is that short.
+        why = (
+            why_infeasible(scenario, graph, max_corrections, simple_infeasible=True)
+            if math.isinf(upper_bound)
+            else f"no feasible route of at most {upper_bound:,.1f} m"
+        )
     return FrontResult(tuple(front), stats, why, graph)
 
 
@@ -512,20 +520,3 @@ def staircase(
     keep = np.zeros(len(order), dtype=bool)
     keep[order] = t < prev
     return keep
-
-
-def explain_infeasible(scenario: Scenario, graph: ReachGraph, closest: int) -> str:
-    """Why no route exists: how close to B any feasible chain gets, and what B demands."""
-    p = scenario.params
-    lim_b = graph.lim_v[graph.end]
-    d = float(graph.to_end[closest])
-    where = "A itself" if closest == graph.start else f"point {scenario.ids[closest]}"
-    first_hops = int(graph.degree()[graph.start])
-    msg = (
-        f"no feasible route from A to B: the closest any feasible chain of corrections gets to B "
-        f"is {where}, {d:,.0f} m from B, but B must be reached within theta={p.theta:g} "
-        f"(at most {lim_b:,.0f} m flown since the last reset of each error, delta={p.delta:g})"
-    )
-    if first_hops == 0:
-        msg += "; no correction point can be reached from A within its limits"
-    return msg
