@@ -211,9 +211,14 @@ def _straight(scenario: Scenario, max_corrections: int | None):
     # Flown under the scenario's leg model (with R = 0 and climb limits, each leg's path angle
     # and the limits' say on it), independently of the search's labels.
     routes = [_with_probability(scenario, flown_route(scenario, fp.points)) for fp in res.front]
+    v = scenario.vehicle
+    # With R = 0 the airplane model's climb limits rule too-steep legs out: say they held.
+    legs = "straight legs"
+    if v.climb_limited and scenario.leg_model == "airplane":
+        legs += f" within climb {v.max_climb_angle:g} deg and descent {v.max_descent_angle:g} deg"
     statement = (
-        "exact: the Pareto front of (length, corrections) over all simple feasible routes with "
-        "straight legs (label search with dominance and bounds, elementarity by decremental "
+        f"exact: the Pareto front of (length, corrections) over all simple feasible routes with "
+        f"{legs} (label search with dominance and bounds, elementarity by decremental "
         "state-space relaxation)"
     )
     return routes, [r.length for r in routes], True, statement, stats
