@@ -88,7 +88,9 @@ def test_write_mission_refuses_a_risky_route_unless_allowed(tmp_path):
         write_mission(result, tmp_path / "m.plan")
     assert not (tmp_path / "m.plan").exists()
     with pytest.warns(RiskyRouteWarning, match="0.8000"):
-        out = write_mission(result, tmp_path / "m.waypoints", allow_risky=True, firmware="ardupilot")
+        out = write_mission(
+            result, tmp_path / "m.waypoints", allow_risky=True, firmware="ardupilot"
+        )
     assert out.exists()
     safe = plan(scenario)  # with the probability objective the certain route is on the front
     assert safe.threshold_met and safe.route.probability == 1.0
