@@ -1,65 +1,63 @@
-"""The aircraft: a point-mass fixed wing at its airspeed, turning at most at its bank limit and
-climbing or sinking at most at its flight-path-angle limits (gcs_planner.vehicle.VehicleProfile).
+"""The aircraft: a point-mass fixed wing flying through a moving air mass.
 
-No wind, no roll or pitch dynamics: the bank and the climb rate the autopilot asks for are flown
-at once, within the limits. So the aircraft never turns tighter than its turning radius
-R = V^2 / (g tan phi) and never climbs steeper than its climb angle: the two limits the planner's
-legs must respect, and the ones a dry run must be able to catch being broken.
+It holds an equivalent airspeed (EAS, what both autopilots hold: ArduPlane AIRSPEED_CRUISE, PX4
+FW_AIRSPD_TRIM) and so flies through the air at the true airspeed TAS = EAS * EAS2TAS(altitude)
+(sim/atmosphere.py, ISA). Its heading is where its nose points in the air; its course is where
+it goes over the ground: the air velocity plus the wind (sim/wind.py). The autopilot asks for a
+lateral acceleration (L1 and npfg both compute one from the ground velocity) and a climb rate;
+the aircraft flies the bank atan(a / g), clipped to the autopilot's roll limit (ArduPlane
+ROLL_LIMIT_DEG, PX4 FW_R_LIM), which turns its heading at g tan(bank) / TAS, and the climb rate
+clipped to the autopilot's climb and sink rates (ArduPlane TECS_CLMB_MAX / TECS_SINK_MAX, PX4
+in missions FW_T_CLMB_R_SP / FW_T_SINK_R_SP). No roll or pitch dynamics: what is asked is flown
+at once, within those limits.
 
-A step integrates the horizontal motion exactly on the arc of constant turn rate, so a coarse
-fixed step (0.5 s at 25 m/s: 12.5 m) flies a circle of radius R as a circle, not as a polygon.
+A step integrates the air-relative motion exactly on the arc of constant heading rate and adds
+the wind's drift over the step, so a coarse fixed step (0.5 s at 25 m/s: 12.5 m) flies a circle
+in still air as a circle, and its trochoid in a steady wind as the trochoid.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
-from gcs_planner.vehicle import G, VehicleProfile
+from gcs_planner.vehicle import G
 
-# With the angle limits at 90 degrees ("unlimited", the contest's model) the aircraft still cannot
-# fly straight up: it keeps this much of its airspeed horizontal.
+# With unlimited climb (the contest's model) the aircraft still cannot fly straight up: it keeps
+# this much of its airspeed horizontal.
 STEEPEST_DEG = 89.0
 
 
 @dataclass(frozen=True)
 class Envelope:
-    """What the flight model enforces, derived from the profile at the current airspeed."""
+    """What the flight model enforces: the autopilot's limits at the current airspeed."""
 
-    airspeed: float  # m/s
-    bank_limit_deg: float  # 90 = turns of radius 0 (straight-leg plans)
+    airspeed: float  # m/s, equivalent (EAS)
+    bank_limit_deg: float  # >= 90: turns on the spot (straight-leg plans, R = 0)
     climb_rate: float  # m/s, > 0
     sink_rate: float  # m/s, > 0
-    # rad/s; inf when the aircraft turns on the spot (turning radius 0). Derived, kept as a
-    # field because the guidance reads it every step.
-    max_turn_rate: float = field(init=False)
-
-    def __post_init__(self) -> None:
-        rate = math.inf
-        if self.bank_limit_deg < 90.0:
-            rate = G * math.tan(math.radians(self.bank_limit_deg)) / self.airspeed
-        object.__setattr__(self, "max_turn_rate", rate)
 
     @property
-    def min_radius(self) -> float:
-        rate = self.max_turn_rate
-        return 0.0 if math.isinf(rate) else self.airspeed / rate
+    def free_turn(self) -> bool:
+        return self.bank_limit_deg >= 90.0
 
+    @property
+    def max_lateral_accel(self) -> float:
+        return math.inf if self.free_turn else G * math.tan(math.radians(self.bank_limit_deg))
 
-def envelope_of(profile: VehicleProfile, airspeed: float | None = None) -> Envelope:
-    """The profile's limits at ``airspeed`` (default its cruise airspeed). The bank limit is the
-    bank that turns on the profile's radius at cruise: a faster aircraft turns wider."""
-    v = float(airspeed or profile.cruise_airspeed)
-    bank = profile.bank_angle if profile.turn_radius > 0 else 90.0
-    climb = min(profile.max_climb_angle, STEEPEST_DEG)
-    sink = min(profile.max_descent_angle, STEEPEST_DEG)
-    return Envelope(v, bank, v * math.sin(math.radians(climb)), v * math.sin(math.radians(sink)))
+    def min_radius(self, tas: float | None = None) -> float:
+        """The tightest circle through the air at the roll limit, at ``tas`` (default EAS)."""
+        if self.free_turn:
+            return 0.0
+        v = self.airspeed if tas is None else tas
+        return v * v / self.max_lateral_accel
 
 
 @dataclass
 class AircraftState:
-    """Position (local frame, m: x east, y north, z up), course (rad, counter-clockwise from
-    east), and what it flew last step: bank (deg, right wing down positive) and climb rate."""
+    """Position (local frame, m: x east, y north, z up), heading (through the air) and course
+    (over the ground), both rad counter-clockwise from east, and what it flew last step: bank
+    (deg, right wing down positive), climb rate, true airspeed and ground speed."""
 
     x: float
     y: float
@@ -68,30 +66,64 @@ class AircraftState:
     t: float = 0.0
     bank_deg: float = 0.0
     climb_rate: float = 0.0
+    heading: float | None = None
+    tas: float = 0.0
+    ground_speed: float = 0.0
+
+    def __post_init__(self) -> None:
+        if self.heading is None:
+            self.heading = self.course
 
 
 def step(
-    s: AircraftState, env: Envelope, turn_rate: float, climb_rate: float, dt: float
+    s: AircraftState,
+    env: Envelope,
+    lateral_accel: float,
+    climb_rate: float,
+    dt: float,
+    wind: tuple[float, float] = (0.0, 0.0),
+    eas2tas: float = 1.0,
+    heading: float | None = None,
 ) -> AircraftState:
-    """Fly ``dt`` seconds asking for ``turn_rate`` (rad/s, counter-clockwise positive) and
-    ``climb_rate`` (m/s); both are clipped to the envelope. ``turn_rate`` may be inf for an
-    aircraft without turn limit: the caller then sets the course itself."""
+    """Fly ``dt`` seconds asking for ``lateral_accel`` (m/s^2, positive to the left: a
+    counter-clockwise turn) and ``climb_rate`` (m/s), both clipped to the envelope, through air
+    moving at ``wind`` (east, north m/s) at EAS2TAS ``eas2tas``. An aircraft without a turn
+    limit (``env.free_turn``) takes ``heading`` as given instead."""
+    v = env.airspeed * eas2tas
     vz = min(max(climb_rate, -env.sink_rate), env.climb_rate)
-    vh = math.sqrt(max(env.airspeed * env.airspeed - vz * vz, 0.0))
-    limit = env.max_turn_rate
-    w = turn_rate if math.isinf(limit) else min(max(turn_rate, -limit), limit)
-    if math.isinf(w) or abs(w) < 1e-9:
-        w = 0.0 if math.isinf(w) else w
-        x = s.x + vh * dt * math.cos(s.course)
-        y = s.y + vh * dt * math.sin(s.course)
-        course = s.course
+    vh = math.sqrt(max(v * v - vz * vz, 0.0))
+    psi0 = s.heading if s.heading is not None else s.course
+    if env.free_turn:
+        a = 0.0
+        psi0 = psi0 if heading is None else heading
+        w = 0.0
     else:
-        course = s.course + w * dt
-        x = s.x + vh / w * (math.sin(course) - math.sin(s.course))
-        y = s.y - vh / w * (math.cos(course) - math.cos(s.course))
-    # Coordinated turn: tan(bank) = V w / g; a counter-clockwise turn is a left bank.
-    bank = -math.degrees(math.atan(env.airspeed * w / G))
-    return AircraftState(x, y, s.z + vz * dt, _wrap(course), s.t + dt, bank, vz)
+        limit = env.max_lateral_accel
+        a = min(max(lateral_accel, -limit), limit)
+        w = a / v  # g tan(bank) / TAS with tan(bank) = a / g
+    wx, wy = wind
+    if abs(w) < 1e-9:
+        psi1 = psi0
+        dx = vh * dt * math.cos(psi0)
+        dy = vh * dt * math.sin(psi0)
+    else:
+        psi1 = psi0 + w * dt
+        dx = vh / w * (math.sin(psi1) - math.sin(psi0))
+        dy = -vh / w * (math.cos(psi1) - math.cos(psi0))
+    gx, gy = vh * math.cos(psi1) + wx, vh * math.sin(psi1) + wy
+    bank = -math.degrees(math.atan(a / G))  # a counter-clockwise turn is a left bank
+    return AircraftState(
+        s.x + dx + wx * dt,
+        s.y + dy + wy * dt,
+        s.z + vz * dt,
+        math.atan2(gy, gx),
+        s.t + dt,
+        bank,
+        vz,
+        _wrap(psi1),
+        v,
+        math.hypot(gx, gy),
+    )
 
 
 def _wrap(a: float) -> float:

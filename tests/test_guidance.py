@@ -1,5 +1,6 @@
-"""The mock vehicle's autopilot (sim/guidance.py) on small missions: the aircraft keeps its
-envelope, and each flavour reaches, circles and leaves items as its autopilot does."""
+"""The mock vehicle's autopilot (sim/guidance.py) on small missions: the aircraft keeps the
+autopilot's envelope (its roll limit and its climb and sink rates, not the planner's), and each
+flavour reaches, circles and leaves items as its autopilot does."""
 
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ from gcs_planner.mission.georef import LocalFrame
 from gcs_planner.mission.items import MissionItem
 from gcs_planner.scenario.model import Origin
 from gcs_planner.vehicle import VehicleProfile
+from sim.atmosphere import eas2tas
 from sim.guidance import AutopilotParams, fly
 
 FRAME = LocalFrame(Origin(30.5, 123.5, 0.0))
@@ -33,22 +35,34 @@ def mission(*specs) -> list[MissionItem]:
 
 
 def turn_radii(flight) -> np.ndarray:
-    v = flight.airspeed
+    """The radius each sample turns on through the air: true airspeed squared over g tan(bank)."""
+    v = flight.tas
     bank = np.radians(np.abs(flight.bank))
     with np.errstate(divide="ignore"):
         return np.where(bank > 1e-9, v * v / (9.80665 * np.tan(bank)), np.inf)
 
 
 @pytest.mark.parametrize("flavour", ["ardupilot", "px4"])
-def test_a_sharp_turn_is_flown_no_tighter_than_the_turning_radius(flavour):
+def test_a_sharp_turn_is_flown_at_the_autopilots_roll_limit_no_tighter(flavour):
+    """The autopilot banks up to its roll limit (ROLL_LIMIT_DEG 45, FW_R_LIM 50), not to the bank
+    of the planner's radius: a sharp corner is turned on V^2 / (g tan(limit)), tighter than the
+    200 m plan, never tighter than that."""
     items = mission((16, (0, 0, 1000), {"param2": 1}), (16, (3000, 0, 1000), {"param2": 1}),
                     (16, (3000, 3000, 1000), {"param2": 1}))  # fmt: skip
-    f = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour=flavour,
-            params=AutopilotParams(flavour, acceptance_radius=1.0))  # fmt: skip
+    ap = AutopilotParams(flavour, acceptance_radius=1.0)
+    f = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour=flavour, params=ap)
     assert f.ended == "mission end"
-    assert turn_radii(f).min() >= PROFILE.turn_radius * (1 - 1e-9)
-    # It turned 90 degrees: it flew the corner, wider than the chord corner.
-    assert f.cumulative[-1] > 6000.0 - 2 * 200.0 + math.pi / 2 * 200.0 - 1.0
+    limit = {"ardupilot": 45.0, "px4": 50.0}[flavour]
+    assert np.abs(f.bank).max() == pytest.approx(limit)
+    tightest = f.tas**2 / (9.80665 * math.tan(math.radians(limit)))
+    assert np.all(turn_radii(f) >= tightest * (1 - 1e-9))
+    assert turn_radii(f).min() < PROFILE.turn_radius / 2
+    if flavour == "ardupilot":
+        # It flew up to the finish line, then turned: wider than the chord corner.
+        assert f.cumulative[-1] > 6000.0 - 2 * 100.0 + math.pi / 2 * 100.0 - 1.0
+    else:
+        # PX4 switched ~59 m early (npfg's switch distance) and cut the corner.
+        assert f.cumulative[-1] < 6000.0 - 2 * 59.0 + math.pi / 2 * 59.0 + 1.0
 
 
 @pytest.mark.parametrize("flavour", ["ardupilot", "px4"])
@@ -97,7 +111,9 @@ def test_arduplane_loiter_turns_counts_its_turns_and_leaves_towards_the_next_way
     r = np.linalg.norm(f.xyz[during, :2] - centre, axis=1)
     laps = np.sum(np.abs(np.diff(np.unwrap(f.course[during])))) / (2 * math.pi)
     assert laps >= 2.0
-    assert np.median(r) == pytest.approx(300.0, rel=0.05)
+    # ArduPlane scales the loiter radius by EAS2TAS^2 (NAVL1_LIM_BANK = 0): ~321 m at 700-1000 m.
+    scaled = 300.0 * np.array([eas2tas(z) ** 2 for z in f.xyz[during, 2]])
+    assert np.median(r / scaled) == pytest.approx(1.0, rel=0.05)
     assert f.xyz[during, 2][-1] == pytest.approx(700.0, abs=5.0)
     # It left heading for the next waypoint: within 10 degrees, plus 10 per lap flown
     # (ArduPlane widens the window so that wind cannot keep it circling for ever).
@@ -125,7 +141,9 @@ def test_loiter_to_altitude_climbs_on_the_circle_then_leaves(flavour):
     # Counter-clockwise (negative radius): the course increases.
     assert np.sum(np.diff(np.unwrap(f.course[during]))) > 2 * math.pi
     r = np.linalg.norm(f.xyz[during, :2] - np.array([3000.0, 0.0]), axis=1)
-    assert np.median(r) == pytest.approx(250.0, rel=0.05)
+    # ArduPlane flies the radius scaled to the altitude (EAS2TAS^2), PX4 the radius as given.
+    scale = [eas2tas(z) ** 2 if flavour == "ardupilot" else 1.0 for z in f.xyz[during, 2]]
+    assert np.median(r / (250.0 * np.array(scale))) == pytest.approx(1.0, rel=0.05)
 
 
 def test_px4_skips_loiter_turns_and_says_so():
@@ -154,8 +172,9 @@ def test_do_change_speed_changes_the_airspeed_and_widens_the_turns():
                     (16, (3000, 3000, 1000), {"param2": 1}))  # fmt: skip
     f = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour="ardupilot")
     assert f.airspeed.max() == pytest.approx(35.0)
-    # Same bank limit, faster: R = V^2 / (g tan phi) grows by (35/25)^2.
-    assert turn_radii(f).min() >= 200.0 * (35.0 / 25.0) ** 2 * (1 - 1e-6)
+    # Same roll limit (45 deg), faster: the tightest turn V^2 / (g tan 45) grows by (35/25)^2.
+    fast = f.airspeed > 30.0
+    assert turn_radii(f)[fast].min() >= (35.0 * eas2tas(1000.0)) ** 2 / 9.80665 * (1 - 1e-6)
 
 
 @pytest.mark.parametrize("heading_required", [0.0, 1.0])

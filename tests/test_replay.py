@@ -57,14 +57,25 @@ def line_scenario(kinds: str, unreliable: str = "", spacing: float = 12_000.0) -
     )
 
 
-def mission_through(points_xyz: np.ndarray, *, home: bool, relative: bool = False) -> list:
-    """Waypoints through local points, as MAVLink items (an ArduPilot-style home at seq 0)."""
+def mission_through(
+    points_xyz: np.ndarray, *, home: bool, relative: bool = False, run_out: float = 1000.0
+) -> list:
+    """Waypoints through local points, as MAVLink items (an ArduPilot-style home at seq 0), and a
+    run-out waypoint ``run_out`` metres beyond the last point on the last leg's heading: a
+    fixed-wing PX4 switches to the next item at npfg's switch distance (~57-70 m before a
+    waypoint), so without one it never overflies the last point."""
     frame = LocalFrame(ORIGIN)
     items: list[MissionItem] = []
     lat, lon, alt = frame.to_geodetic(*points_xyz[0])
     if home:
         items.append(MissionItem(0, 0, 16, x=round(lat * 1e7), y=round(lon * 1e7), z=alt))
     items.append(MissionItem(len(items), 2, 178, param2=25.0))
+    if run_out > 0 and len(points_xyz) > 1:
+        last = np.asarray(points_xyz[-1], float)
+        d = last - np.asarray(points_xyz[-2], float)
+        d[2] = 0.0
+        d = d / (np.linalg.norm(d) or 1.0)
+        points_xyz = np.vstack([points_xyz, last + run_out * d])
     for p in points_xyz:
         la, lo, al = frame.to_geodetic(*p)
         z = al - alt if relative else al
@@ -163,6 +174,16 @@ def test_a_mission_that_stops_short_of_b_does_not_arrive():
     rep = replay(mission_through(sc.xyz[:3], home=False), sc)
     assert not rep.arrived and not rep.run.reached_b
     assert "from B" in rep.run.lost_reason
+
+
+def test_px4_never_overflies_a_last_waypoint_it_switches_away_from():
+    """A PX4 mission ending on B: PX4 accepts B at npfg's switch distance (~67 m at 5 km, 32 m/s
+    true) and the flight ends there, outside the capture radius; ArduPlane flies up to it."""
+    sc = line_scenario("VH")
+    px4 = replay(mission_through(sc.xyz, home=False, run_out=0.0), sc)
+    assert not px4.run.reached_b and px4.run.miss_b > 50.0
+    ardu = replay(mission_through(sc.xyz, home=True, run_out=0.0), sc, home_at_seq0=True)
+    assert ardu.run.reached_b
 
 
 def test_passing_close_to_a_landmark_corrects_there_once():

@@ -1,0 +1,524 @@
+"""What every fixed-wing navigator in mode AUTO does alike: the mission sequence, L1-type
+lateral guidance on the ground velocity, circling, the altitude target, one step of flight.
+
+The rules where ArduPlane and PX4 differ (when a waypoint is reached, where the altitude ramp
+ends, how a loiter is sized, finished and left) are hooks each autopilot's navigator fills
+(sim/navigators/arduplane.py, sim/navigators/px4.py), so each rule lives in one place.
+
+Lateral guidance is L1 (Park, Deyst, How 2004) as ArduPlane's AP_L1_Control::update_waypoint
+computes it, on the GROUND velocity (its _groundspeed_vector): lateral acceleration
+K Vg^2 / L1 sin(Nu), K = 4 damping^2, L1 = damping period Vg / pi (NAVL1_PERIOD 17 s,
+NAVL1_DAMPING 0.75), Nu the intercept angle asin(xtrack / L1) (limited to 45 degrees) plus the
+track-angle error of the ground course; behind the previous waypoint and farther than L1 from it
+the aircraft heads for it first. PX4's npfg follows the line with the same structure on the
+ground velocity too (npfg.cpp NPFG::guideToPath); its own gains are not modelled, its switch
+distance is (sim/navigators/px4.py).
+
+The navigator steers its ESTIMATE of where it is (``estimate``: the true position plus the INS
+error of sim/ins.py when one is given), never the truth; the aircraft (sim/aircraft.py) flies
+the truth through the wind (sim/wind.py).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from sim import atmosphere
+from sim.aircraft import AircraftState, Envelope, step
+from sim.navigators.params import AutopilotParams
+from sim.wind import WindField
+
+NAV_WAYPOINT = 16
+NAV_LOITER_UNLIM = 17
+NAV_LOITER_TURNS = 18
+NAV_LOITER_TIME = 19
+NAV_RETURN_TO_LAUNCH = 20
+NAV_LAND = 21
+NAV_TAKEOFF = 22
+NAV_LOITER_TO_ALT = 31
+DO_CHANGE_SPEED = 178
+LOITERS = frozenset({NAV_LOITER_UNLIM, NAV_LOITER_TURNS, NAV_LOITER_TIME, NAV_LOITER_TO_ALT})
+
+# ArduPlane defaults NAVL1_PERIOD, NAVL1_DAMPING (the guidance of both navigators).
+L1_PERIOD_S = 17.0
+L1_DAMPING = 0.75
+# TECS altitude time constant (ArduPlane TECS_TIME_CONST, PX4 FW_T_ALT_TC): 5 s.
+ALTITUDE_TIME_CONSTANT_S = 5.0
+# On a straight leg where the aircraft is settled on the track and its glide slope in a steady
+# air mass, nothing changes but the position, so the step grows COARSE_STEPS times: the long
+# legs of a 170 km mission cost little, the turns and the gusts keep the fine step.
+DEFAULT_STEP_S = 0.5
+COARSE_STEPS = 8
+
+
+@dataclass(frozen=True)
+class NavCommand:
+    """One mission item the guidance acts on, its position in the local frame when it has one."""
+
+    seq: int
+    command: int
+    pos: tuple[float, float, float] | None
+    params: tuple[float, float, float, float]
+
+
+@dataclass(frozen=True)
+class Event:
+    """Something the autopilot did: ``kind`` "reached", "skipped", "altitude" or "end";
+    ``sample`` the index of the track sample at that moment."""
+
+    t: float
+    sample: int
+    seq: int
+    kind: str
+    text: str = ""
+
+
+def wrap(a: float) -> float:
+    return (a + math.pi) % (2 * math.pi) - math.pi
+
+
+class Navigator:
+    """The state of mode AUTO over one flight. Subclasses are the autopilots."""
+
+    flavour = ""
+
+    def __init__(
+        self,
+        commands: list[NavCommand],
+        airspeed: float,
+        ap: AutopilotParams,
+        start: AircraftState,
+        dt: float,
+        *,
+        free_turn: bool = False,
+        wind: WindField | None = None,
+        alt_offset: float = 0.0,
+        ins: object | None = None,
+    ) -> None:
+        self.cmds = commands
+        self.cruise = airspeed
+        self.ap = ap
+        self.free_turn = free_turn
+        self.dt = dt
+        self.wind = wind
+        self.alt_offset = alt_offset
+        # The INS (sim/ins.py): offset(state) -> (dx, dy, dz) of the estimate from the truth;
+        # observe(before, after) after every step (corrections happen there, in the truth).
+        self.ins = ins
+        self.env = self._envelope(airspeed)
+        self.s = start
+        if self.s.tas <= 0:
+            self.s.tas = self.s.ground_speed = airspeed * self.eas2tas(start.z)
+        self.samples: list[tuple] = []
+        self.events: list[Event] = []
+        self.notes: list[str] = []
+        self.k = -1  # index of the active command
+        self.est = (start.x, start.y, start.z)
+        self.prev = self.est
+        self.phase = "track"  # "track" | "loiter" (circling: a loiter item, or PX4 for altitude)
+        self.loiter_sum = 0.0
+        self.loiter_started = False
+        self.loiter_t0 = 0.0
+        self.min_dist = math.inf
+        self.hold_alt: float | None = None
+        self.ended = ""
+        self.settled = False  # on the track and the glide slope (see COARSE_STEPS)
+        self.alt_error = 0.0
+        self._estimate()
+
+    # Hooks: each autopilot's rules --------------------------------------------------------
+    def acceptance(self, c: NavCommand) -> float:
+        """Horizontal distance within which waypoint ``c`` counts as reached."""
+        raise NotImplementedError
+
+    def skips(self, c: NavCommand) -> str:
+        """Why this autopilot does not fly item ``c`` as a position ("" when it does)."""
+        return ""
+
+    def point_leg_without_finish_line(self, c: NavCommand) -> bool:
+        """A leg starting on its own waypoint has no "passed" line on this autopilot."""
+        return False
+
+    def glide_end(self, acceptance: float) -> float:
+        """How far before the waypoint the altitude ramp reaches the waypoint's altitude."""
+        return 0.0
+
+    def waypoint_altitude_ok(self, dz: float) -> bool:
+        """A waypoint reached horizontally ``dz`` m off its altitude counts as reached."""
+        return True
+
+    def loiter_radius(self, radius: float) -> float:
+        """The radius the autopilot circles for a commanded ``radius``, here and now."""
+        return radius
+
+    def loiter_done(self, c: NavCommand, laps: float, dz: float) -> bool:
+        raise NotImplementedError
+
+    def exit_heading_ok(self, c: NavCommand, laps: float) -> bool:
+        raise NotImplementedError
+
+    def exit_point(self, c: NavCommand, radius: float, direction: int) -> tuple | None:
+        """Where the next leg starts after loiter ``c`` (None: at the loiter's position)."""
+        return None
+
+    def loiter_approach_climb(self, c: NavCommand, dist: float, radius: float) -> float | None:
+        """The climb rate on the way to a loiter, or None for "climb to its altitude"."""
+        return None
+
+    def on_loiter_started(self, c: NavCommand) -> None:
+        """Called once when the aircraft is on the loiter's circle."""
+
+    # The air and the estimate -------------------------------------------------------------
+    def _envelope(self, airspeed: float) -> Envelope:
+        bank = 90.0 if self.free_turn else float(self.ap.bank_limit or 45.0)
+        climb = float(self.ap.climb_rate or 5.0)
+        sink = float(self.ap.sink_rate or 5.0)
+        return Envelope(float(airspeed), bank, climb, sink)
+
+    def eas2tas(self, z: float) -> float:
+        return atmosphere.eas2tas(z + self.alt_offset)
+
+    def _estimate(self) -> None:
+        s = self.s
+        if self.ins is None:
+            self.est = (s.x, s.y, s.z)
+        else:
+            dx, dy, dz = self.ins.offset(s)  # type: ignore[attr-defined]
+            self.est = (s.x + dx, s.y + dy, s.z + dz)
+
+    def ground_speed(self) -> float:
+        """Speed over the ground of the last step: L1 and npfg work on the ground velocity, so
+        a headwind (or a steep climb) shortens L1 and slows the turns they ask for."""
+        return max(self.s.ground_speed, 1e-3)
+
+    def _fly(self, lateral: float, climb: float, dt: float, heading: float | None = None) -> None:
+        wind = (0.0, 0.0) if self.wind is None else self.wind.step(dt)
+        before = self.s
+        self.s = step(before, self.env, lateral, climb, dt, wind, self.eas2tas(before.z), heading)
+        self._after(before)
+
+    def _after(self, before: AircraftState) -> None:
+        if self.ins is not None:
+            self.ins.observe(before, self.s)  # type: ignore[attr-defined]
+        self._estimate()
+
+    # The mission sequence -----------------------------------------------------------------
+    def record(self) -> None:
+        s = self.s
+        seq = self.cmds[self.k].seq if 0 <= self.k < len(self.cmds) else -1
+        self.samples.append(
+            (s.t, s.x, s.y, s.z, s.course, s.bank_deg, s.climb_rate, self.env.airspeed, seq,
+             s.heading, s.tas, s.ground_speed)
+        )  # fmt: skip
+
+    def event(self, seq: int, kind: str, text: str = "") -> None:
+        self.events.append(Event(self.s.t, len(self.samples) - 1, seq, kind, text))
+
+    def flies(self, c: NavCommand) -> bool:
+        if c.command == NAV_RETURN_TO_LAUNCH:
+            return True
+        if c.pos is None or self.skips(c):
+            return False
+        return c.command in (NAV_WAYPOINT, NAV_TAKEOFF, NAV_LAND) or c.command in LOITERS
+
+    def _next_nav_index(self, start: int) -> int | None:
+        for j in range(start, len(self.cmds)):
+            if self.flies(self.cmds[j]):
+                return j
+        return None
+
+    def next_target(self) -> tuple[float, float, float] | None:
+        j = self._next_nav_index(self.k + 1)
+        return None if j is None else self.cmds[j].pos
+
+    def advance(self) -> bool:
+        """Make the next command active; run the DO items on the way. False at the end."""
+        j = self.k + 1
+        while j < len(self.cmds):
+            c = self.cmds[j]
+            if self.flies(c):
+                break
+            why = self.skips(c)
+            if c.command == DO_CHANGE_SPEED and c.params[1] > 0:
+                self.env = self._envelope(c.params[1])
+            elif why:
+                self.notes.append(f"item {c.seq}: {why}; skipped")
+                self.event(c.seq, "skipped", why)
+            elif c.command != DO_CHANGE_SPEED:
+                self.event(c.seq, "skipped")
+            j += 1
+        self.k = j
+        self.phase = "track"
+        self.loiter_sum = 0.0
+        self.loiter_started = False
+        self.min_dist = math.inf
+        self.hold_alt = None
+        if j >= len(self.cmds):
+            self.ended = "mission end"
+            return False
+        c = self.cmds[j]
+        if c.command == NAV_RETURN_TO_LAUNCH:
+            self.ended = "return to launch"
+            return False
+        assert c.pos is not None
+        # ArduPlane set_next_WP: already past the new leg's finish line, track it from here.
+        ex, ey, ez = self.est
+        px, py = self.prev[0], self.prev[1]
+        if (ex - c.pos[0]) * (c.pos[0] - px) + (ey - c.pos[1]) * (c.pos[1] - py) > 0:
+            self.prev = (ex, ey, ez)
+        return True
+
+    def reached(self, c: NavCommand, how: str, exit_from: tuple | None = None) -> bool:
+        assert c.pos is not None
+        self.event(c.seq, "reached", how)
+        self.prev = exit_from or c.pos
+        return self.advance()
+
+    def loiter_geometry(self, c: NavCommand) -> tuple[float, int]:
+        """(radius flown, direction: +1 counter-clockwise, -1 clockwise) of a loiter item. The
+        signed radius is param3 of the loiters, but param2 of LOITER_TO_ALT (common.xml; PX4's
+        mavlink_mission.cpp and ArduPilot's AP_Mission read it there); 0 takes the autopilot's
+        loiter radius parameter. The aircraft cannot hold a circle tighter than its roll limit
+        allows at its true airspeed."""
+        p = c.params[1] if c.command == NAV_LOITER_TO_ALT else c.params[2]
+        signed = p if abs(p) > 0 and c.command != NAV_WAYPOINT else self.ap.loiter_radius
+        radius = self.loiter_radius(abs(signed))
+        radius = max(radius, self.env.min_radius(self.s.tas))
+        return radius, (-1 if signed >= 0 else 1)
+
+    # Lateral guidance ---------------------------------------------------------------------
+    def l1_line(self, a: tuple, b: tuple) -> float:
+        """Lateral acceleration (m/s^2, + left) of L1 guidance on the line a -> b."""
+        s, v = self.s, self.ground_speed()
+        x, y = self.est[0], self.est[1]
+        l1 = L1_DAMPING * L1_PERIOD_S * v / math.pi
+        abx, aby = b[0] - a[0], b[1] - a[1]
+        n = math.hypot(abx, aby)
+        if n < 1e-6:
+            abx, aby = b[0] - x, b[1] - y
+            n = math.hypot(abx, aby) or 1.0
+        ux, uy = abx / n, aby / n
+        ax, ay = x - a[0], y - a[1]
+        cx, cy = math.cos(s.course), math.sin(s.course)
+        dist_a = math.hypot(ax, ay)
+        along = ax * ux + ay * uy
+        self.settled = False
+        if dist_a > l1 and along < -0.7071 * dist_a:
+            # Behind the start of the leg and far: head for it (AP_L1_Control).
+            nu = wrap(math.atan2(-ay, -ax) - s.course)
+        else:
+            xtrack = ux * ay - uy * ax  # > 0: left of the track
+            nu1 = math.asin(max(-0.7071, min(0.7071, xtrack / l1)))
+            eta = math.atan2(ux * cy - uy * cx, ux * cx + uy * cy)  # course left of track: > 0
+            nu = -(nu1 + eta)
+            self.settled = abs(xtrack) < 0.5 and abs(eta) < 0.005
+        nu = max(-math.pi / 2, min(math.pi / 2, nu))
+        k = 4.0 * L1_DAMPING * L1_DAMPING
+        return k * v * v / l1 * math.sin(nu)
+
+    def circle(self, centre: tuple, radius: float, direction: int) -> float:
+        """Lateral acceleration holding a circle: the centripetal term of the ground speed plus
+        L1 on the tangent's course with an intercept angle."""
+        s, v = self.s, self.ground_speed()
+        l1 = L1_DAMPING * L1_PERIOD_S * v / math.pi
+        rx, ry = self.est[0] - centre[0], self.est[1] - centre[1]
+        r = math.hypot(rx, ry)
+        theta = math.atan2(ry, rx)
+        intercept = math.atan((r - radius) / (0.5 * l1))
+        want = theta + direction * (math.pi / 2 + intercept)
+        err = wrap(want - s.course)
+        ff = direction * v * v / radius if radius > 0 and abs(r - radius) < l1 else 0.0
+        k = 4.0 * L1_DAMPING * L1_DAMPING
+        return ff + k * v * v / l1 * math.sin(max(-math.pi / 2, min(math.pi / 2, err)))
+
+    # Altitude -----------------------------------------------------------------------------
+    def climb_to(self, alt: float, feedforward: float = 0.0) -> float:
+        return feedforward + (alt - self.est[2]) / max(ALTITUDE_TIME_CONSTANT_S * 0.2, self.dt)
+
+    def glide(self, a: tuple, b: tuple, end_dist: float) -> float:
+        """Climb rate on the glide slope from a's altitude to b's, reached ``end_dist`` before b;
+        the slope is over the ground, so its feed-forward rate is the ground speed's."""
+        x, y, z = self.est
+        total = math.hypot(b[0] - a[0], b[1] - a[1])
+        d = math.hypot(b[0] - x, b[1] - y)
+        span = total - end_dist
+        if span <= 1e-6:
+            return self.climb_to(b[2])
+        self.min_dist = min(self.min_dist, d, total)
+        progress = min(max((total - self.min_dist) / span, 0.0), 1.0)
+        target = a[2] + (b[2] - a[2]) * progress
+        self.alt_error = target - z
+        slope = (b[2] - a[2]) / span
+        ff = self.ground_speed() * slope if progress < 1.0 else 0.0
+        return self.climb_to(target, ff)
+
+    # One step -----------------------------------------------------------------------------
+    def finish_line(self, p: tuple, c: NavCommand) -> float:
+        """Signed distance (times the leg's length) of point ``p`` past the finish line of the
+        leg prev -> c: >= 0 once past it."""
+        assert c.pos is not None
+        px, py = self.prev[0], self.prev[1]
+        return (p[0] - c.pos[0]) * (c.pos[0] - px) + (p[1] - c.pos[1]) * (c.pos[1] - py)
+
+    def tick(self) -> bool:
+        """Fly one step of the active command; False when the flight is over."""
+        c = self.cmds[self.k]
+        assert c.pos is not None
+        x, y, z = self.est
+        dist = math.hypot(c.pos[0] - x, c.pos[1] - y)
+        if c.command in LOITERS:
+            return self._tick_loiter(c, dist)
+        if self.phase == "loiter":  # PX4 circling a waypoint for its altitude
+            return self._tick_altitude_loiter(c)
+        acc = self.acceptance(c)
+        if dist <= acc and self.waypoint_altitude_ok(abs(z - c.pos[2])):
+            # Already there (the waypoint on A where the aircraft starts): reached at once.
+            return self.reached(c, f"within {dist:.1f} m")
+        climb = self.glide(self.prev, c.pos, self.glide_end(acc))
+        dt = self.dt
+        heading = None
+        lateral = 0.0
+        if self.free_turn:
+            # No turn limit: point the ground track at the waypoint and stop on it.
+            heading, dt, climb = self._free_turn_step(c, dist, climb, dt)
+        else:
+            lateral = self.l1_line(self.prev, c.pos)
+            coarse = dt * COARSE_STEPS
+            if (
+                self.settled
+                and (self.wind is None or self.wind.sigma == 0.0)
+                and abs(self.alt_error) < 0.5
+                and dist > 3.0 * self.ground_speed() * coarse
+                and -self.env.sink_rate < climb < self.env.climb_rate
+            ):
+                dt = coarse
+        before, est0 = self.s, self.est
+        wind = (0.0, 0.0) if self.wind is None else self.wind.step(dt)
+        e2t = self.eas2tas(before.z)
+        self.s = step(before, self.env, lateral, climb, dt, wind, e2t, heading)
+        off = (est0[0] - before.x, est0[1] - before.y)
+        f0 = self.finish_line(est0, c)
+        f1 = self.finish_line((self.s.x + off[0], self.s.y + off[1]), c)
+        crossed = f0 < 0 <= f1
+        if crossed and not self.free_turn:
+            # The autopilot checks the finish line many times a second: stop the step on it,
+            # so that the next leg starts there and not up to a step beyond.
+            self.s = step(before, self.env, lateral, climb, dt * f0 / (f0 - f1), wind, e2t)
+        self._after(before)
+        self.record()
+        return self._check_waypoint(c, acc, crossed)
+
+    def _free_turn_step(
+        self, c: NavCommand, dist: float, climb: float, dt: float
+    ) -> tuple[float, float, float]:
+        """(heading, step, climb) of an aircraft without turn limit: the heading whose ground
+        track points at the waypoint in the current wind, the step cut to land on it."""
+        assert c.pos is not None
+        x, y, z = self.est
+        bearing = math.atan2(c.pos[1] - y, c.pos[0] - x)
+        wx, wy = self.wind.current() if self.wind is not None else (0.0, 0.0)
+        tas = self.env.airspeed * self.eas2tas(z)
+        vz = min(max(climb, -self.env.sink_rate), self.env.climb_rate)
+        vh = math.sqrt(max(tas * tas - vz * vz, 1e-9))
+        cross = -wx * math.sin(bearing) + wy * math.cos(bearing)
+        heading = bearing - math.asin(max(-1.0, min(1.0, cross / vh)))
+        along = vh * math.cos(heading - bearing) + wx * math.cos(bearing) + wy * math.sin(bearing)
+        if along > 0 and dist <= along * dt:
+            dt = max(dist / along, 1e-6)
+            climb = (c.pos[2] - z) / dt
+        return heading, dt, climb
+
+    def _check_waypoint(self, c: NavCommand, acc: float, crossed: bool = False) -> bool:
+        assert c.pos is not None
+        x, y, z = self.est
+        dist = math.hypot(c.pos[0] - x, c.pos[1] - y)
+        passed = crossed or (
+            self.finish_line(self.est, c) >= 0 and not self.point_leg_without_finish_line(c)
+        )
+        if not (dist <= acc or passed):
+            return True
+        if c.command == NAV_LAND:
+            self.event(c.seq, "reached", "landing")
+            self.ended = "landing"
+            return False
+        dz = abs(z - c.pos[2])
+        if not self.waypoint_altitude_ok(dz):
+            if self.phase != "loiter":
+                self.phase = "loiter"
+                self.event(c.seq, "altitude", f"{dz:.0f} m off its altitude: circling it")
+            return True
+        how = f"within {dist:.1f} m" if dist <= acc else f"passed at {dist:.1f} m"
+        return self.reached(c, how)
+
+    def _tick_altitude_loiter(self, c: NavCommand) -> bool:
+        assert c.pos is not None
+        radius, direction = self.loiter_geometry(NavCommand(c.seq, NAV_WAYPOINT, c.pos, c.params))
+        self._fly(self.circle(c.pos, radius, direction), self.climb_to(c.pos[2]), self.dt)
+        self.record()
+        if not self.waypoint_altitude_ok(abs(self.est[2] - c.pos[2])):
+            return True
+        if not self.exit_heading_ok(c, 0.0):
+            return True
+        return self.reached(c, "altitude reached circling it")
+
+    def _tick_loiter(self, c: NavCommand, dist: float) -> bool:
+        assert c.pos is not None
+        radius, direction = self.loiter_geometry(c)
+        band = max(0.1 * radius, 5.0)
+        on_circle = abs(dist - radius) <= band
+        if self.phase == "track" and dist > radius + band:
+            lateral = (
+                self.l1_line(self.prev, c.pos)
+                if dist > 2 * radius
+                else self.circle(c.pos, radius, direction)
+            )
+        else:
+            lateral = self.circle(c.pos, radius, direction)
+        climb = self.loiter_approach_climb(c, dist, radius)
+        if climb is None:
+            climb = self.climb_to(c.pos[2])
+        before = self.s.course
+        self._fly(lateral, climb, self.dt)
+        self.record()
+        if on_circle or self.loiter_started:
+            if not self.loiter_started:
+                self.loiter_started = True
+                self.loiter_t0 = self.s.t
+                self.phase = "loiter"
+                self.on_loiter_started(c)
+            self.loiter_sum += direction * wrap(self.s.course - before)
+        if not self.loiter_started:
+            return True
+        if c.command == NAV_LOITER_UNLIM:
+            self.event(c.seq, "reached", "loitering")
+            self.ended = "loiter at end"
+            return False
+        laps = self.loiter_sum / (2 * math.pi)
+        dz = abs(self.est[2] - c.pos[2])
+        if not self.loiter_done(c, laps, dz):
+            return True
+        if not self.exit_heading_ok(c, laps):
+            return True
+        exit_from = self.exit_point(c, radius, direction) if c.params[3] > 0 else None
+        how = f"after {laps:.2f} turns, {dz:.1f} m from its altitude"
+        return self.reached(c, how, exit_from)
+
+    # Shared exit-course test --------------------------------------------------------------
+    def course_lined_up(
+        self, c: NavCommand, tolerance_deg: float, reachable: float, radius: float
+    ) -> bool:
+        """The ground course points at the next waypoint within ``tolerance_deg``, or the next
+        waypoint is within ``reachable`` radii of the centre (the course can never point at it)
+        or there is none."""
+        nxt = self.next_target()
+        if nxt is None or c.pos is None:
+            return True
+        if math.hypot(nxt[0] - c.pos[0], nxt[1] - c.pos[1]) <= reachable * radius:
+            return True
+        bearing = math.atan2(nxt[1] - self.est[1], nxt[0] - self.est[0])
+        return abs(wrap(bearing - self.s.course)) <= math.radians(tolerance_deg)
+
+
+NavigatorFactory = Callable[..., Navigator]
