@@ -175,6 +175,10 @@ def fly(
     pilot.record()
     going = pilot.advance()
     while going:
+        if ins is not None and getattr(ins, "lost", False):
+            # Lost on arrival at a correction landmark: nothing after it counts.
+            pilot.ended = "lost"
+            break
         if pilot.s.t >= time_limit:
             pilot.ended = "time limit"
             pilot.event(pilot.cmds[pilot.k].seq, "end", f"still flying after {time_limit:.0f} s")

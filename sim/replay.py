@@ -42,6 +42,8 @@ from gcs_planner.mission.items import MissionItem
 from gcs_planner.scenario.model import Kind, Parameters, Scenario
 from gcs_planner.vehicle import DEFAULT_CAPTURE_RADIUS_M, DEFAULT_CRUISE_AIRSPEED, VehicleProfile
 from sim import guidance
+from sim.ins import DEFAULT_ERROR_UNIT_M, InsEstimate
+from sim.wind import WindModel, WindSpec
 
 # MAV_CMD values whose x/y/z are a position the vehicle flies to.
 NAV_POSITION_COMMANDS = frozenset({16, 17, 18, 19, 21, 22, 31})
@@ -143,6 +145,8 @@ class CorrectionRow:
     succeeded: bool | None  # None when the vehicle was lost on arrival
     v_after: float
     h_after: float
+    miss: float = 0.0  # true 3D closest approach to the landmark, metres
+    estimate_error_m: float = 0.0  # the INS estimate's distance from the truth there, metres
 
 
 @dataclass(frozen=True)
@@ -158,6 +162,15 @@ class ReplayRun:
     h_at_end: float
     reached_b: bool
     miss_b: float
+    missed_before_loss: bool = False  # the flight missed a landmark of the mission before
+
+    @property
+    def flight_lost(self) -> bool:
+        """Lost by the flight: a landmark of the mission missed on the way, or a limit passed
+        (or B missed) with no failed correction before it; not chance at unreliable points."""
+        if self.arrived:
+            return False
+        return self.missed_before_loss or not any(c.succeeded is False for c in self.corrections)
 
 
 @dataclass(frozen=True)
@@ -168,6 +181,12 @@ class MonteCarloSummary:
     ci_low: float
     ci_high: float
     confidence: float
+    # Runs lost by the flight (ReplayRun.flight_lost) and by failed corrections; ``flown`` True
+    # when each run was flown on its own (wind, gusts and the estimate drawn per run), False
+    # when the outcomes at unreliable points were drawn over one flight.
+    flight_losses: int = 0
+    correction_losses: int = 0
+    flown: bool = False
 
 
 @dataclass(frozen=True)
@@ -414,6 +433,7 @@ def _fly(
                 succeeded,
                 v * delta,
                 h * delta,
+                miss=e.miss,
             )
         )
         if not ok:
@@ -476,6 +496,7 @@ def monte_carlo(
     v = np.zeros(runs)
     h = np.zeros(runs)
     ok = np.ones(runs, dtype=bool)
+    failed = np.zeros(runs, dtype=bool)  # a failed correction before the run was lost
     last = 0.0
     for e in encounters:
         v += e.distance - last
@@ -484,6 +505,7 @@ def monte_carlo(
         v_lim, h_lim = params.limits_m(e.kind)
         ok &= (v <= v_lim) & (h <= h_lim)
         won = rng.random(runs) < params.p_success if e.unreliable else np.ones(runs, bool)
+        failed |= ok & ~won
         if e.kind == Kind.V:
             v = np.where(won, 0.0, np.minimum(v, residual_m))
         else:
@@ -495,7 +517,11 @@ def monte_carlo(
     ok &= (v <= theta_m) & (h <= theta_m) & reached
     successes = int(np.count_nonzero(ok))
     low, high = wilson_interval(successes, runs, confidence)
-    return MonteCarloSummary(runs, successes, successes / runs, low, high, confidence)
+    flight = int(np.count_nonzero(~ok & ~failed))
+    return MonteCarloSummary(
+        runs, successes, successes / runs, low, high, confidence, flight,
+        runs - successes - flight,
+    )  # fmt: skip
 
 
 def find_missed(
@@ -532,6 +558,135 @@ def flown_path(flight: guidance.Flight) -> FlightPath:
     return FlightPath(flight.xyz, tuple(int(c) for c in flight.current), tuple(flight.airspeed))
 
 
+def _ins_run(
+    ins: InsEstimate, path: FlightPath, scenario: Scenario, params: Parameters, capture: float
+) -> tuple[ReplayRun, list[Encounter]]:
+    """The run the INS made in flight, up to the closest approach to B (``path``'s end)."""
+    delta = params.delta
+    end = path.length
+    rows: list[CorrectionRow] = []
+    encounters: list[Encounter] = []
+    v = h = end  # no correction: the errors at B are the metres flown
+    last_d, v_after, h_after = 0.0, 0.0, 0.0
+    cum = path.cumulative
+    for c in sorted(ins.corrections, key=lambda c: c.distance):
+        if c.distance > end + 1e-6:
+            break
+        v_lim, h_lim = params.limits(c.kind)
+        k = min(int(np.searchsorted(cum, c.distance, side="right")), len(path.seqs) - 1)
+        seq = int(path.seqs[k])
+        encounters.append(
+            Encounter(c.landmark, c.id, c.kind, c.unreliable, c.distance, c.miss, seq)
+        )
+        rows.append(
+            CorrectionRow(
+                c.id, c.kind.name, seq, c.distance, c.unreliable,
+                c.v_before_m * delta, c.h_before_m * delta, v_lim, h_lim,
+                v_lim - c.v_before_m * delta, h_lim - c.h_before_m * delta, c.within_limits,
+                c.succeeded, c.v_after_m * delta, c.h_after_m * delta, c.miss,
+                c.estimate_error_m,
+            )
+        )  # fmt: skip
+        if not c.within_limits:
+            what = "vertical" if c.v_before_m > params.limits_m(c.kind)[0] else "horizontal"
+            reason = f"lost at {c.kind.name} point {c.id}: {what} error over its limit on arrival"
+            run = ReplayRun(False, True, reason, c.distance, tuple(rows), c.v_after_m * delta,
+                            c.h_after_m * delta, False, math.inf)  # fmt: skip
+            return run, encounters
+        last_d, v_after, h_after = c.distance, c.v_after_m, c.h_after_m
+    if rows:
+        v, h = v_after + (end - last_d), h_after + (end - last_d)
+    b = scenario.xyz[scenario.end]
+    miss_b = float(np.linalg.norm(path.points[-1] - b))
+    reached = miss_b <= capture
+    theta_m = params.limits_m(Kind.B)[0]
+    within = v <= theta_m and h <= theta_m
+    reason = ""
+    if not reached:
+        reason = (
+            f"the flight passes {miss_b:.1f} m from B at its closest (3D), outside the capture "
+            f"radius {capture:g} m"
+        )
+    elif not within:
+        reason = "lost at B: an error over theta on arrival"
+    run = ReplayRun(reached and within, reached and not within, reason, end, tuple(rows),
+                    v * delta, h * delta, reached, miss_b)  # fmt: skip
+    return run, encounters
+
+
+@dataclass(frozen=True)
+class FlightSetup:
+    """What every flight of one replay shares: the vehicle's stored items, where and how it
+    flies them."""
+
+    items: tuple[MissionItem, ...]
+    scenario: Scenario
+    params: Parameters
+    profile: VehicleProfile
+    flavour: str
+    autopilot: guidance.AutopilotParams
+    frame: LocalFrame
+    home_at_seq0: bool
+    home_alt: float | None
+    course: float | None
+    capture_radius: float
+    dt: float
+    navigate_on_estimate: bool
+    error_unit: float
+    nominal: FlightPath
+
+    def fly_once(
+        self, rng: np.random.Generator, wind: WindModel | None
+    ) -> tuple[ReplayRun, guidance.Flight, FlightPath, list[Encounter], list[Missed]]:
+        """One flight: in ``wind``, on the INS estimate (directions and outcomes from ``rng``)
+        when navigating on the estimate; else the truth is flown and the INS replayed after."""
+        sc = self.scenario
+        a = np.asarray(sc.xyz[sc.start], float)
+        ins = None
+        if self.navigate_on_estimate:
+            ins = InsEstimate(sc, self.params, rng, capture_radius=self.capture_radius,
+                              error_unit=self.error_unit)  # fmt: skip
+        flight = guidance.fly(
+            self.items, self.frame, (float(a[0]), float(a[1]), float(a[2])), self.profile,
+            flavour=self.flavour, params=self.autopilot, home_at_seq0=self.home_at_seq0,
+            home_alt=self.home_alt, course=self.course, dt=self.dt, wind=wind, ins=ins,
+        )  # fmt: skip
+        track = flown_path(flight)
+        b_distance, _ = closest_approach(track, sc.xyz[sc.end], self.capture_radius)
+        path = track.until(b_distance)
+        if ins is not None:
+            ins.finish()
+            run, encounters = _ins_run(ins, path, sc, self.params, self.capture_radius)
+        else:
+            encounters = find_encounters(path, sc, self.capture_radius)
+            run = _fly(path, encounters, sc, self.params, rng, self.capture_radius)
+        missed = find_missed(self.nominal, path, encounters, sc, self.capture_radius)
+        if any(m.distance <= run.flown_length for m in missed):
+            run = replace(run, missed_before_loss=True)
+        return run, flight, path, encounters, missed
+
+
+def monte_carlo_flights(
+    setup: FlightSetup, wind: WindSpec, runs: int, seed: int, confidence: float = 0.99
+) -> MonteCarloSummary:
+    """``runs`` flights, each with its own draws from (``seed``, run): the wind's direction
+    (when not given) and gusts, the INS error directions, the outcomes at unreliable points."""
+    if runs < 1:
+        raise ValueError("runs must be >= 1")
+    successes = flight_losses = 0
+    for k in range(runs):
+        rng = np.random.default_rng([seed, k])
+        model = None if wind.still else wind.draw(rng)
+        run, *_ = setup.fly_once(rng, model)
+        successes += run.arrived
+        flight_losses += run.flight_lost
+    low, high = wilson_interval(successes, runs, confidence)
+    return MonteCarloSummary(
+        runs, successes, successes / runs, low, high, confidence, flight_losses,
+        runs - successes - flight_losses, flown=True,
+    )  # fmt: skip
+
+
 def replay(
     items: Sequence[MissionItem],
     scenario: Scenario,
@@ -548,14 +703,24 @@ def replay(
     profile: VehicleProfile | None = None,
     autopilot: guidance.AutopilotParams | None = None,
     dt: float = guidance.DEFAULT_STEP_S,
+    wind: WindSpec | None = None,
+    navigate_on_estimate: bool = False,
+    error_unit: float = DEFAULT_ERROR_UNIT_M,
 ) -> ReplayReport:
     """Fly the stored ``items`` and replay the INS against the landmark database ``scenario``.
 
     ``params`` default to the scenario's, ``profile`` (the aircraft) to ``scenario.vehicle``,
     with ``cruise_speed`` (the autopilot's cruise parameter) for its airspeed when given.
-    ``flavour`` defaults to ArduPilot when ``home_at_seq0`` else PX4. One replay is drawn with
-    ``seed``; with ``runs`` > 0 a Monte Carlo of that many replays (seeded from ``seed`` too)
-    draws the outcomes at unreliable points over the same flight.
+    ``flavour`` defaults to ArduPilot when ``home_at_seq0`` else PX4; ``autopilot`` to its
+    shipped limits with the profile's turning radius as loiter radius. ``wind`` (default still
+    air) is drawn from ``seed`` for the one replay reported. With ``navigate_on_estimate`` the
+    aircraft steers its INS estimate (sim/ins.py, ``error_unit`` metres per error unit) and
+    corrections happen in flight, in the truth; otherwise it flies the truth and the INS is
+    replayed along the track.
+
+    With ``runs`` > 0 a Monte Carlo of that many replays (seeded from ``seed`` too): when every
+    flight is the same (still air, the truth flown) the outcomes at unreliable points are drawn
+    over the one flight; otherwise each run is flown on its own with its own draws.
     """
     # The aircraft is held to the true limits: the planner's reserve is its own margin.
     params = (params or scenario.params).flown()
@@ -563,6 +728,7 @@ def replay(
     if cruise_speed is not None and cruise_speed > 0:
         profile = replace(profile, cruise_airspeed=float(cruise_speed))
     flavour = flavour or ("ardupilot" if home_at_seq0 else "px4")
+    wind = wind or WindSpec()
     frame = scenario_frame(scenario)
     nominal = decode_path(
         items,
@@ -573,36 +739,33 @@ def replay(
         capture_radius=capture_radius,
         frame=frame,
     )
-    a = np.asarray(scenario.xyz[scenario.start], float)
     course = None
     if scenario.heading_at_a is not None:
         hx, hy, _ = scenario.heading_at_a
         if math.hypot(hx, hy) > 0:
             course = math.atan2(hy, hx)
-    flight = guidance.fly(
-        items,
-        frame,
-        (float(a[0]), float(a[1]), float(a[2])),
-        profile,
-        flavour=flavour,
-        params=autopilot or guidance.AutopilotParams(flavour, loiter_radius=profile.turn_radius),
-        home_at_seq0=home_at_seq0,
-        home_alt=home_alt,
-        course=course,
-        dt=dt,
-    )
+    setup = FlightSetup(
+        tuple(items), scenario, params, profile, flavour,
+        autopilot or guidance.AutopilotParams(flavour, loiter_radius=profile.turn_radius),
+        frame, home_at_seq0, home_alt, course, capture_radius, dt, navigate_on_estimate,
+        error_unit, nominal,
+    )  # fmt: skip
+    rng = np.random.default_rng(seed)
+    model = None if wind.still else wind.draw(np.random.default_rng([seed, 2**31]))
+    run, flight, path, encounters, missed = setup.fly_once(rng, model)
     track = flown_path(flight)
-    b_distance, _ = closest_approach(track, scenario.xyz[scenario.end], capture_radius)
-    path = track.until(b_distance)
-    encounters = find_encounters(path, scenario, capture_radius)
-    run = _fly(path, encounters, scenario, params, np.random.default_rng(seed), capture_radius)
-    missed = find_missed(nominal, path, encounters, scenario, capture_radius)
-    k = min(int(np.searchsorted(track.cumulative, b_distance, side="right")), len(flight.t) - 1)
+    k = min(int(np.searchsorted(track.cumulative, path.length, side="right")), len(flight.t) - 1)
     mc = None
     if runs > 0:
-        mc = monte_carlo(
-            path, encounters, scenario, params, runs, seed + 1, capture_radius, confidence
-        )
+        if wind.still and not navigate_on_estimate:
+            mc = monte_carlo(
+                path, encounters, scenario, params, runs, seed + 1, capture_radius, confidence
+            )
+            if missed:  # one flight for every run: a landmark it missed loses them all
+                lost = runs - mc.successes
+                mc = replace(mc, flight_losses=lost, correction_losses=0)
+        else:
+            mc = monte_carlo_flights(setup, wind, runs, seed + 1, confidence)
     return ReplayReport(
         run=run,
         mission_length=nominal.length,

@@ -86,3 +86,31 @@ class WindField:
             self.ux = self.ux * a + b * self._normal()
             self.uy = self.uy * a + b * self._normal()
         return self.wx + self.ux, self.wy + self.uy
+
+
+@dataclass(frozen=True)
+class WindSpec:
+    """The wind a dry run flies: ``speed`` m/s from ``from_deg`` (None: a direction drawn per
+    flight, uniformly), gusts of ``gust`` m/s."""
+
+    speed: float = 0.0
+    from_deg: float | None = None
+    gust: float = 0.0
+
+    @property
+    def still(self) -> bool:
+        return self.speed == 0.0 and self.gust == 0.0
+
+    def draw(self, rng: np.random.Generator) -> WindModel:
+        """One flight's air mass: its direction (when not given) and gust seed from ``rng``."""
+        direction = float(rng.uniform(0.0, 360.0)) if self.from_deg is None else self.from_deg
+        return WindModel(self.speed, direction, self.gust, int(rng.integers(2**31)))
+
+    def describe(self) -> str:
+        if self.still:
+            return "still air"
+        where = f"{self.from_deg:g} deg" if self.from_deg is not None else "drawn directions"
+        out = f"wind {self.speed:g} m/s from {where}"
+        if self.gust > 0:
+            out += f", gusts {self.gust:g} m/s (first-order Gauss-Markov per axis, L = 533 m)"
+        return out

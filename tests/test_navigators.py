@@ -34,8 +34,8 @@ def test_px4_accepts_a_fixed_wing_waypoint_at_the_npfg_switch_distance():
     e = reached(f, 1)
     x, y, _ = f.xyz[e.sample]
     vg = f.ground_speed[e.sample - 1]
-    switch = 0.32 * 10.0 * 0.7071 * vg
-    assert switch == pytest.approx(56.6, abs=0.5)  # 25 m/s at sea level
+    switch = 0.32 * 10.0 * 0.7 * vg
+    assert switch == pytest.approx(56.0, abs=0.5)  # 25 m/s at sea level
     assert math.hypot(4000.0 - x, y) == pytest.approx(switch, abs=vg * 0.5 + 0.5)
     # ArduPlane with param2 = 1 flies up to the finish line.
     ardu = mission((16, (0, 0, 0), {"param2": 1}), (16, (4000, 0, 0), {"param2": 1}),

@@ -27,10 +27,13 @@ from gcs_planner.link.protocol import DEFAULT_TIMEOUT_S
 from gcs_planner.mission.geo_exports import trajectory_local
 from gcs_planner.plan_json import plan_to_dict
 from sim.replay import CHORD_SHORTFALL, QUANTISATION_M
+from sim.wind import WindSpec
 
-EPILOG = f"""exit codes: 0 the mission verified and the replay arrived; 2 bad input; 3 no feasible
-route; {LinkError.exit_code} the upload failed or the read-back differs; {EXIT_LOST} the mission
-verified but the replay was lost (the output says where and which limit)."""
+EPILOG = f"""exit codes: 0 the mission verified and, with --runs N, no run was lost by the flight
+and the success rate is consistent with the planned probability (without --runs: the one seeded
+flight, a demonstration, arrived); 2 bad input; 3 no feasible route; {LinkError.exit_code} the
+upload failed or the read-back differs; {EXIT_LOST} the mission verified but the verdict failed
+(the output says where and which limit)."""
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -47,7 +50,26 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     add_plan_arguments(p)
     g = p.add_argument_group("dry run")
     g.add_argument("--firmware", choices=FIRMWARES, default="ardupilot", help="vehicle flavour")
-    g.add_argument("--runs", default="0", metavar="N", help="Monte Carlo replays (default 0)")
+    g.add_argument(
+        "--runs",
+        default="0",
+        metavar="N",
+        help="flights for the verdict, each with its own draws (default 0: one seeded flight, "
+        "a demonstration)",
+    )
+    g.add_argument(
+        "--wind",
+        default="0",
+        metavar="SPEED[@FROM_DEG]",
+        help="steady wind flown, m/s, from FROM_DEG (clockwise from north; default: a "
+        "direction drawn per flight); the plan is still made for still air",
+    )
+    g.add_argument("--gust", default="0", metavar="SPEED", help="gusts, m/s per axis (default 0)")
+    g.add_argument(
+        "--navigate-on-truth",
+        action="store_true",
+        help="the aircraft flies its true position instead of its INS estimate (comparison)",
+    )
     g.add_argument(
         "--loss",
         default="0",
@@ -91,8 +113,20 @@ def _number(text: str, flag: str, kind: type, low: float, high: float | None = N
     return value
 
 
+def parse_wind(text: str, gust_text: str) -> WindSpec:
+    """``SPEED[@FROM_DEG]`` and the gust speed, checked here (one line, exit 2 when bad)."""
+    speed_text, _, direction_text = text.partition("@")
+    speed = _number(speed_text, "--wind", float, 0.0, 100.0)
+    direction = None
+    if direction_text:
+        direction = _number(direction_text, "--wind", float, 0.0, 360.0)
+    gust = _number(gust_text, "--gust", float, 0.0, 50.0)
+    return WindSpec(speed, direction, gust)
+
+
 def run(args: argparse.Namespace) -> int:
     runs = int(_number(args.runs, "--runs", int, 0))
+    wind = parse_wind(args.wind, args.gust)
     loss = _number(args.loss, "--loss", float, 0.0, 1.0)
     seed = int(_number(args.seed, "--seed", int, 0))
     timeout = _number(args.timeout, "--timeout", float, 1e-3)
@@ -115,6 +149,8 @@ def run(args: argparse.Namespace) -> int:
         timeout=timeout,
         acceptance_radius=acceptance,
         track=flown,
+        wind=wind,
+        navigate_on_estimate=not args.navigate_on_truth,
     )
     if track_out is not None and flown:
         try:
@@ -130,10 +166,22 @@ def run(args: argparse.Namespace) -> int:
     if not report.verified:
         print(f"gcs-planner: error: {report.link_error}", file=sys.stderr)
         return LinkError.exit_code
-    if not report.arrived:
-        print(f"gcs-planner: lost: {report.why}", file=sys.stderr)
+    if not report.ok:
+        print(f"gcs-planner: {verdict_line(report)}", file=sys.stderr)
         return EXIT_LOST
     return 0
+
+
+def verdict_line(r: DryRunReport) -> str:
+    """Why the verdict failed, in one line."""
+    if r.runs == 0:
+        return f"lost: {r.why}"
+    parts = []
+    if r.flight_losses:
+        parts.append(f"{r.flight_losses} of {r.runs} runs lost by the flight")
+    if not r.probability_within_ci:
+        parts.append("the success rate is not consistent with the planned probability")
+    return "verdict failed: " + "; ".join(parts or ["see the report"])
 
 
 def render(r: DryRunReport) -> str:
@@ -192,6 +240,13 @@ def render(r: DryRunReport) -> str:
         out.append(f"flown {r.flown_length:,.1f} m before the vehicle was lost")
     if not r.corrections_as_planned:
         out.append("corrections: NOT the planned points in the planned order (see the rows)")
+    out.append(
+        f"world: {r.wind}; autopilot {r.autopilot}; the aircraft steers its "
+        + ("INS estimate (corrections where the true track passes within the capture radius)"
+           if r.navigate_on_estimate else "true position")
+    )  # fmt: skip
+    for assumption in r.assumptions:
+        out.append(f"  assumed: {assumption}")
     if r.runs > 0 and r.success_rate is not None and r.success_ci is not None:
         low, high = r.success_ci
         if r.reserve > 0:  # the plan's probability is a floor: held to limits less the reserve
@@ -200,9 +255,14 @@ def render(r: DryRunReport) -> str:
         else:
             verdict = "within" if r.probability_within_ci else "OUTSIDE"
             said = f"planned probability {r.planned_probability:.4f}: {verdict} the interval"
+        how = "flights, each with its own draws" if r.runs_flown else "replays of one flight"
         out.append(
-            f"success rate {r.success_rate:.3f} over {r.runs} replays "
+            f"success rate {r.success_rate:.3f} over {r.runs} {how} "
             f"({(r.confidence or 0) * 100:g} % Wilson interval {low:.3f}-{high:.3f}); {said}"
+        )
+        out.append(
+            f"losses: {r.flight_losses} by the flight (a missed landmark or a limit passed with "
+            f"no failed correction before it), {r.correction_losses} by failed corrections"
         )
     if r.planned_probability < 1.0:
         out.append(
@@ -210,12 +270,22 @@ def render(r: DryRunReport) -> str:
             f"one seeded draw (--seed {r.seed})"
             + ("" if r.runs else "; --runs N gives the success rate")
         )
-    if r.ok:
-        out.append("result: verified and arrived")
-    elif not r.verified:
+    if r.demonstration:
+        out.append(
+            "note: one seeded flight is a demonstration, not a verdict: --runs N flies N, each "
+            "with its own draws"
+        )
+    if not r.verified:
         out.append("result: the upload did not verify")
+    elif r.demonstration:
+        out.append("result: verified and arrived" if r.arrived else f"result: LOST: {r.why}")
+    elif r.ok:
+        out.append(
+            f"result: verified; no run lost by the flight; success rate consistent with the "
+            f"planned probability (this draw: {'arrived' if r.arrived else 'lost'})"
+        )
     else:
-        out.append(f"result: LOST: {r.why}")
+        out.append(f"result: NOT verified by the flight: {verdict_line(r)}")
     return "\n".join(out)
 
 

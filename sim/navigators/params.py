@@ -7,7 +7,7 @@ Shipped defaults (read in the autopilots' parameter tables):
   every loiter radius by EAS2TAS^2, AP_L1_Control::loiter_radius).
 * PX4: FW_R_LIM 50 deg, FW_T_CLMB_MAX 5 and FW_T_SINK_MAX 5 m/s, FW_T_CLMB_R_SP 3 and
   FW_T_SINK_R_SP 2 m/s (fw_pos_control_params.c: "the default rate at which the vehicle will
-  climb in autonomous modes"), NAV_ACC_RAD 10 m, NPFG_PERIOD 10 s, NPFG_DAMPING 0.7071,
+  climb in autonomous modes"), NAV_ACC_RAD 10 m, NPFG_PERIOD 10 s, NPFG_DAMPING 0.7,
   NPFG_SW_DST_MLT 0.32 (npfg_params.c).
 
 A vehicle's parameters (the mock's PARAM table) override them name by name
@@ -35,7 +35,7 @@ SHIPPED: dict[str, dict[str, float]] = {
         "FW_T_SINK_R_SP": 2.0,
         "NAV_ACC_RAD": 10.0,
         "NPFG_PERIOD": 10.0,
-        "NPFG_DAMPING": 0.7071,
+        "NPFG_DAMPING": 0.7,
         "NPFG_SW_DST_MLT": 0.32,
     },
 }
@@ -55,7 +55,7 @@ class AutopilotParams:
     sink_rate: float | None = None  # m/s: TECS_SINK_MAX / min(FW_T_SINK_R_SP, FW_T_SINK_MAX)
     loiter_bank_limit: float = 0.0  # ArduPlane NAVL1_LIM_BANK
     npfg_period: float = 10.0  # PX4 NPFG_PERIOD
-    npfg_damping: float = 0.7071  # PX4 NPFG_DAMPING
+    npfg_damping: float = 0.7  # PX4 NPFG_DAMPING
     npfg_switch_multiplier: float = 0.32  # PX4 NPFG_SW_DST_MLT
 
     def __post_init__(self) -> None:

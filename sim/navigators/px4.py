@@ -10,7 +10,7 @@ copied).
   larger; FixedwingPositionControl publishes _npfg.switchDistance(500)), and the switch distance
   is min(500 m, NPFG_SW_DST_MLT * track error bound), the bound being the ground speed times the
   time constant NPFG_PERIOD * NPFG_DAMPING (npfg.cpp NPFG::switchDistance, trackErrorBound,
-  timeConst): 10 * 0.7071 * 0.32 * 25 = 56.6 m at 25 m/s with the defaults. So a fixed-wing PX4
+  timeConst): 10 * 0.7 * 0.32 * 25 = 56 m at 25 m/s with the defaults. So a fixed-wing PX4
   turns for the next waypoint about 2.3 s of ground speed early, whatever NAV_ACC_RAD says.
 * An aircraft that comes to the waypoint too high or too low circles it on NAV_LOITER_RAD until
   the altitude is in (the position setpoint turned into a loiter), then leaves with its course on
