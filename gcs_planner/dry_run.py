@@ -17,8 +17,17 @@ repeated).
 
 The mission is exported with a small waypoint ACCEPTANCE radius (``acceptance_radius``, 1 m:
 param2 of the waypoints for ArduPlane, the vehicle's NAV_ACC_RAD for PX4, which ignores param2
-on a fixed wing) so that the autopilot flies up to each point and passes its finish line rather
-than turning up to 50 m early and missing the landmark's 5 m CAPTURE radius.
+on a fixed wing) so that ArduPlane flies up to each point and passes its finish line rather than
+turning up to 90 m early. PX4 still switches at npfg's switch distance (~56 m at 25 m/s): the
+flight says what that does.
+
+The flight is in the real world (issue 26; sim/guidance.py): the autopilot's own parameters as
+the vehicle holds them (shipped defaults unless set, ``set_params``), its true airspeed at
+altitude, the wind (``wind``), and the INS estimate it steers (``navigate_on_estimate``). With
+``runs`` every run is a flight of its own and the verdict (``DryRunReport.ok``) asks that no run
+was lost by the flight and that the success rate is consistent with the planned probability;
+without runs the seeded flight is a demonstration. The report states what the plan assumed that
+the flight does not (unlimited climb, still air, EAS as TAS).
 """
 
 from __future__ import annotations
@@ -57,6 +66,8 @@ VEHICLE_REQUEST_TIMEOUT_S = 1.0
 DRY_RUN_ACCEPTANCE_RADIUS_M = 1
 # PX4's acceptance radius parameter (fixed wing: param2 is not used).
 PX4_ACCEPTANCE_PARAM = "NAV_ACC_RAD"
+# ArduPlane's integer parameters among those a dry run may set (the rest are floats).
+INT16_PARAMS = frozenset({"WP_RADIUS", "WP_LOITER_RAD"})
 # The planned path's sampling for the deviation (the figure is within half of it).
 DEVIATION_STEP_M = 2.0
 # Loiters the exporter writes for the planner's helices (LOITER_TURNS, LOITER_TO_ALT); the last
@@ -246,6 +257,7 @@ def dry_run(
     wind: WindSpec | None = None,
     navigate_on_estimate: bool = True,
     error_unit: float = DEFAULT_ERROR_UNIT_M,
+    set_params: dict[str, float] | None = None,
 ) -> DryRunReport:
     """Fly ``plan``'s chosen route on a mock vehicle whose landmark database is ``landmarks``.
 
@@ -273,7 +285,10 @@ def dry_run(
     flight), the aircraft steering its INS estimate (``navigate_on_estimate``, ``error_unit``
     metres per error unit) with the autopilot's own parameters as the vehicle holds them. With
     ``runs`` > 0 each run is flown on its own with its own draws (wind direction, gusts, error
-    directions, outcomes) unless nothing in the flight is drawn.
+    directions, outcomes) unless nothing in the flight is drawn. ``set_params``: autopilot
+    parameters (the vehicle's own names, e.g. TECS_CLMB_MAX, NAVL1_LIM_BANK, FW_T_CLMB_R_SP)
+    the ground station sets over the link after the upload, as a user configures the aircraft;
+    a parameter the vehicle does not confirm is an upload error.
     """
     if flavour not in FLAVOURS:
         raise ValueError(f"flavour must be one of {FLAVOURS}, got {flavour!r}")
@@ -312,13 +327,21 @@ def dry_run(
             for _ in range(attempts):
                 try:
                     client.upload_verified(mission.items, loiter_radius=loiter)
+                    settings = dict(set_params or {})
                     if flavour == "px4":
+                        settings = {PX4_ACCEPTANCE_PARAM: float(acceptance_radius), **settings}
+                    for name, value in settings.items():
+                        ptype = (
+                            mavlink.MAV_PARAM_TYPE_INT16
+                            if name in INT16_PARAMS
+                            else mavlink.MAV_PARAM_TYPE_REAL32
+                        )
                         set_parameter(
                             link,
                             client._target(),
-                            PX4_ACCEPTANCE_PARAM,
-                            float(acceptance_radius),
-                            mavlink.MAV_PARAM_TYPE_REAL32,
+                            name,
+                            float(value),
+                            ptype,
                             timeout=timeout,
                             retries=retries,
                         )
@@ -391,7 +414,9 @@ def dry_run(
         length_tolerance=length_tolerance(arcs, replayed.waypoints),
         rows=tuple(rows),
         # The landmarks the path meets do not depend on the draw, only their outcomes do.
-        corrections_as_planned=[e.id for e in replayed.encounters] == list(planned),
+        corrections_as_planned=as_planned(
+            [e.id for e in replayed.encounters], list(planned), replayed
+        ),  # fmt: skip
         v_at_b=replayed.run.v_at_end,
         h_at_b=replayed.run.h_at_end,
         theta=replayed.theta,
@@ -422,6 +447,16 @@ def dry_run(
         runs_flown=False if mc is None else mc.flown,
         flight_lost=replayed.run.flight_lost,
     )
+
+
+def as_planned(met: list[str], planned: list[str], replayed: replay_mod.ReplayReport) -> bool:
+    """The flight met the planned points in the planned order and no other, as far as it went:
+    all of them, or up to the one where it was lost on arrival (a flight on the INS estimate
+    ends there: what comes after depends on the draw)."""
+    if met == planned:
+        return True
+    lost_at_point = replayed.run.lost and not replayed.run.reached_b and not replayed.missed
+    return lost_at_point and bool(met) and met == planned[: len(met)]
 
 
 def plan_assumptions(plan: Plan, wind: WindSpec | None = None) -> tuple[str, ...]:

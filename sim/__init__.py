@@ -2,8 +2,11 @@
 the flight of the stored mission with INS drift and corrections against its own landmark
 database.
 
-* ``aircraft``: the point-mass fixed wing of the scenario's vehicle profile;
+* ``aircraft``: the point-mass fixed wing, at its true airspeed through the air mass;
+* ``atmosphere``: ISA, EAS to TAS; ``wind``: steady wind and seeded gusts;
+* ``navigators``: one per autopilot (ArduPlane, PX4) on one base, with their parameters;
 * ``guidance``: mode AUTO as ArduPlane or PX4 flies the mission items;
+* ``ins``: the INS estimate the autopilot steers, corrections in the truth;
 * ``replay``: the INS along the flown track, corrections within the capture radius, Monte Carlo;
 * ``telemetry``: what a ground station sees while it flies;
 * ``vehicle``: the MockVehicle on a MAVLink link.

@@ -22,8 +22,14 @@ component becomes min(component, r). The vehicle must pass within ``capture_radi
 both errors <= theta; the replay ends at its closest approach to B. Errors are kept in metres
 flown since the last reset, as the planner keeps them, and compared with ``Parameters.limits_m``.
 
-The path and the corrections it meets do not depend on chance, only the outcomes at unreliable
-points do; so a Monte Carlo over N replays draws N outcome vectors over the same encounters.
+Flown on the truth in still air, the path and the corrections it meets do not depend on chance,
+only the outcomes at unreliable points do; so a Monte Carlo over N replays draws N outcome
+vectors over the same encounters. Flown on the INS estimate (``navigate_on_estimate``, sim/ins.py:
+corrections happen in flight where the TRUE track passes within the capture radius, and reset
+the estimate) or in wind, every flight depends on its draws, and each run is flown on its own
+(``monte_carlo_flights``). A run is lost by the flight (``ReplayRun.flight_lost``) when it missed
+a landmark of its mission on the way, or passed a limit or missed B with no failed correction
+before it.
 """
 
 from __future__ import annotations
@@ -661,6 +667,11 @@ class FlightSetup:
             encounters = find_encounters(path, sc, self.capture_radius)
             run = _fly(path, encounters, sc, self.params, rng, self.capture_radius)
         missed = find_missed(self.nominal, path, encounters, sc, self.capture_radius)
+        if flight.ended == "lost":
+            # The flight ended where it was lost: a landmark whose mission item it had not
+            # reached yet was not missed, just not reached.
+            done = max((e.seq for e in flight.events if e.kind == "reached"), default=-1)
+            missed = [m for m in missed if m.seq <= done]
         if any(m.distance <= run.flown_length for m in missed):
             run = replace(run, missed_before_loss=True)
         return run, flight, path, encounters, missed

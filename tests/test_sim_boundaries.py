@@ -23,7 +23,18 @@ def imported_by(module: str) -> list[str]:
 
 
 @pytest.mark.parametrize(
-    "module", ["sim.aircraft", "sim.guidance", "sim.replay", "sim.telemetry", "sim.vehicle"]
+    "module",
+    [
+        "sim.aircraft",
+        "sim.guidance",
+        "sim.replay",
+        "sim.telemetry",
+        "sim.vehicle",
+        "sim.ins",
+        "sim.wind",
+        "sim.atmosphere",
+        "sim.navigators",
+    ],  # fmt: skip
 )
 def test_sim_does_not_import_the_planning_core(module):
     loaded = imported_by(module)
@@ -31,7 +42,9 @@ def test_sim_does_not_import_the_planning_core(module):
     assert not [m for m in loaded if m.startswith(PLANNER)]
 
 
-@pytest.mark.parametrize("module", ["sim.aircraft", "sim.guidance", "sim.replay", "sim.telemetry"])
+@pytest.mark.parametrize(
+    "module", ["sim.aircraft", "sim.guidance", "sim.replay", "sim.telemetry", "sim.ins", "sim.wind"]
+)
 def test_the_flight_does_not_import_the_ground_stations_client(module):
     loaded = imported_by(module)
     assert not [m for m in loaded if m.startswith(CLIENT)]

@@ -66,6 +66,14 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     )
     g.add_argument("--gust", default="0", metavar="SPEED", help="gusts, m/s per axis (default 0)")
     g.add_argument(
+        "--param",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="set an autopilot parameter on the vehicle after the upload (repeatable), e.g. "
+        "TECS_CLMB_MAX=8 or NAVL1_LIM_BANK=45",
+    )
+    g.add_argument(
         "--navigate-on-truth",
         action="store_true",
         help="the aircraft flies its true position instead of its INS estimate (comparison)",
@@ -124,9 +132,22 @@ def parse_wind(text: str, gust_text: str) -> WindSpec:
     return WindSpec(speed, direction, gust)
 
 
+def parse_params(pairs: list[str]) -> dict[str, float]:
+    """``NAME=VALUE`` pairs (one line, exit 2 when bad)."""
+    out: dict[str, float] = {}
+    for pair in pairs:
+        name, sep, value = pair.partition("=")
+        if not sep or not name or len(name) > 16:
+            raise InputError(f"expected NAME=VALUE (a name of 1-16 characters), got {pair!r}",
+                             field="--param")  # fmt: skip
+        out[name] = _number(value, "--param", float, -1e9, 1e9)
+    return out
+
+
 def run(args: argparse.Namespace) -> int:
     runs = int(_number(args.runs, "--runs", int, 0))
     wind = parse_wind(args.wind, args.gust)
+    settings = parse_params(args.param)
     loss = _number(args.loss, "--loss", float, 0.0, 1.0)
     seed = int(_number(args.seed, "--seed", int, 0))
     timeout = _number(args.timeout, "--timeout", float, 1e-3)
@@ -151,6 +172,7 @@ def run(args: argparse.Namespace) -> int:
         track=flown,
         wind=wind,
         navigate_on_estimate=not args.navigate_on_truth,
+        set_params=settings,
     )
     if track_out is not None and flown:
         try:
@@ -159,6 +181,10 @@ def run(args: argparse.Namespace) -> int:
         except OSError as exc:
             message = f"cannot write {track_out}: {exc.strerror}"
             raise InputError(message, field="--track-out") from None
+        except InputError as exc:  # write_atomic's own words, named by the flag
+            if exc.field is None:
+                raise InputError(exc.reason, file=exc.file, field="--track-out") from None
+            raise
     if args.json:
         sys.stdout.write(json.dumps(report.to_dict(), indent=2) + "\n")
     else:

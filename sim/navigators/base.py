@@ -381,8 +381,12 @@ class Navigator:
         heading = None
         lateral = 0.0
         if self.free_turn:
-            # No turn limit: point the ground track at the waypoint and stop on it.
-            heading, dt, climb = self._free_turn_step(c, dist, climb, dt)
+            # No turn limit: point the ground track at the waypoint and stop on its acceptance
+            # circle. The flight between is a straight line: in steady air a long step flies it
+            # as exactly as short ones (the INS finds passes on the segments).
+            if self.wind is None or self.wind.sigma == 0.0:
+                dt *= 4 * COARSE_STEPS
+            heading, dt, climb = self._free_turn_step(c, dist, climb, dt, acc)
         else:
             lateral = self.l1_line(self.prev, c.pos)
             coarse = dt * COARSE_STEPS
@@ -411,10 +415,11 @@ class Navigator:
         return self._check_waypoint(c, acc, crossed)
 
     def _free_turn_step(
-        self, c: NavCommand, dist: float, climb: float, dt: float
+        self, c: NavCommand, dist: float, climb: float, dt: float, acc: float = 0.0
     ) -> tuple[float, float, float]:
         """(heading, step, climb) of an aircraft without turn limit: the heading whose ground
-        track points at the waypoint in the current wind, the step cut to land on it."""
+        track points at the waypoint in the current wind, the step cut to land on its
+        acceptance circle (on the waypoint for an acceptance under a metre)."""
         assert c.pos is not None
         x, y, z = self.est
         bearing = math.atan2(c.pos[1] - y, c.pos[0] - x)
@@ -425,9 +430,14 @@ class Navigator:
         cross = -wx * math.sin(bearing) + wy * math.cos(bearing)
         heading = bearing - math.asin(max(-1.0, min(1.0, cross / vh)))
         along = vh * math.cos(heading - bearing) + wx * math.cos(bearing) + wy * math.sin(bearing)
-        if along > 0 and dist <= along * dt:
-            dt = max(dist / along, 1e-6)
-            climb = (c.pos[2] - z) / dt
+        # Stop on the waypoint, or a centimetre inside a wider acceptance circle.
+        stop = dist if acc < 1.0 + 1e-9 else max(dist - acc + 0.01, 0.0)
+        if along > 0 and stop <= along * dt:
+            dt = max(stop / along, 1e-6)
+        # A straight leg is a straight line to the waypoint in 3D: the rate that arrives at its
+        # altitude (clipped to the autopilot's rates by the aircraft).
+        if along > 0:
+            climb = (c.pos[2] - z) * along / max(dist, 1e-6)
         return heading, dt, climb
 
     def _check_waypoint(self, c: NavCommand, acc: float, crossed: bool = False) -> bool:
