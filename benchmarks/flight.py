@@ -4,8 +4,9 @@ For each workbook the planner's front (length, corrections; R = 200 m) is export
 run's 1 m acceptance radius and its longest route is replayed: the flight model and autopilot
 (sim/guidance.py, fixed 0.5 s step) plus the INS replay along the flown track, against the
 chord replay it replaced (the mission's items joined by straight segments, no autopilot), both
-timed in this process. Also the flown length against the planned one and the largest deviation
-from the planned path.
+timed in this process; and the same mission in a 5 m/s wind with 1.5 m/s gusts, the aircraft
+steering its INS estimate (sim/ins.py), against the still-air flight. Also the flown length
+against the planned one and the largest deviation from the planned path.
 
     python -m benchmarks.flight [--runs N]
 """
@@ -29,6 +30,11 @@ from gcs_planner.plan_json import plan_to_dict
 from gcs_planner.vehicle import FIRMWARES
 from sim import replay as replay_mod
 from sim.guidance import AutopilotParams
+from sim.wind import WindSpec
+
+# The real-world flight timed beside the still-air one: 5 m/s from 270 deg, 1.5 m/s gusts, the
+# aircraft steering its INS estimate.
+WIND = WindSpec(5.0, 270.0, 1.5)
 
 TURN_RADIUS = 200.0
 FLAVOURS = FIRMWARES
@@ -42,9 +48,10 @@ class FlightRow:
     flown_m: float
     deviation_m: float
     items: int
-    flight_s: float  # flight model + INS replay
+    flight_s: float  # flight model + INS replay, still air, on the truth
     chord_s: float  # the chord replay
     arrived: bool
+    wind_s: float = 0.0  # in WIND, on the INS estimate
 
 
 def _chord_replay(items, scenario, home: bool) -> None:
@@ -71,9 +78,15 @@ def run_flight(specs: list[str], runs: int) -> list[FlightRow]:
             ap = AutopilotParams(
                 flavour, acceptance_radius=DRY_RUN_ACCEPTANCE_RADIUS_M, loiter_radius=TURN_RADIUS
             )
-            flight_t, chord_t = [], []
+            flight_t, chord_t, wind_t = [], [], []
             report = None
             for _ in range(runs):
+                t0 = time.perf_counter()
+                replay_mod.replay(
+                    mission.items, scenario, home_at_seq0=home, flavour=flavour, autopilot=ap,
+                    wind=WIND, navigate_on_estimate=True,
+                )  # fmt: skip
+                wind_t.append(time.perf_counter() - t0)
                 t0 = time.perf_counter()
                 report = replay_mod.replay(
                     mission.items, scenario, home_at_seq0=home, flavour=flavour, autopilot=ap
@@ -94,6 +107,7 @@ def run_flight(specs: list[str], runs: int) -> list[FlightRow]:
                     statistics.median(flight_t),
                     statistics.median(chord_t),
                     report.arrived,
+                    statistics.median(wind_t),
                 )
             )
     return rows
@@ -101,7 +115,8 @@ def run_flight(specs: list[str], runs: int) -> list[FlightRow]:
 
 def render(rows: list[FlightRow]) -> str:
     head = ["scenario", "autopilot", "planned", "flown", "largest deviation", "items",
-            "flight + INS", "chord replay", "ratio", "arrived"]  # fmt: skip
+            "flight + INS", "chord replay", "ratio", "arrived",
+            "wind 5 + gusts 1.5, on the estimate", "ratio to still air"]  # fmt: skip
     body = [
         [
             r.scenario,
@@ -114,6 +129,8 @@ def render(rows: list[FlightRow]) -> str:
             seconds(r.chord_s),
             f"{r.flight_s / r.chord_s:.1f}x",
             "yes" if r.arrived else "no",
+            seconds(r.wind_s),
+            f"{r.wind_s / r.flight_s:.1f}x",
         ]
         for r in rows
     ]
