@@ -16,6 +16,12 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from gcs_planner.autopilot import AUTOPILOTS
+
+# MAV_PARAM_TYPE: INT16 = 4, REAL32 = 9 (re-exported: the link and the mock name them from here).
+from gcs_planner.autopilot import PARAM_TYPE_INT16 as PARAM_TYPE_INT16
+from gcs_planner.autopilot import PARAM_TYPE_REAL32 as PARAM_TYPE_REAL32
+
 # Standard gravity (m/s^2), as both autopilots use for the bank/turn-rate relation.
 G = 9.80665
 
@@ -38,39 +44,22 @@ MAX_BANK_DEG = 60.0
 # ---------------------------------------------------------------------------------------------
 # Autopilot words
 
-FIRMWARES = ("ardupilot", "px4")
+# Each firmware's rules live in its record (gcs_planner/autopilot.py); these are the words the
+# link, the exporters and the mock vehicle have always used, read from there.
+FIRMWARES = tuple(AUTOPILOTS)
 # MAV_AUTOPILOT enum values (common.xml): ARDUPILOTMEGA = 3, PX4 = 12.
-AUTOPILOT_IDS = {"ardupilot": 3, "px4": 12}
+AUTOPILOT_IDS = {fw: ap.autopilot_id for fw, ap in AUTOPILOTS.items()}
 FIRMWARE_OF_AUTOPILOT = {v: k for k, v in AUTOPILOT_IDS.items()}
-# MAV_PARAM_TYPE: INT16 = 4, REAL32 = 9.
-PARAM_TYPE_INT16 = 4
-PARAM_TYPE_REAL32 = 9
 # The parameter that holds the loiter radius, and its type: ArduPlane WP_LOITER_RAD (int16,
 # metres), PX4 NAV_LOITER_RAD (float, metres). The link sets it to R on upload.
 LOITER_RADIUS_PARAM = {
-    "ardupilot": ("WP_LOITER_RAD", PARAM_TYPE_INT16),
-    "px4": ("NAV_LOITER_RAD", PARAM_TYPE_REAL32),
+    fw: (ap.loiter_radius_param, ap.loiter_radius_type) for fw, ap in AUTOPILOTS.items()
 }
 # Where each autopilot keeps the rest of the envelope (read by ``--vehicle-from``; served by the
 # mock vehicle). ArduPlane: AIRSPEED_CRUISE (m/s), ROLL_LIMIT_DEG, TECS_CLMB_MAX / TECS_SINK_MAX
 # (m/s, converted to angles at cruise airspeed), WP_RADIUS (acceptance, m). PX4: FW_AIRSPD_TRIM,
 # FW_R_LIM, FW_T_CLMB_MAX / FW_T_SINK_MAX (m/s), NAV_ACC_RAD.
-ENVELOPE_PARAMS = {
-    "ardupilot": {
-        "cruise_airspeed": "AIRSPEED_CRUISE",
-        "bank_limit": "ROLL_LIMIT_DEG",
-        "climb_rate": "TECS_CLMB_MAX",
-        "sink_rate": "TECS_SINK_MAX",
-        "acceptance_radius": "WP_RADIUS",
-    },
-    "px4": {
-        "cruise_airspeed": "FW_AIRSPD_TRIM",
-        "bank_limit": "FW_R_LIM",
-        "climb_rate": "FW_T_CLMB_MAX",
-        "sink_rate": "FW_T_SINK_MAX",
-        "acceptance_radius": "NAV_ACC_RAD",
-    },
-}
+ENVELOPE_PARAMS = {fw: dict(ap.envelope) for fw, ap in AUTOPILOTS.items()}
 
 # Arcs are densified into waypoints at most this far apart in angle, and close enough that a
 # chord stays within MAX_CHORD_ERROR_M of the arc, so the autopilot flies the planned turn.

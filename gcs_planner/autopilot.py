@@ -1,0 +1,328 @@
+"""Each autopilot as one record: what ArduPlane and PX4 (fixed wing) are, in one place each rule.
+
+A record holds what the ground station, the exporters and the mock vehicle need to agree on:
+the MAV_AUTOPILOT id, whether the autopilot keeps home at mission seq 0, the parameter holding
+the loiter radius, the acceptance rule and its parameters, the item a helix is written as, the
+custom mode of the mission mode, and the parameters as the firmware ships them (default, type,
+and the range within which the flight can use a value). :func:`effective` turns a parameter
+table into the numbers a flight model reads (:class:`EffectiveParameters`).
+
+Sources (read, modelled, not copied):
+
+* ArduPlane 4.x: ``ArduPlane/Parameters.cpp`` (WP_RADIUS, WP_LOITER_RAD, ROLL_LIMIT_DEG,
+  AIRSPEED_CRUISE), ``ArduPlane/config.h`` (AIRSPEED_CRUISE 12 m/s, WP_RADIUS_DEFAULT 90,
+  LOITER_RADIUS_DEFAULT 60, HEAD_MAX 45), ``libraries/AP_TECS/AP_TECS.cpp`` ``var_info``
+  (CLMB_MAX 5, SINK_MAX 5 m/s), ``libraries/AP_L1_Control/AP_L1_Control.cpp`` ``var_info``
+  (PERIOD 17 s, DAMPING 0.75, LIM_BANK 0: loiter radii scaled by EAS2TAS^2),
+  ``ArduPlane/mode.h`` (Mode::Number::AUTO = 10), ``ArduPlane/commands_logic.cpp``
+  (``verify_nav_wp``: param2 acceptance radius, else WP_RADIUS, or the finish line);
+* PX4 main: ``src/modules/fw_pos_control/fw_path_navigation_params.c`` (FW_R_LIM 50,
+  FW_T_CLMB_MAX 5, FW_T_SINK_MAX 5, FW_T_CLMB_R_SP 3, FW_T_SINK_R_SP 2, NPFG_PERIOD 10,
+  NPFG_DAMPING 0.7, NPFG_SW_DST_MLT 0.32), the airspeed parameters (FW_AIRSPD_TRIM 15),
+  ``src/modules/navigator/navigator_params.c`` (NAV_LOITER_RAD 80, NAV_ACC_RAD 10; "for fixed
+  wing the npfg switch distance is used for horizontal acceptance"),
+  ``navigator_main.cpp`` ``Navigator::get_acceptance_radius`` (the larger of NAV_ACC_RAD and
+  the position controller's switch distance), ``FixedwingPositionControl`` (missions climb and
+  sink at FW_T_CLMB_R_SP / FW_T_SINK_R_SP, TECS bounding them by FW_T_CLMB_MAX /
+  FW_T_SINK_MAX), ``px4_custom_mode.h`` (main mode AUTO 4, sub mode MISSION 4).
+
+This module imports nothing of the planner, the link or the simulator (like
+:mod:`gcs_planner.vehicle`, which states its words from it), so every room can import it.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+# MAV_PARAM_TYPE (common.xml): INT16 = 4, REAL32 = 9.
+PARAM_TYPE_INT16 = 4
+PARAM_TYPE_REAL32 = 9
+INT16_MAX = 2**15 - 1
+
+# MAVLink commands the records name (common.xml).
+MAV_CMD_NAV_WAYPOINT = 16
+MAV_CMD_NAV_LOITER_TURNS = 18
+MAV_CMD_NAV_LOITER_TO_ALT = 31
+
+
+@dataclass(frozen=True)
+class ParamSpec:
+    """One parameter as the firmware ships it: its default, MAVLink type, and the range a value
+    must lie in for the flight to use it (``low_open``: the low end itself is not usable, e.g. a
+    roll limit of 0 deg; ``min_abs``: a signed value whose magnitude must reach this, e.g. a
+    loiter radius whose sign is the turn's sense)."""
+
+    name: str
+    default: float
+    ptype: int = PARAM_TYPE_REAL32
+    low: float = -math.inf
+    high: float = math.inf
+    low_open: bool = False
+    min_abs: float = 0.0
+    unit: str = ""
+
+    def refusal(self, value: float) -> str | None:
+        """Why ``value`` cannot be this parameter's, or None when it can."""
+        if not math.isfinite(value):
+            return f"{self.name} {value!r} is not a number"
+        if self.ptype == PARAM_TYPE_INT16:
+            value = float(round(value))
+        too_low = value <= self.low if self.low_open else value < self.low
+        if too_low or value > self.high:
+            low = "(" if self.low_open else "["
+            return f"{self.name} {value:g} outside {low}{self.low:g}, {self.high:g}]"
+        if abs(value) < self.min_abs:
+            return f"{self.name} {value:g}: magnitude below {self.min_abs:g}"
+        return None
+
+    def stored(self, value: float) -> float:
+        """The value as the autopilot stores it (an int16 parameter rounds)."""
+        return float(round(value)) if self.ptype == PARAM_TYPE_INT16 else float(value)
+
+
+@dataclass(frozen=True)
+class Autopilot:
+    """One firmware: its ids, mission rules, mission mode and shipped parameters.
+
+    ``envelope`` names the parameter behind each word of the flight envelope (cruise_airspeed,
+    bank_limit, climb_rate, sink_rate, acceptance_radius) as the ground station reads it with
+    ``plan --vehicle-from``; ``mission_climb`` the parameters a mission's climb and sink
+    follow (PX4: the rate setpoints, bounded by the maxima).
+    """
+
+    firmware: str
+    autopilot_id: int  # MAV_AUTOPILOT: ARDUPILOTMEGA 3, PX4 12
+    home_at_seq0: bool  # ArduPilot keeps home as mission item 0; PX4 holds no home item
+    loiter_radius_param: str
+    acceptance_param: str  # the vehicle-wide acceptance radius
+    helix_command: int  # the item a helix is written as (mission/builder.py)
+    auto_custom_mode: int  # HEARTBEAT custom_mode of the mission mode
+    params: tuple[ParamSpec, ...]
+    envelope: Mapping[str, str]
+    mission_climb: tuple[str, ...]  # climb then sink parameters a mission flies with
+    mission_climb_bounds: tuple[str, ...] = ()  # PX4: the TECS maxima bounding them
+
+    @property
+    def defaults(self) -> dict[str, float]:
+        return {p.name: p.default for p in self.params}
+
+    def spec(self, name: str) -> ParamSpec | None:
+        for p in self.params:
+            if p.name == name:
+                return p
+        return None
+
+    @property
+    def loiter_radius_type(self) -> int:
+        spec = self.spec(self.loiter_radius_param)
+        assert spec is not None
+        return spec.ptype
+
+    def refusal(self, name: str, value: float) -> str | None:
+        """Why this autopilot's flight cannot use ``value`` for ``name`` (None: it can, or the
+        parameter is not one of the record's)."""
+        spec = self.spec(name)
+        return None if spec is None else spec.refusal(value)
+
+    def is_auto_mode(self, base_mode: float, custom_main: float, custom_sub: float) -> bool:
+        """Whether MAV_CMD_DO_SET_MODE's params 1-3 ask for this autopilot's mission mode.
+
+        ArduPilot (``GCS_MAVLINK::_set_mode_common``): with MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
+        in param1, param2 is the mode number (Plane AUTO = 10). PX4 (``Commander``,
+        ``handle_command`` for VEHICLE_CMD_DO_SET_MODE): param2 the main mode (AUTO = 4),
+        param3 the sub mode (MISSION = 4)."""
+        if not all(math.isfinite(v) for v in (base_mode, custom_main, custom_sub)):
+            return False
+        if not int(base_mode) & MAV_MODE_FLAG_CUSTOM_MODE_ENABLED:
+            return False
+        if self.firmware == "ardupilot":
+            return int(custom_main) == self.auto_custom_mode
+        main = (self.auto_custom_mode >> 16) & 0xFF
+        sub = (self.auto_custom_mode >> 24) & 0xFF
+        return int(custom_main) == main and int(custom_sub) == sub
+
+
+MAV_MODE_FLAG_CUSTOM_MODE_ENABLED = 1
+ARDUPLANE_MODE_AUTO = 10  # ArduPlane/mode.h, Mode::Number::AUTO
+PX4_MAIN_MODE_AUTO = 4  # px4_custom_mode.h, PX4_CUSTOM_MAIN_MODE_AUTO
+PX4_SUB_MODE_AUTO_MISSION = 4  # PX4_CUSTOM_SUB_MODE_AUTO_MISSION
+# PX4 packs its modes into HEARTBEAT custom_mode: main mode in byte 2, sub mode in byte 3.
+PX4_MODE_AUTO_MISSION = (PX4_MAIN_MODE_AUTO << 16) | (PX4_SUB_MODE_AUTO_MISSION << 24)
+
+# A loiter or acceptance radius the ground station writes comes from the plan, not from a
+# tuning list: the mock takes any radius a flight can fly (int16 metres, ArduPlane's storage),
+# where PX4's metadata shows NAV_LOITER_RAD as 25..1000 (PX4 does not enforce metadata ranges
+# on PARAM_SET, and a plan's radius outside them is still flown).
+_RADIUS_MAX = float(INT16_MAX)
+
+ARDUPLANE = Autopilot(
+    firmware="ardupilot",
+    autopilot_id=3,
+    home_at_seq0=True,
+    loiter_radius_param="WP_LOITER_RAD",
+    acceptance_param="WP_RADIUS",
+    helix_command=MAV_CMD_NAV_LOITER_TURNS,
+    auto_custom_mode=ARDUPLANE_MODE_AUTO,
+    params=(
+        # AIRSPEED_CRUISE has no @Range; AIRSPEED_MIN / AIRSPEED_MAX are 5..100 m/s.
+        ParamSpec("AIRSPEED_CRUISE", 12.0, low=5.0, high=100.0, unit="m/s"),
+        ParamSpec("ROLL_LIMIT_DEG", 45.0, low=0.0, high=90.0, low_open=True, unit="deg"),
+        ParamSpec("TECS_CLMB_MAX", 5.0, low=0.1, high=20.0, unit="m/s"),
+        ParamSpec("TECS_SINK_MAX", 5.0, low=0.0, high=20.0, low_open=True, unit="m/s"),
+        ParamSpec("WP_RADIUS", 90.0, PARAM_TYPE_INT16, low=1.0, high=_RADIUS_MAX, unit="m"),
+        ParamSpec(
+            "WP_LOITER_RAD",
+            60.0,
+            PARAM_TYPE_INT16,
+            low=-_RADIUS_MAX,
+            high=_RADIUS_MAX,
+            min_abs=1.0,
+            unit="m",
+        ),
+        ParamSpec("NAVL1_PERIOD", 17.0, low=1.0, high=60.0, unit="s"),
+        ParamSpec("NAVL1_DAMPING", 0.75, low=0.6, high=1.0),
+        ParamSpec("NAVL1_LIM_BANK", 0.0, low=0.0, high=89.0, unit="deg"),
+    ),
+    envelope={
+        "cruise_airspeed": "AIRSPEED_CRUISE",
+        "bank_limit": "ROLL_LIMIT_DEG",
+        "climb_rate": "TECS_CLMB_MAX",
+        "sink_rate": "TECS_SINK_MAX",
+        "acceptance_radius": "WP_RADIUS",
+    },
+    mission_climb=("TECS_CLMB_MAX", "TECS_SINK_MAX"),
+)
+
+PX4 = Autopilot(
+    firmware="px4",
+    autopilot_id=12,
+    home_at_seq0=False,
+    loiter_radius_param="NAV_LOITER_RAD",
+    acceptance_param="NAV_ACC_RAD",
+    helix_command=MAV_CMD_NAV_LOITER_TO_ALT,
+    auto_custom_mode=PX4_MODE_AUTO_MISSION,
+    params=(
+        ParamSpec("FW_AIRSPD_TRIM", 15.0, low=0.5, high=40.0, unit="m/s"),
+        ParamSpec("FW_R_LIM", 50.0, low=35.0, high=65.0, unit="deg"),
+        ParamSpec("FW_T_CLMB_MAX", 5.0, low=1.0, high=15.0, unit="m/s"),
+        ParamSpec("FW_T_SINK_MAX", 5.0, low=1.0, high=15.0, unit="m/s"),
+        ParamSpec("FW_T_CLMB_R_SP", 3.0, low=0.5, high=15.0, unit="m/s"),
+        ParamSpec("FW_T_SINK_R_SP", 2.0, low=0.5, high=15.0, unit="m/s"),
+        ParamSpec("NAV_LOITER_RAD", 80.0, low=1.0, high=_RADIUS_MAX, unit="m"),
+        ParamSpec("NAV_ACC_RAD", 10.0, low=0.05, high=200.0, unit="m"),
+        ParamSpec("NPFG_PERIOD", 10.0, low=1.0, high=100.0, unit="s"),
+        ParamSpec("NPFG_DAMPING", 0.7, low=0.1, high=1.0),
+        ParamSpec("NPFG_SW_DST_MLT", 0.32, low=0.1, high=1.0),
+    ),
+    envelope={
+        "cruise_airspeed": "FW_AIRSPD_TRIM",
+        "bank_limit": "FW_R_LIM",
+        "climb_rate": "FW_T_CLMB_MAX",
+        "sink_rate": "FW_T_SINK_MAX",
+        "acceptance_radius": "NAV_ACC_RAD",
+    },
+    mission_climb=("FW_T_CLMB_R_SP", "FW_T_SINK_R_SP"),
+    mission_climb_bounds=("FW_T_CLMB_MAX", "FW_T_SINK_MAX"),
+)
+
+AUTOPILOTS: dict[str, Autopilot] = {"ardupilot": ARDUPLANE, "px4": PX4}
+
+
+def autopilot_for(firmware: str) -> Autopilot:
+    """The record of ``firmware`` ("ardupilot" or "px4"); ValueError otherwise."""
+    try:
+        return AUTOPILOTS[firmware]
+    except KeyError:
+        known = ", ".join(AUTOPILOTS)
+        raise ValueError(f"firmware must be one of {known}, got {firmware!r}") from None
+
+
+@dataclass(frozen=True)
+class EffectiveParameters:
+    """What a flight under this autopilot flies with, from its parameter table.
+
+    ``climb_rate`` / ``sink_rate`` (m/s) are the rates a mission climbs and sinks at: ArduPlane
+    TECS_CLMB_MAX / TECS_SINK_MAX; PX4 FW_T_CLMB_R_SP / FW_T_SINK_R_SP, bounded by
+    FW_T_CLMB_MAX / FW_T_SINK_MAX. ``bank_limit`` (deg): ROLL_LIMIT_DEG / FW_R_LIM.
+    ``loiter_radius`` (m, signed: + clockwise), ``acceptance_radius`` (m, the vehicle-wide one:
+    WP_RADIUS / NAV_ACC_RAD). ArduPlane only: ``l1_period``, ``l1_damping``,
+    ``loiter_bank_limit`` (NAVL1_LIM_BANK; 0 scales loiter radii by EAS2TAS^2). PX4 only:
+    ``npfg_period``, ``npfg_damping``, ``npfg_switch_multiplier``. ``values``: the whole table.
+    """
+
+    firmware: str
+    cruise_airspeed: float
+    bank_limit: float
+    climb_rate: float
+    sink_rate: float
+    loiter_radius: float
+    acceptance_radius: float
+    values: Mapping[str, float]
+    l1_period: float | None = None
+    l1_damping: float | None = None
+    loiter_bank_limit: float | None = None
+    npfg_period: float | None = None
+    npfg_damping: float | None = None
+    npfg_switch_multiplier: float | None = None
+
+    def switch_distance(self, ground_speed: float) -> float:
+        """PX4: the npfg switch distance at ``ground_speed`` (m/s), NPFG_PERIOD * NPFG_DAMPING
+        (the track error bound's time constant) * NPFG_SW_DST_MLT * ground speed (``npfg.cpp``
+        ``switchDistance`` / ``trackErrorBound``); 0 for ArduPlane, which has none."""
+        if self.npfg_period is None or self.npfg_damping is None:
+            return 0.0
+        assert self.npfg_switch_multiplier is not None
+        t = self.npfg_period * self.npfg_damping
+        return max(ground_speed, 0.0) * t * self.npfg_switch_multiplier
+
+    def waypoint_acceptance(self, ground_speed: float, item_radius: float = 0.0) -> float:
+        """The horizontal distance at which the autopilot counts a waypoint reached.
+
+        ArduPlane (``Plane::verify_nav_wp``): the item's param2 when > 0, else WP_RADIUS (and
+        the finish line, which the flight model draws itself). PX4 fixed wing
+        (``Navigator::get_acceptance_radius``): the larger of NAV_ACC_RAD and the npfg switch
+        distance; a waypoint's param2 is not used for a fixed wing."""
+        if self.firmware == "ardupilot":
+            return item_radius if item_radius > 0 else self.acceptance_radius
+        return max(self.acceptance_radius, self.switch_distance(ground_speed))
+
+
+def effective(firmware: str, values: Mapping[str, float]) -> EffectiveParameters:
+    """The parameters a flight under ``firmware`` uses, from ``values`` (name -> value; a name
+    missing takes the shipped default)."""
+    ap = autopilot_for(firmware)
+    table = {**ap.defaults, **{k: float(v) for k, v in values.items()}}
+
+    def get(name: str) -> float:
+        return table[name]
+
+    climb, sink = (get(n) for n in ap.mission_climb)
+    if ap.mission_climb_bounds:
+        climb_max, sink_max = (get(n) for n in ap.mission_climb_bounds)
+        climb, sink = min(climb, climb_max), min(sink, sink_max)
+    env = ap.envelope
+    common = {
+        "firmware": firmware,
+        "cruise_airspeed": get(env["cruise_airspeed"]),
+        "bank_limit": get(env["bank_limit"]),
+        "climb_rate": climb,
+        "sink_rate": sink,
+        "loiter_radius": get(ap.loiter_radius_param),
+        "acceptance_radius": get(ap.acceptance_param),
+        "values": dict(table),
+    }
+    if firmware == "ardupilot":
+        return EffectiveParameters(
+            **common,
+            l1_period=get("NAVL1_PERIOD"),
+            l1_damping=get("NAVL1_DAMPING"),
+            loiter_bank_limit=get("NAVL1_LIM_BANK"),
+        )
+    return EffectiveParameters(
+        **common,
+        npfg_period=get("NPFG_PERIOD"),
+        npfg_damping=get("NPFG_DAMPING"),
+        npfg_switch_multiplier=get("NPFG_SW_DST_MLT"),
+    )
