@@ -1,11 +1,19 @@
 """The vehicle's parameter server: PARAM_REQUEST_LIST / _READ / PARAM_SET answered with
 PARAM_VALUE, as ArduPilot and PX4 answer them.
 
-It serves the parameters the ground station reads and sets (the loiter radius and the flight
-envelope of :mod:`gcs_planner.vehicle`, under each autopilot's own names). A write is checked
-before it is stored: a value that is not finite, or does not fit the parameter's integer type,
-leaves the parameter as it was, and the PARAM_VALUE sent back says so. Unknown names get no
-answer, as on both autopilots.
+It serves its firmware's parameters as the firmware ships them (the records of
+:mod:`gcs_planner.autopilot`: ArduPlane TECS_CLMB_MAX 5, ROLL_LIMIT_DEG 45, ...; PX4
+FW_T_CLMB_R_SP 3, FW_R_LIM 50, ...), except where the scenario's aircraft says otherwise: its
+cruise airspeed, its turning radius as the loiter radius, and its bank limit when the scenario
+gives one (``max_bank_angle``). The plan's climb and descent limits are the plan's assumptions,
+not the aircraft's, and are never served as its rates.
+
+A write is checked before it is stored: a value the flight cannot use (not finite, outside the
+parameter's range, or not fitting its integer type) leaves the parameter as it was, the
+PARAM_VALUE sent back says so, and a STATUSTEXT says why. Real autopilots take nearly anything
+(ArduPilot's @Range and PX4's @min/@max are ground-station metadata); the mock refuses what its
+flight model could not fly, so that a hostile value is a refusal, never a dead flight. Unknown
+names get no answer, as on both autopilots.
 """
 
 from __future__ import annotations
@@ -15,15 +23,9 @@ import threading
 from collections.abc import Callable
 from typing import Any
 
+from gcs_planner.autopilot import EffectiveParameters, autopilot_for, effective
 from gcs_planner.link.connection import mavlink
-from gcs_planner.vehicle import (
-    DEFAULT_CRUISE_AIRSPEED,
-    ENVELOPE_PARAMS,
-    LOITER_RADIUS_PARAM,
-    PARAM_TYPE_INT16,
-    PARAM_TYPE_REAL32,
-    VehicleProfile,
-)
+from gcs_planner.vehicle import VehicleProfile
 
 INT_RANGES = {
     mavlink.MAV_PARAM_TYPE_INT8: (-(2**7), 2**7 - 1),
@@ -33,48 +35,29 @@ INT_RANGES = {
     mavlink.MAV_PARAM_TYPE_INT32: (-(2**31), 2**31 - 1),
     mavlink.MAV_PARAM_TYPE_UINT32: (0, 2**32 - 1),
 }
-# What the autopilots ship with where the aircraft does not say (ArduPlane ROLL_LIMIT_DEG 45,
-# TECS_CLMB_MAX 5, TECS_SINK_MAX 5, WP_RADIUS 90; PX4 FW_R_LIM 50, FW_T_CLMB_MAX 5,
-# FW_T_SINK_MAX 5, NAV_ACC_RAD 10).
-SHIPPED = {
-    "ardupilot": {"bank_limit": 45.0, "climb_rate": 5.0, "sink_rate": 5.0, "acceptance_radius": 90},
-    "px4": {"bank_limit": 50.0, "climb_rate": 5.0, "sink_rate": 5.0, "acceptance_radius": 10.0},
-}
-# ArduPlane's WP_RADIUS is an int16 like WP_LOITER_RAD; every other one here is a float.
-_INT_PARAMS = {"WP_RADIUS", "WP_LOITER_RAD"}
 
 
 def parameter_table(
     flavour: str, profile: VehicleProfile | None = None
 ) -> dict[str, tuple[float, int]]:
-    """name -> (value, MAV_PARAM_TYPE) for ``flavour``, from ``profile`` where it says."""
-    shipped = SHIPPED[flavour]
-    cruise = profile.cruise_airspeed if profile is not None else DEFAULT_CRUISE_AIRSPEED
-    radius = profile.turn_radius if profile is not None and profile.turn_radius > 0 else 80.0
-    bank = shipped["bank_limit"]
-    climb, sink = shipped["climb_rate"], shipped["sink_rate"]
+    """name -> (value, MAV_PARAM_TYPE) for ``flavour``: the shipped defaults, with the
+    scenario's aircraft (``profile``) where it says: cruise airspeed, turning radius as the
+    loiter radius, and the bank limit only when the radius came from airspeed and bank."""
+    ap = autopilot_for(flavour)
+    table = {p.name: (p.default, p.ptype) for p in ap.params}
+
+    def put(name: str, value: float) -> None:
+        spec = ap.spec(name)
+        assert spec is not None
+        table[name] = (spec.stored(value), spec.ptype)
+
     if profile is not None:
+        put(ap.envelope["cruise_airspeed"], profile.cruise_airspeed)
         if profile.turn_radius > 0:
-            bank = round(profile.bank_angle, 1)
-        if math.isfinite(profile.climb_rate):
-            climb = round(profile.climb_rate, 2)
-        if math.isfinite(profile.sink_rate):
-            sink = round(profile.sink_rate, 2)
-    values = {
-        "cruise_airspeed": cruise,
-        "bank_limit": bank,
-        "climb_rate": climb,
-        "sink_rate": sink,
-        "acceptance_radius": shipped["acceptance_radius"],
-    }
-    table: dict[str, tuple[float, int]] = {}
-    loiter_name, loiter_type = LOITER_RADIUS_PARAM[flavour]
-    loiter = float(round(radius)) if loiter_type == PARAM_TYPE_INT16 else float(radius)
-    table[loiter_name] = (loiter, loiter_type)
-    for word, name in ENVELOPE_PARAMS[flavour].items():
-        ptype = PARAM_TYPE_INT16 if name in _INT_PARAMS else PARAM_TYPE_REAL32
-        value = float(values[word])
-        table[name] = (float(round(value)) if ptype == PARAM_TYPE_INT16 else value, ptype)
+            put(ap.loiter_radius_param, profile.turn_radius)
+        if profile.radius_source != "turn_radius" and profile.turn_radius > 0:
+            # The scenario gave max_bank_angle: that is the aircraft's roll limit.
+            put(ap.envelope["bank_limit"], round(profile.bank_angle, 1))
     return table
 
 
@@ -85,7 +68,8 @@ def param_name(pid: Any) -> str:
 
 
 def accepted_value(value: float, ptype: int) -> float | None:
-    """The value a PARAM_SET stores for a parameter of ``ptype``, or None when it is refused."""
+    """The value a PARAM_SET stores for a parameter of ``ptype``, or None when it is refused
+    (the type's own limits; the record's ranges are checked by :class:`ParamServer`)."""
     if not math.isfinite(value):
         return None
     if ptype in INT_RANGES:
@@ -99,7 +83,8 @@ def accepted_value(value: float, ptype: int) -> float | None:
 
 
 class ParamServer:
-    """The parameters of one vehicle; ``lock`` guards them."""
+    """The parameters of one vehicle; ``lock`` guards them. ``statustext(text, severity)``
+    announces a refused write (optional)."""
 
     HANDLED = ("PARAM_SET", "PARAM_REQUEST_READ", "PARAM_REQUEST_LIST")
 
@@ -109,17 +94,28 @@ class ParamServer:
         send: Callable[[Any], None],
         table: dict[str, tuple[float, int]],
         lock: threading.Lock,
+        *,
+        flavour: str = "ardupilot",
+        statustext: Callable[..., None] | None = None,
     ) -> None:
         self.mav = mav
         self.send = send
         self.table = dict(table)
         self.lock = lock
-        self.refused = 0  # writes refused (not finite, out of the type's range)
+        self.flavour = flavour
+        self.autopilot = autopilot_for(flavour)
+        self.statustext = statustext
+        self.refused = 0  # writes refused (not usable by the flight, out of the type's range)
 
     @property
     def values(self) -> dict[str, float]:
         with self.lock:
             return {k: v for k, (v, _) in self.table.items()}
+
+    @property
+    def effective(self) -> EffectiveParameters:
+        """The parameters the flight uses now (:func:`gcs_planner.autopilot.effective`)."""
+        return effective(self.flavour, self.values)
 
     def send_value(self, name: str) -> None:
         with self.lock:
@@ -143,16 +139,23 @@ class ParamServer:
 
     def on_set(self, msg: Any) -> None:
         name = param_name(msg.param_id)
+        why = None
         with self.lock:
             if name not in self.table:
                 return  # autopilots stay silent about parameters they do not have
             _, ptype = self.table[name]
-            value = accepted_value(float(msg.param_value), ptype)
-            if value is None:
-                self.refused += 1
-            else:
+            raw = float(msg.param_value)
+            value = accepted_value(raw, ptype)
+            why = self.autopilot.refusal(name, raw)
+            if value is None and why is None:
+                why = f"{name} {raw:g} does not fit its type"
+            if why is None and value is not None:
                 self.table[name] = (value, ptype)
+            else:
+                self.refused += 1
         self.send_value(name)  # what it holds now: the ground station sees a refusal
+        if why is not None and self.statustext is not None:
+            self.statustext(f"Refused: {why}", mavlink.MAV_SEVERITY_WARNING)
 
     def on_read(self, msg: Any) -> None:
         name = param_name(msg.param_id)
