@@ -25,7 +25,12 @@ What a real autopilot does, modelled from ArduPilot's ``MissionItemProtocol`` an
 * a MISSION_REQUEST is answered with the legacy float MISSION_ITEM and a MISSION_REQUEST_INT
   with MISSION_ITEM_INT, as both autopilots answer;
 * ArduPilot always holds its home at seq 0 (an "empty" mission is one item, home); PX4 holds no
-  home item;
+  home item (the autopilot records' ``home_at_seq0``);
+* the items each autopilot takes: ArduPilot stores any command of its list; PX4 takes only the
+  commands ``MavlinkMissionManager::parse_mavlink_mission_item`` maps (global-frame NAV items,
+  frame-MISSION DO/CONDITION items; mavlink_mission.cpp), and refuses the whole upload with
+  MAV_MISSION_UNSUPPORTED at the first item it does not: NAV_LOITER_TURNS among them, which PX4
+  has no mission item for (the exporter writes PX4 helices as NAV_LOITER_TO_ALT);
 * mission types: MISSION is stored, FENCE and RALLY exist but this vehicle holds none (uploads
   are UNSUPPORTED, downloads are empty, clears succeed), MAV_MISSION_TYPE_ALL clears them all;
   any other type is refused UNSUPPORTED.
@@ -42,15 +47,37 @@ from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from typing import Any
 
+from gcs_planner.autopilot import autopilot_for
 from gcs_planner.link.connection import mavlink
 from gcs_planner.link.protocol import GLOBAL_FLOAT_FRAMES, GLOBAL_INT_FRAMES, item_to_message
 from gcs_planner.mission.items import MAV_MISSION_TYPE_MISSION, MissionItem
 from sim import replay as replay_mod
 
 SUPPORTED_FRAMES = frozenset({0, 2, 3, 5, 6})
+MAV_FRAME_MISSION = 2
+# ArduPilot: the commands this mock's ArduPlane stores, in any supported frame.
 SUPPORTED_COMMANDS = frozenset(
     {16, 17, 18, 19, 20, 21, 22, 31, 112, 113, 114, 115, 176, 177, 178, 179, 183, 184, 189, 201}
 )
+# PX4 (mavlink_mission.cpp, parse_mavlink_mission_item), by frame. A global frame (0, 3, 5, 6):
+# WAYPOINT 16, LOITER_UNLIM 17, LOITER_TIME 19, LAND 21, TAKEOFF 22, LOITER_TO_ALT 31, ROI 80,
+# VTOL_TAKEOFF 84, VTOL_LAND 85, DO_SET_ROI_LOCATION 195, DO_SET_ROI 201, AUTOTUNE 212,
+# ARM_DISARM 400, CONDITION_GATE 4501, the fence vertices/circles 5001-5004, FENCE_RETURN 5000,
+# RALLY_POINT 5100. No LOITER_TURNS (18): PX4 answers it MAV_MISSION_UNSUPPORTED.
+PX4_GLOBAL_COMMANDS = frozenset(
+    {16, 17, 19, 21, 22, 31, 80, 84, 85, 195, 201, 212, 400, 4501, 5000, 5001, 5002, 5003, 5004,
+     5100}
+)  # fmt: skip
+# Frame MISSION (2): DO_JUMP 177, ROI 80 / DO_SET_ROI 201, WINCH 42600, GRIPPER 211,
+# CHANGE_SPEED 178, SET_HOME 179, LAND_START 189, TRIGGER_CONTROL 2003, DIGICAM 203,
+# MOUNT 204/205, GIMBAL 1000/1001, camera 530/531/534, IMAGE 2000/2001, VIDEO 2500/2501,
+# CONTROL_VIDEO 200, CAM_TRIGG_DIST 206, OBLIQUE_SURVEY 260, CAM_TRIGG_INTERVAL 214,
+# VTOL_TRANSITION 3000, NAV_DELAY 93, RTL 20, ROI_WPNEXT_OFFSET 196, ROI_NONE 197,
+# CONDITION_DELAY 112, CONDITION_DISTANCE 114, SET_ACTUATOR 187, AUTOTUNE 212, ARM_DISARM 400.
+PX4_MISSION_FRAME_COMMANDS = frozenset(
+    {20, 80, 93, 112, 114, 177, 178, 179, 187, 189, 196, 197, 200, 201, 203, 204, 205, 206, 211,
+     212, 214, 260, 400, 530, 531, 534, 1000, 1001, 2000, 2001, 2003, 2500, 2501, 3000, 42600}
+)  # fmt: skip
 POSITION_COMMANDS = replay_mod.NAV_POSITION_COMMANDS
 ALT_RANGE_M = (-1000.0, 100_000.0)
 INT32 = (-(2**31), 2**31 - 1)
@@ -84,11 +111,20 @@ def _fits_int32(value: int) -> bool:
     return INT32[0] <= value <= INT32[1]
 
 
-def check_item(item: MissionItem) -> int:
-    """The MAV_MISSION_RESULT an autopilot gives ``item``: ACCEPTED, or why not."""
+def supports(item: MissionItem, flavour: str = "ardupilot") -> bool:
+    """Whether ``flavour`` has a mission item for ``item``'s command in its frame."""
+    if flavour == "px4":
+        if item.frame == MAV_FRAME_MISSION:
+            return item.command in PX4_MISSION_FRAME_COMMANDS
+        return item.command in PX4_GLOBAL_COMMANDS
+    return item.command in SUPPORTED_COMMANDS
+
+
+def check_item(item: MissionItem, flavour: str = "ardupilot") -> int:
+    """The MAV_MISSION_RESULT ``flavour`` gives ``item``: ACCEPTED, or why not."""
     if item.frame not in SUPPORTED_FRAMES:
         return mavlink.MAV_MISSION_UNSUPPORTED_FRAME
-    if item.command not in SUPPORTED_COMMANDS:
+    if not supports(item, flavour):
         return mavlink.MAV_MISSION_UNSUPPORTED
     if not 0 <= item.autocontinue <= 1:
         return mavlink.MAV_MISSION_INVALID
@@ -199,6 +235,7 @@ class MissionServer:
         self.send = send
         self.statustext = statustext
         self.flavour = flavour
+        self.home_at_seq0 = autopilot_for(flavour).home_at_seq0
         self.capacity = capacity
         self.home = home
         self.request_timeout = request_timeout
@@ -228,14 +265,14 @@ class MissionServer:
 
     def commit(self, items: list[MissionItem]) -> None:
         items = [replace(it, current=0, seq=k) for k, it in enumerate(items)]
-        if self.flavour == "ardupilot":
+        if self.home_at_seq0:
             # ArduPilot always holds its own home at seq 0, whatever was sent there.
             lat, lon, alt = self.home
             home = MissionItem(0, 0, 16, 0, 1, 0.0, 0.0, 0.0, 0.0, lat, lon, alt)
             items = [home, *items[1:]]
         with self.lock:
             self.items = items
-            self.current_seq = 1 if self.flavour == "ardupilot" and len(items) > 1 else 0
+            self.current_seq = 1 if self.home_at_seq0 and len(items) > 1 else 0
 
     # Sending ----------------------------------------------------------------------------------
     def ack(self, peer: Peer, result: int, mission_type: int = MAV_MISSION_TYPE_MISSION) -> None:
@@ -345,7 +382,7 @@ class MissionServer:
             self.ack(peer, mavlink.MAV_MISSION_DENIED)
             return
         item = item_from_wire(msg)
-        result = item if isinstance(item, int) else check_item(item)
+        result = item if isinstance(item, int) else check_item(item, self.flavour)
         seq = int(msg.seq)
         if seq != up.expected:
             if (
@@ -366,7 +403,11 @@ class MissionServer:
             self.ack(peer, mavlink.MAV_MISSION_INVALID_SEQUENCE)
             return
         if result != mavlink.MAV_MISSION_ACCEPTED:
+            # The whole upload ends here, the stored mission unchanged (both autopilots: PX4's
+            # handle_mission_item switches to idle after the refusing MISSION_ACK).
             self.upload = None
+            if result == mavlink.MAV_MISSION_UNSUPPORTED and not isinstance(item, int):
+                self.statustext(f"Mission item {seq}: command {item.command} not supported")
             self.ack(peer, result)
             return
         assert isinstance(item, MissionItem)

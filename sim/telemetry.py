@@ -20,8 +20,14 @@ from typing import Any
 
 import numpy as np
 
+from gcs_planner.autopilot import (
+    ARDUPLANE_MODE_AUTO,
+    PX4_MAIN_MODE_AUTO,
+    PX4_MODE_AUTO_MISSION,
+    PX4_SUB_MODE_AUTO_MISSION,
+    autopilot_for,
+)
 from gcs_planner.mission.georef import LocalFrame
-from gcs_planner.vehicle import AUTOPILOT_IDS
 
 # MAVLink enum values (common.xml / ardupilotmega.xml / PX4's px4_custom_mode.h).
 MAV_TYPE_FIXED_WING = 1
@@ -35,16 +41,24 @@ MAV_STATE_ACTIVE = 4
 MAV_SEVERITY_CRITICAL = 2
 MAV_SEVERITY_WARNING = 4
 MAV_SEVERITY_INFO = 6
-ARDUPLANE_MODE_AUTO = 10
-PX4_MAIN_MODE_AUTO = 4
-PX4_SUB_MODE_AUTO_MISSION = 4
-PX4_MODE_AUTO_MISSION = (PX4_MAIN_MODE_AUTO << 16) | (PX4_SUB_MODE_AUTO_MISSION << 24)
+# The mission modes' numbers live in the autopilot records (gcs_planner/autopilot.py); named
+# here too for the readers of this module.
+__all__ = [
+    "ARDUPLANE_MODE_AUTO", "PX4_MAIN_MODE_AUTO", "PX4_MODE_AUTO_MISSION",
+    "PX4_SUB_MODE_AUTO_MISSION", "extended_sys_state", "heartbeat_fields", "play", "timeline",
+]  # fmt: skip
 POSITION_RATE_HZ = 10.0
+# EXTENDED_SYS_STATE (common.xml): MAV_VTOL_STATE_UNDEFINED = 0 (not a VTOL);
+# MAV_LANDED_STATE_ON_GROUND = 1, MAV_LANDED_STATE_IN_AIR = 2.
+MAV_VTOL_STATE_UNDEFINED = 0
+MAV_LANDED_STATE_ON_GROUND = 1
+MAV_LANDED_STATE_IN_AIR = 2
 
 
 def heartbeat_fields(flavour: str, flying: bool) -> tuple[int, int, int, int, int]:
     """(type, autopilot, base_mode, custom_mode, system_status) of the vehicle's HEARTBEAT."""
-    autopilot = AUTOPILOT_IDS[flavour]
+    record = autopilot_for(flavour)
+    autopilot = record.autopilot_id
     if not flying:
         standby = MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
         return MAV_TYPE_FIXED_WING, autopilot, standby, 0, MAV_STATE_STANDBY
@@ -55,8 +69,15 @@ def heartbeat_fields(flavour: str, flying: bool) -> tuple[int, int, int, int, in
         | MAV_MODE_FLAG_GUIDED_ENABLED
         | MAV_MODE_FLAG_STABILIZE_ENABLED
     )
-    custom = ARDUPLANE_MODE_AUTO if flavour == "ardupilot" else PX4_MODE_AUTO_MISSION
-    return MAV_TYPE_FIXED_WING, autopilot, base, custom, MAV_STATE_ACTIVE
+    return MAV_TYPE_FIXED_WING, autopilot, base, record.auto_custom_mode, MAV_STATE_ACTIVE
+
+
+def extended_sys_state(flying: bool) -> tuple[int, int]:
+    """(vtol_state, landed_state) of EXTENDED_SYS_STATE: the mock's aircraft is on the ground
+    until a flight starts, in the air while it plays, and on the ground again after it (the
+    mock ends a flight where the replay ends; it does not model the loiter left at B)."""
+    landed = MAV_LANDED_STATE_IN_AIR if flying else MAV_LANDED_STATE_ON_GROUND
+    return MAV_VTOL_STATE_UNDEFINED, landed
 
 
 @dataclass(frozen=True)

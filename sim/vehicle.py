@@ -6,10 +6,20 @@ MISSION_CURRENT at 1 Hz, and hands each message to the part that serves it: the 
 (:mod:`sim.param_server`). Every handler runs under a guard: a message that makes one fail is
 counted in ``handler_errors`` and the vehicle goes on answering.
 
+It serves its firmware's parameters as shipped (:mod:`sim.param_server`, the records of
+:mod:`gcs_planner.autopilot`); :meth:`MockVehicle.autopilot_parameters` gives the flight the
+effective ones. MAV_CMD_MISSION_START and MAV_CMD_DO_SET_MODE to the mission mode (ArduPlane
+AUTO, PX4 AUTO/MISSION: what MAVSDK's ``start_mission()`` sends) start the flight;
+EXTENDED_SYS_STATE says landed (on the ground) until it starts, in the air while it plays, on
+the ground after.
+
 Faults (drop, duplicate, delay, reorder) can be injected on what it sends and on what it
-receives. Frames that arrive twice byte for byte (same MAVLink sequence number) are dropped as
-link-level duplicates, a check real radios and routers also make; a duplicate that differs in
-any byte is a new message and handled as such.
+receives. A frame that arrives again byte for byte (same MAVLink sequence number) from the same
+address within ``DUPLICATE_WINDOW_S`` is dropped as a link-level duplicate, as a radio's
+retransmission or a router's second path delivers it; a duplicate that differs in any byte is a
+new message. The window and the address matter: a ground station restarted (a new process,
+whose sequence numbers start again at 0) sends frames byte-identical to its predecessor's, and
+those are new messages.
 
 It runs in a thread: ``start()`` / ``stop()`` or ``with MockVehicle(...) as v:``. Given a
 scenario it can fly its stored mission (``replay`` for the report, ``fly`` with telemetry).
@@ -17,16 +27,17 @@ scenario it can fly its stored mission (``replay`` for the report, ``fly`` with 
 
 from __future__ import annotations
 
-import collections
+import math
 import threading
 import time
 from collections.abc import Iterable
 from typing import Any
 
+from gcs_planner.autopilot import EffectiveParameters, autopilot_for
 from gcs_planner.link.connection import Link, mavlink
 from gcs_planner.mission.items import MissionItem
 from gcs_planner.scenario.model import Scenario
-from gcs_planner.vehicle import ENVELOPE_PARAMS, FIRMWARES
+from gcs_planner.vehicle import FIRMWARES
 from sim import replay as replay_mod
 from sim import telemetry
 from sim.faults import FaultInjector, FaultRates
@@ -35,7 +46,10 @@ from sim.mission_server import MissionServer, seq_from_param
 from sim.param_server import ParamServer, parameter_table
 
 FLAVOURS = FIRMWARES
-_CRUISE_PARAM = {flavour: ENVELOPE_PARAMS[flavour]["cruise_airspeed"] for flavour in FLAVOURS}
+# Copies of one frame by a radio or a router arrive within milliseconds; a ground station
+# resending on a timeout does so after its timeout (the link's: 1 s) with a new sequence number.
+# Half a second tells the two apart on a busy machine.
+DUPLICATE_WINDOW_S = 0.5
 
 
 class _FaultyWriter:
@@ -124,11 +138,19 @@ class MockVehicle:
         )
         profile = scenario.vehicle if scenario is not None else None
         table = parameter_table(flavour, profile)
-        self.params = ParamServer(self.mav, self._send, table, self._lock)
+        self.autopilot = autopilot_for(flavour)
+        self.params = ParamServer(
+            self.mav, self._send, table, self._lock, flavour=flavour, statustext=self._statustext
+        )
         self.handler_errors = 0  # messages whose handling failed; the vehicle went on
-        self._seen: collections.deque[bytes] = collections.deque(maxlen=64)
-        self._seen_set: set[bytes] = set()
-        self._peers: set[tuple[int, int]] = set()
+        self.flight_errors = 0  # flights that raised; the vehicle said so and went on
+        # (address, frame bytes) -> when it last arrived, for the duplicate window.
+        self._seen: dict[tuple[Any, bytes], float] = {}
+        self._seen_pruned = 0.0
+        self.duplicates_dropped = 0  # frames dropped as link-level copies
+        self.commands: list[tuple[int, int]] = []  # (MAV_CMD, MAV_RESULT) answered
+        self._peers: set[tuple[int, int]] = set()  # ground stations heard
+        self._peer_addresses: set[tuple[tuple[int, int], Any]] = set()
         self._thread: threading.Thread | None = None
         self._fly_thread: threading.Thread | None = None
         self._stop = threading.Event()
@@ -175,6 +197,13 @@ class MockVehicle:
     def parameters(self) -> dict[str, float]:
         return self.params.values
 
+    def autopilot_parameters(self) -> EffectiveParameters:
+        """The parameters the flight flies with now (shipped defaults, the scenario's aircraft,
+        and whatever the ground station set): cruise airspeed, climb and sink rates, bank limit,
+        loiter and acceptance radii, L1 (ArduPlane) or npfg (PX4) constants. See
+        :class:`gcs_planner.autopilot.EffectiveParameters`."""
+        return self.params.effective
+
     @property
     def current(self) -> int:
         return self.missions.current
@@ -211,6 +240,12 @@ class MockVehicle:
     def _heartbeat(self) -> None:
         fields = telemetry.heartbeat_fields(self.flavour, self.flying)
         self._send(self.mav.heartbeat_encode(*fields))
+        self._extended_sys_state()
+
+    def _extended_sys_state(self) -> None:
+        # Both autopilots stream it (ArduPilot GCS_MAVLINK::send_extended_sys_state, PX4's
+        # EXTENDED_SYS_STATE stream); MAVSDK's in_air and QGroundControl read landed_state.
+        self._send(self.mav.extended_sys_state_encode(*telemetry.extended_sys_state(self.flying)))
 
     def _mission_current(self) -> None:
         self.missions.mission_current()
@@ -252,17 +287,24 @@ class MockVehicle:
         # Where it came from, kept with it through the fault injector's delays: a transfer is
         # bound to its sender's address as well as its ids.
         msg._gcs_address = self.link.last_sender
-        if self.drop_link_duplicates:
-            key = bytes(msg.get_msgbuf())
-            if key in self._seen_set:
-                return ()
-            if len(self._seen) == self._seen.maxlen:
-                self._seen_set.discard(self._seen[0])
-            self._seen.append(key)
-            self._seen_set.add(key)
+        if self.drop_link_duplicates and self._duplicate(msg, now):
+            return ()
         if self.faults_in is not None:
             return self.faults_in.push(msg, now)
         return (msg,)
+
+    def _duplicate(self, msg: Any, now: float) -> bool:
+        """Whether ``msg`` is a copy of a frame from the same address within the window."""
+        if now - self._seen_pruned > DUPLICATE_WINDOW_S:
+            self._seen = {k: t for k, t in self._seen.items() if now - t <= DUPLICATE_WINDOW_S}
+            self._seen_pruned = now
+        key = (msg._gcs_address, bytes(msg.get_msgbuf()))
+        seen = self._seen.get(key)
+        self._seen[key] = now
+        if seen is not None and now - seen <= DUPLICATE_WINDOW_S:
+            self.duplicates_dropped += 1
+            return True
+        return False
 
     def _for_me(self, msg: Any) -> bool:
         ts = getattr(msg, "target_system", 0)
@@ -291,9 +333,13 @@ class MockVehicle:
 
     def _on_heartbeat(self, msg: Any, peer: tuple[int, int]) -> None:
         # Answer a newcomer at once rather than at the next 1 Hz beat, as a vehicle listening on
-        # udpin can only reach a ground station after hearing it.
-        if peer not in self._peers:
+        # udpin can only reach a ground station after hearing it. A newcomer is new ids or a new
+        # address: a ground station restarted with the same ids (every `gcs-planner download`
+        # is 255/190) otherwise waits up to a second for the next beat.
+        key = (peer, getattr(msg, "_gcs_address", None))
+        if key not in self._peer_addresses:
             self._peers.add(peer)
+            self._peer_addresses.add(key)
             self._heartbeat()
 
     def _on_command_long(self, msg: Any, peer: tuple[int, int]) -> None:
@@ -305,22 +351,57 @@ class MockVehicle:
                 self._statustext(f"Set current item {msg.param1!r} failed: no such item")
             result = mavlink.MAV_RESULT_ACCEPTED if ok else mavlink.MAV_RESULT_DENIED
         elif msg.command == mavlink.MAV_CMD_MISSION_START:
-            busy = self._fly_thread is not None and self._fly_thread.is_alive()
-            home_only = 1 if self.flavour == "ardupilot" else 0  # ArduPilot's home stays
-            if self.scenario is None or len(self.mission) <= home_only or busy:
-                result = mavlink.MAV_RESULT_DENIED
-            else:
-                result = mavlink.MAV_RESULT_ACCEPTED
-                self._fly_thread = threading.Thread(
-                    target=self.fly, kwargs={"time_scale": self.speedup}, daemon=True
-                )
-                self._fly_thread.start()
+            result = self._start_flight()
+        elif msg.command == mavlink.MAV_CMD_DO_SET_MODE:
+            result = self._set_mode(msg.param1, msg.param2, msg.param3)
+        self.commands.append((int(msg.command), result))
         self._send(self.mav.command_ack_encode(msg.command, result))
+
+    def _set_mode(self, base: float, main: float, sub: float) -> int:
+        """MAV_CMD_DO_SET_MODE. The mission mode starts the flight as MISSION_START does (what
+        ArduPlane's AUTO and PX4's AUTO/MISSION do once airborne); this mock models no other
+        mode, and refuses one as ArduPilot refuses a mode it cannot enter
+        (``GCS_MAVLINK::_set_mode_common``: MAV_RESULT_FAILED) or PX4 a transition it denies
+        (``Commander::handle_command``: MAV_RESULT_TEMPORARILY_REJECTED)."""
+        if self.autopilot.is_auto_mode(base, main, sub):
+            return self._start_flight()
+        self._statustext("Mode change refused: only the mission mode is modelled")
+        if self.flavour == "px4":
+            return mavlink.MAV_RESULT_TEMPORARILY_REJECTED
+        custom = math.isfinite(base) and int(base) & mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
+        # ArduPilot: no custom-mode flag is an invalid command (DENIED); a custom mode it cannot
+        # enter is FAILED.
+        return mavlink.MAV_RESULT_FAILED if custom else mavlink.MAV_RESULT_DENIED
+
+    def _start_flight(self) -> int:
+        if self._fly_thread is not None and self._fly_thread.is_alive():
+            # Already flying the mission: MAVSDK's start_mission() on ArduPilot sends
+            # DO_SET_MODE AUTO and then MISSION_START; both autopilots accept the second while
+            # in the mission mode. The flight under way goes on; none is started beside it.
+            return mavlink.MAV_RESULT_ACCEPTED
+        home_only = 1 if self.autopilot.home_at_seq0 else 0  # ArduPilot's home stays
+        if self.scenario is None or len(self.mission) <= home_only:
+            return mavlink.MAV_RESULT_DENIED
+        self._fly_thread = threading.Thread(target=self._fly_guarded, daemon=True)
+        self._fly_thread.start()
+        return mavlink.MAV_RESULT_ACCEPTED
+
+    def _fly_guarded(self) -> None:
+        """The flight thread: whatever the flight model raises ends this flight with a
+        STATUSTEXT, never the vehicle (which goes on answering and can fly again)."""
+        try:
+            self.fly(time_scale=self.speedup)
+        except Exception as exc:
+            self.flight_errors += 1
+            self.flying = False
+            self._heartbeat()
+            text = f"Flight aborted: {type(exc).__name__}"
+            self._statustext(text, mavlink.MAV_SEVERITY_CRITICAL)
 
     # Flying -----------------------------------------------------------------------------------
     @property
     def cruise_speed(self) -> float:
-        return self.parameters[_CRUISE_PARAM[self.flavour]]
+        return self.autopilot_parameters().cruise_airspeed
 
     def replay(self, *, seed: int = 0, runs: int = 0) -> replay_mod.ReplayReport:
         """Fly the stored mission in mode AUTO (sim/guidance.py) with the landmark database's
@@ -332,7 +413,7 @@ class MockVehicle:
             self.scenario,
             seed=seed,
             runs=runs,
-            home_at_seq0=self.flavour == "ardupilot",
+            home_at_seq0=self.autopilot.home_at_seq0,
             capture_radius=self.capture_radius,
             cruise_speed=self.cruise_speed,
             flavour=self.flavour,
@@ -367,6 +448,7 @@ class MockVehicle:
             )
         finally:
             self.flying = False
+            self._heartbeat()  # disarmed and on the ground at once, not at the next beat
         return report
 
     def _fly_current(self, seq: int) -> None:

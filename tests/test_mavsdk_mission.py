@@ -149,3 +149,32 @@ def test_project_client_uploads_to_mavsdk_mission_raw_server_and_reads_back():
     server_items = from_raw(received[-1][1].mission_items)
     assert not mission_differences(items, server_items)
     assert not mission_differences(items, again)
+
+
+@pytest.mark.parametrize("flavour", ["ardupilot", "px4"])
+def test_mavsdk_start_mission_flies_the_mock(flavour):
+    """Issue 26: MAVSDK's ``start_mission()`` sets the mission mode with MAV_CMD_DO_SET_MODE
+    (ArduPlane AUTO; PX4 AUTO/MISSION), which the mock answered UNSUPPORTED (MAVSDK raised)."""
+    from test_mock_params import mission_items, scenario
+
+    sc = scenario()
+    port = free_udp_port()
+    gcs = mavsdk_instance(ComponentType.GROUND_STATION)
+    try:
+        assert int(gcs.add_any_connection(f"udpin://127.0.0.1:{port}")) == 0
+        with MockVehicle(
+            f"udpout:127.0.0.1:{port}", flavour=flavour, scenario=sc, speedup=20_000.0
+        ) as vehicle:
+            system = gcs.first_autopilot(timeout_s=30.0)
+            assert system is not None
+            raw = MissionRaw(system)
+            raw.upload_mission(to_raw(mission_items(sc, flavour)))
+            raw.start_mission()  # raises on a refusal
+            assert vehicle._fly_thread is not None
+            vehicle._fly_thread.join(60.0)
+            assert not vehicle._fly_thread.is_alive()
+    finally:
+        gcs.destroy()
+    # What MAVSDK sent: DO_SET_MODE (176), accepted.
+    assert (176, 0) in vehicle.commands
+    assert vehicle.last_report is not None and vehicle.flight_errors == 0

@@ -209,3 +209,76 @@ def test_final_item_resent_after_a_lost_ack_is_acknowledged_again():
     assert [m.type for m in again] == [mavlink.MAV_MISSION_ACCEPTED]
     assert stale == []
     assert len(vehicle.mission) == 2
+
+
+def test_consecutive_download_processes_are_each_answered_first_time(tmp_path):
+    """Issue 26: every `gcs-planner download` starts its MAVLink sequence at 0, so its frames
+    are byte-identical to its predecessor's; the vehicle dropped them as duplicates (no time
+    limit, no address), and a download got its answer only after resending. With no resends
+    allowed (--retries 0; generous waits) each of three processes must be answered."""
+    import subprocess
+    import sys
+
+    port = free_udp_port()
+    with MockVehicle(f"udpin:127.0.0.1:{port}", flavour="px4") as vehicle:
+        client = MissionClient(open_link(f"udpout:127.0.0.1:{port}"))
+        try:
+            client.connect(timeout=30.0)
+            client.upload(ITEMS)
+        finally:
+            client.link.close()
+        for k in range(3):
+            out = tmp_path / f"back{k}.json"
+            run = subprocess.run(
+                [sys.executable, "-m", "gcs_planner", "download", "--connect",
+                 f"udpout:127.0.0.1:{port}", "--retries", "0", "--timeout", "10", "--wait", "30",
+                 "--quiet", "--out", str(out)],
+                capture_output=True, text=True, timeout=120,
+            )  # fmt: skip
+            assert run.returncode == 0, run.stderr
+            assert out.exists()
+    assert vehicle.duplicates_dropped == 0
+
+
+def test_a_one_shot_request_from_each_new_client_is_answered():
+    """A PARAM_REQUEST_READ sent once by a fresh client (a script, a one-shot tool) is the
+    same bytes as the last one's: it went unanswered."""
+    port = free_udp_port()
+    answered = 0
+    with MockVehicle(f"udpin:127.0.0.1:{port}", flavour="ardupilot"):
+        for _ in range(4):
+            link = open_link(f"udpout:127.0.0.1:{port}")
+            try:
+                link.send(link.mav.param_request_read_encode(1, 1, b"", 0))
+                deadline = time.monotonic() + 10.0
+                while time.monotonic() < deadline:
+                    msg = link.recv(0.1)
+                    if msg is not None and msg.get_type() == "PARAM_VALUE":
+                        answered += 1
+                        break
+            finally:
+                link.close()
+    assert answered == 4
+
+
+def test_a_copy_after_the_window_is_a_new_message():
+    """The same bytes from the same address later than DUPLICATE_WINDOW_S are handled again
+    (a radio's copy comes within milliseconds; this is a resend)."""
+    from sim.vehicle import DUPLICATE_WINDOW_S
+
+    port = free_udp_port()
+    with MockVehicle(f"udpin:127.0.0.1:{port}", flavour="px4") as vehicle:
+        link = _raw_peer(port)
+        try:
+            buf = link.mav.mission_clear_all_encode(1, 1, 0).pack(link.mav)
+            for copies in (1, 2):
+                link.write_raw(buf)
+                deadline = time.monotonic() + 10.0
+                while vehicle.acks_sent.count(mavlink.MAV_MISSION_ACCEPTED) < copies:
+                    assert time.monotonic() < deadline, f"copy {copies} was not handled"
+                    time.sleep(0.05)
+                # Handled, so stamped: the next copy comes well after the window.
+                time.sleep(DUPLICATE_WINDOW_S + 1.0)
+        finally:
+            link.close()
+    assert vehicle.duplicates_dropped == 0

@@ -231,3 +231,142 @@ def test_mission_start_with_home_alone_is_denied():
         ack = wait_for(link, of("COMMAND_ACK"))
         assert ack is not None and ack.result == mavlink.MAV_RESULT_DENIED
         assert len(vehicle.mission) == 1
+
+
+# Issue 26 -------------------------------------------------------------------------------------
+
+
+def upload_result(link: Link, items: list[MissionItem]) -> int:
+    """Upload by hand, answering every request, and return the MISSION_ACK's result."""
+    link.send(link.mav.mission_count_encode(1, 1, len(items), 0))
+    kinds = ("MISSION_REQUEST_INT", "MISSION_REQUEST", "MISSION_ACK")
+    while True:
+        msg = wait_for(link, lambda m: m.get_type() in kinds)
+        assert msg is not None, "the vehicle fell silent mid-upload"
+        if msg.get_type() == "MISSION_ACK":
+            return int(msg.type)
+        link.send(item_to_message(link.mav, items[msg.seq], 1, 1))
+
+
+WP = MissionItem(0, 3, 16, x=305_000_000, y=1_235_000_000, z=100.0)
+UNSUPPORTED_ON_PX4 = [
+    # NAV_LOITER_TURNS: PX4 has no mission item for it (mavlink_mission.cpp).
+    MissionItem(1, 3, 18, param1=2.0, param3=200.0, x=305_010_000, y=1_235_000_000, z=300.0),
+    # A NAV_WAYPOINT in frame MISSION, and CONDITION_CHANGE_ALT: not in PX4's lists either.
+    MissionItem(1, 2, 16, x=0, y=0, z=0.0),
+    MissionItem(1, 2, 113, param1=1.0, z=300.0),
+]
+
+
+@pytest.mark.parametrize("odd", UNSUPPORTED_ON_PX4, ids=["loiter_turns", "wp_frame2", "cond_alt"])
+def test_px4_refuses_the_whole_upload_holding_an_item_it_does_not_support(odd):
+    """A real PX4 answers MAV_MISSION_UNSUPPORTED and keeps the mission it had; the mock
+    accepted NAV_LOITER_TURNS and its flight skipped it."""
+    items = [WP, odd.with_seq(1), WP.with_seq(2)]
+    with vehicle_and_peer("px4", request_timeout=30.0) as (vehicle, link):
+        upload_raw(link, ITEMS[:2])
+        assert upload_result(link, items) == mavlink.MAV_MISSION_UNSUPPORTED
+        assert vehicle.mission == ITEMS[:2]
+        assert any(f"command {odd.command} not supported" in t for t in vehicle.statustexts)
+        assert still_answers(link)
+
+
+def test_ardupilot_takes_loiter_turns():
+    items = [WP, UNSUPPORTED_ON_PX4[0], WP.with_seq(2)]
+    with vehicle_and_peer("ardupilot", request_timeout=30.0) as (vehicle, link):
+        assert upload_result(link, items) == mavlink.MAV_MISSION_ACCEPTED
+        assert [it.command for it in vehicle.mission] == [16, 18, 16]
+
+
+def flight_scenario():
+    import numpy as np
+
+    from gcs_planner.scenario.generate import DATASET1
+    from gcs_planner.scenario.model import Kind, Origin, Scenario
+
+    xyz = np.array([[i * 12_000.0, 0.0, 5000.0] for i in range(5)])
+    return Scenario(
+        ids=("A", "V1", "H1", "V2", "B"),
+        xyz=xyz,
+        kind=np.array([Kind.A, Kind.V, Kind.H, Kind.V, Kind.B], dtype=np.uint8),
+        unreliable=np.zeros(5, bool),
+        params=DATASET1,
+        origin=Origin(30.5, 123.5, 0.0),
+    )
+
+
+def flight_items(flavour: str) -> list[MissionItem]:
+    from gcs_planner.mission.georef import LocalFrame
+
+    sc = flight_scenario()
+    frame = LocalFrame(sc.origin)
+    points = [sc.xyz[0], *sc.xyz] if flavour == "ardupilot" else list(sc.xyz)
+    out = []
+    for k, p in enumerate(points):
+        lat, lon, alt = frame.to_geodetic(*p)
+        out.append(MissionItem(k, 0, 16, param2=1.0, x=round(lat * 1e7), y=round(lon * 1e7),
+                               z=float(alt)))  # fmt: skip
+    return out
+
+
+AUTO = {"ardupilot": (1.0, 10.0, 0.0), "px4": (1.0, 4.0, 4.0)}  # DO_SET_MODE params 1-3
+
+
+@pytest.mark.parametrize("flavour", ["ardupilot", "px4"])
+def test_do_set_mode_to_the_mission_mode_flies_and_the_landed_state_follows(flavour):
+    """MAV_CMD_DO_SET_MODE (custom mode enabled; ArduPlane AUTO 10, PX4 main AUTO 4 / sub
+    MISSION 4) is how MAVSDK starts a mission: the mock answered UNSUPPORTED. EXTENDED_SYS_STATE
+    says ON_GROUND before, IN_AIR during and ON_GROUND after the flight (it sent none)."""
+    landed: list[int] = []
+    with vehicle_and_peer(flavour, scenario=flight_scenario(), speedup=None) as (vehicle, link):
+        upload_raw(link, flight_items(flavour))
+        first = wait_for(link, of("EXTENDED_SYS_STATE"))
+        assert first is not None
+        landed.append(first.landed_state)
+        link.send(link.mav.command_long_encode(1, 1, mavlink.MAV_CMD_DO_SET_MODE, 0,
+                                               *AUTO[flavour], 0, 0, 0, 0))  # fmt: skip
+        ack = wait_for(link, of("COMMAND_ACK"))
+        assert ack is not None and ack.command == mavlink.MAV_CMD_DO_SET_MODE
+        assert ack.result == mavlink.MAV_RESULT_ACCEPTED
+
+        def watch(m: Any) -> bool:
+            if m.get_type() == "EXTENDED_SYS_STATE":
+                if m.landed_state != landed[-1]:
+                    landed.append(m.landed_state)
+                return len(landed) >= 3
+            return False
+
+        assert wait_for(link, watch) is not None
+        vehicle._fly_thread.join(PROOF_S)
+    on_ground, in_air = mavlink.MAV_LANDED_STATE_ON_GROUND, mavlink.MAV_LANDED_STATE_IN_AIR
+    assert landed == [on_ground, in_air, on_ground]
+    assert vehicle.last_report is not None and vehicle.flight_errors == 0
+
+
+@pytest.mark.parametrize(
+    ("flavour", "params", "result"),
+    [
+        ("ardupilot", (1.0, 11.0, 0.0), mavlink.MAV_RESULT_FAILED),  # RTL: not modelled
+        ("ardupilot", (0.0, 10.0, 0.0), mavlink.MAV_RESULT_DENIED),  # no custom-mode flag
+        ("ardupilot", (math.nan, 10.0, 0.0), mavlink.MAV_RESULT_DENIED),
+        ("px4", (1.0, 4.0, 3.0), mavlink.MAV_RESULT_TEMPORARILY_REJECTED),  # AUTO/LOITER
+        ("px4", (math.nan, 4.0, 4.0), mavlink.MAV_RESULT_TEMPORARILY_REJECTED),
+    ],
+)
+def test_do_set_mode_to_another_mode_is_refused_and_nothing_flies(flavour, params, result):
+    with vehicle_and_peer(flavour, scenario=flight_scenario(), speedup=None) as (vehicle, link):
+        upload_raw(link, flight_items(flavour))
+        link.send(link.mav.command_long_encode(1, 1, mavlink.MAV_CMD_DO_SET_MODE, 0, *params,
+                                               0, 0, 0, 0))  # fmt: skip
+        ack = wait_for(link, of("COMMAND_ACK"))
+        assert ack is not None and ack.result == result
+        assert still_answers(link)
+    assert vehicle.last_report is None and not vehicle.flying
+
+
+def test_do_set_mode_auto_with_nothing_to_fly_is_denied():
+    with vehicle_and_peer("px4", scenario=flight_scenario()) as (vehicle, link):
+        link.send(link.mav.command_long_encode(1, 1, mavlink.MAV_CMD_DO_SET_MODE, 0, *AUTO["px4"],
+                                               0, 0, 0, 0))  # fmt: skip
+        ack = wait_for(link, of("COMMAND_ACK"))
+        assert ack is not None and ack.result == mavlink.MAV_RESULT_DENIED
