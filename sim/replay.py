@@ -458,30 +458,37 @@ def _fly(
     total = path.length
     v += total - last
     h += total - last
-    b = scenario.xyz[scenario.end]
-    miss_b = float(np.linalg.norm(path.points[-1] - b))
-    reached = miss_b <= capture_radius
+    return _arrival_at_b(path, scenario, params, capture_radius, total, tuple(rows), v, h)
+
+
+def _arrival_at_b(
+    path: FlightPath,
+    scenario: Scenario,
+    params: Parameters,
+    capture: float,
+    flown: float,
+    rows: tuple[CorrectionRow, ...],
+    v: float,
+    h: float,
+) -> ReplayRun:
+    """The run's end at B: ``path`` ends at its closest approach, which must be within the
+    capture radius of B with both errors (``v``, ``h``: metres flown's worth) within theta. One
+    rule for the still-air replay (``_fly``) and the flight on the estimate (``_ins_run``)."""
+    miss_b = float(np.linalg.norm(path.points[-1] - scenario.xyz[scenario.end]))
+    reached = miss_b <= capture
     theta_m = params.limits_m(Kind.B)[0]
     within = v <= theta_m and h <= theta_m
     reason = ""
     if not reached:
         reason = (
             f"the flight passes {miss_b:.1f} m from B at its closest (3D), outside the capture "
-            f"radius {capture_radius:g} m"
+            f"radius {capture:g} m"
         )
     elif not within:
         reason = "lost at B: an error over theta on arrival"
-    return ReplayRun(
-        reached and within,
-        reached and not within,
-        reason,
-        total,
-        tuple(rows),
-        v * delta,
-        h * delta,
-        reached,
-        miss_b,
-    )
+    delta = params.delta
+    return ReplayRun(reached and within, reached and not within, reason, flown, rows,
+                     v * delta, h * delta, reached, miss_b)  # fmt: skip
 
 
 def monte_carlo(
@@ -602,22 +609,7 @@ def _ins_run(
         last_d, v_after, h_after = c.distance, c.v_after_m, c.h_after_m
     if rows:
         v, h = v_after + (end - last_d), h_after + (end - last_d)
-    b = scenario.xyz[scenario.end]
-    miss_b = float(np.linalg.norm(path.points[-1] - b))
-    reached = miss_b <= capture
-    theta_m = params.limits_m(Kind.B)[0]
-    within = v <= theta_m and h <= theta_m
-    reason = ""
-    if not reached:
-        reason = (
-            f"the flight passes {miss_b:.1f} m from B at its closest (3D), outside the capture "
-            f"radius {capture:g} m"
-        )
-    elif not within:
-        reason = "lost at B: an error over theta on arrival"
-    run = ReplayRun(reached and within, reached and not within, reason, end, tuple(rows),
-                    v * delta, h * delta, reached, miss_b)  # fmt: skip
-    return run, encounters
+    return _arrival_at_b(path, scenario, params, capture, end, tuple(rows), v, h), encounters
 
 
 @dataclass(frozen=True)
