@@ -10,7 +10,9 @@ The summaries are updated with each survivor as it is made (the caller passes co
 later candidate that an earlier one of the same layer dominates or equals is dropped at once.
 The full filter would drop it too (whatever dominates the earlier one dominates it), so the
 labels kept after the full filter are the same; only fewer reach the sort (tested equal to the
-numpy layer, table for table).
+numpy layer, table for table). For the same reason the labels can be split into slices fanned
+on threads, each slice with its own copy of the summaries: a slice drops less, the filter
+after drops the rest, and the table is the same whatever the number of threads.
 """
 
 from __future__ import annotations
@@ -19,11 +21,13 @@ import numpy as np
 from numba import njit
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def backward_fan(
     node: np.ndarray,
     R: np.ndarray,
     E: np.ndarray,
+    first: int,
+    last: int,
     r_ptr: np.ndarray,
     r_src: np.ndarray,
     r_len: np.ndarray,
@@ -31,29 +35,39 @@ def backward_fan(
     lim_v: np.ndarray,
     lim_h: np.ndarray,
     own: np.ndarray,
-    near_R: np.ndarray,
-    near_e: np.ndarray,
-    wide_R: np.ndarray,
-    wide_e: np.ndarray,
+    f_ptr: np.ndarray,
+    f_R: np.ndarray,
+    f_E: np.ndarray,
+    summary: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The candidates (predecessor, R, E) of one layer that pass the cheap tests, in the order
-    the numpy layer makes them (labels in order, each label's reverse arcs in order). Updates
-    the four summary arrays in place. ``own[j]``: the metres j's own component carries right
-    after its correction."""
+    """The candidates (predecessor, R, E) that labels ``first:last`` of one layer make and
+    that pass the cheap tests, labels in order. ``summary[j]`` is (near R, near -E, wide R,
+    wide -E) of point j, updated in place (one row of four: the tests read all four of the
+    predecessor, which is anywhere in the map, at one cache line). ``own[j]``: the metres j's
+    own component carries right after its correction. A candidate the frontier of the labels
+    kept so far dominates or equals (``f_ptr``, ``f_R``, ``f_E``: see ``dominated_by_frontier``)
+    is dropped here too, so that only the candidates ahead of it are ever stored. Without the
+    GIL: ``cost_to_go`` runs slices of the labels on threads, each with its own copy of the
+    summaries (the frontier is only read)."""
     cap = 1024
     out_j = np.empty(cap, np.int64)
     out_R = np.empty(cap)
     out_E = np.empty(cap)
     n_out = 0
-    for lab in range(node.shape[0]):
+    for lab in range(first, last):
         j1 = node[lab]
         E1 = E[lab]
         R1 = R[lab]
+        v1 = is_v[j1]
         for arc in range(r_ptr[j1], r_ptr[j1 + 1]):
-            j = r_src[arc]
             d = r_len[arc]
-            same = is_v[j] == is_v[j1]
-            if is_v[j]:
+            # Every continuation needs d <= E1 (the carried component arrives with E1's
+            # allowance at most), and the arcs come shortest first: none after this one can.
+            if d > E1:
+                break
+            j = r_src[arc]
+            vj = is_v[j]
+            if vj:
                 lim_own = lim_v[j1]
                 lim_other = lim_h[j1]
             else:
@@ -62,6 +76,7 @@ def backward_fan(
             d_own = d + own[j]
             if not (d_own <= lim_own):
                 continue
+            same = vj == v1
             if not same and not (d_own <= E1):
                 continue
             if same:
@@ -72,16 +87,17 @@ def backward_fan(
                 continue
             new_R = R1 + d
             neg = -new_E
-            if (near_R[j] <= new_R and near_e[j] <= neg) or (
-                wide_R[j] <= new_R and wide_e[j] <= neg
-            ):
+            s = summary[j]
+            if (s[0] <= new_R and s[1] <= neg) or (s[2] <= new_R and s[3] <= neg):
                 continue
-            if new_R < near_R[j] or (new_R == near_R[j] and neg < near_e[j]):
-                near_R[j] = new_R
-                near_e[j] = neg
-            if neg < wide_e[j] or (neg == wide_e[j] and new_R < wide_R[j]):
-                wide_R[j] = new_R
-                wide_e[j] = neg
+            if dominated_by_frontier(j, new_R, new_E, f_ptr, f_R, f_E):
+                continue
+            if new_R < s[0] or (new_R == s[0] and neg < s[1]):
+                s[0] = new_R
+                s[1] = neg
+            if neg < s[3] or (neg == s[3] and new_R < s[2]):
+                s[2] = new_R
+                s[3] = neg
             if n_out == cap:
                 cap *= 2
                 grown_j = np.empty(cap, np.int64)
@@ -98,36 +114,25 @@ def backward_fan(
     return out_j[:n_out], out_R[:n_out], out_E[:n_out]
 
 
-@njit(cache=True)
-def off_frontier(
-    node: np.ndarray,
-    R: np.ndarray,
-    E: np.ndarray,
-    f_ptr: np.ndarray,
-    f_R: np.ndarray,
-    f_E: np.ndarray,
-) -> np.ndarray:
-    """Per candidate (node, R, E): whether no frontier label of its node dominates or equals it
-    (R' <= R and E' >= E). The frontier of each node is rows f_ptr[j]:f_ptr[j+1], sorted by R
-    ascending, so E ascends too (a label further from B that allows no more error is off the
-    frontier): the label with the largest E among those with R' <= R is the last of them,
-    found by bisection. Exact comparisons, the same test as the sort of ``cost_to_go._filter``."""
-    out = np.ones(node.shape[0], np.bool_)
-    for c in range(node.shape[0]):
-        j = node[c]
-        lo = f_ptr[j]
-        hi = f_ptr[j + 1]
-        r = R[c]
-        # First row with f_R > r.
-        while lo < hi:
-            mid = (lo + hi) // 2
-            if f_R[mid] <= r:
-                lo = mid + 1
-            else:
-                hi = mid
-        if lo > f_ptr[j] and f_E[lo - 1] >= E[c]:
-            out[c] = False
-    return out
+@njit(cache=True, nogil=True)
+def dominated_by_frontier(
+    j: int, r: float, e: float, f_ptr: np.ndarray, f_R: np.ndarray, f_E: np.ndarray
+) -> bool:
+    """Whether a frontier label of node j dominates or equals (j, r, e) (R' <= r and E' >= e).
+    The frontier of each node is rows f_ptr[j]:f_ptr[j+1], sorted by R ascending, so E ascends
+    too (a label further from B that allows no more error is off the frontier): the label with
+    the largest E among those with R' <= r is the last of them, found by bisection. Exact
+    comparisons, the same test as the sort of ``cost_to_go._filter``."""
+    first = f_ptr[j]
+    lo = first
+    hi = f_ptr[j + 1]
+    while lo < hi:  # the first row with f_R > r
+        mid = (lo + hi) // 2
+        if f_R[mid] <= r:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo > first and f_E[lo - 1] >= e
 
 
 @njit(cache=True)
@@ -197,11 +202,16 @@ def merge_frontier(
 
 @njit(cache=True)
 def reverse_arcs(
-    indptr: np.ndarray, target: np.ndarray, length: np.ndarray, start: int, end: int
+    indptr: np.ndarray,
+    target: np.ndarray,
+    length: np.ndarray,
+    start: int,
+    end: int,
+    renumber: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The arcs between correction points (none out of A, none into B) grouped by target, as
-    (r_ptr, r_src, r_len): a counting sort, in the order a stable sort by target of the arcs
-    in their CSR order gives (by source, then as stored)."""
+    (r_ptr, r_src, r_len) with node i numbered ``renumber[i]``: a counting sort, then each
+    target's arcs shortest first."""
     n = indptr.shape[0] - 1
     r_ptr = np.zeros(n + 1, np.int64)
     for i in range(n):
@@ -210,7 +220,7 @@ def reverse_arcs(
         for a in range(indptr[i], indptr[i + 1]):
             t = target[a]
             if t != end:
-                r_ptr[t + 1] += 1
+                r_ptr[renumber[t] + 1] += 1
     for i in range(n):
         r_ptr[i + 1] += r_ptr[i]
     fill = r_ptr[:-1].copy()
@@ -222,10 +232,20 @@ def reverse_arcs(
         for a in range(indptr[i], indptr[i + 1]):
             t = target[a]
             if t != end:
-                at = fill[t]
-                r_src[at] = i
+                u = renumber[t]
+                at = fill[u]
+                r_src[at] = renumber[i]
                 r_len[at] = length[a]
-                fill[t] = at + 1
+                fill[u] = at + 1
+    # Each target's arcs shortest first (stable, so equal lengths keep the order above):
+    # ``backward_fan`` stops at the first arc longer than a label's allowance.
+    for t in range(n):
+        lo = r_ptr[t]
+        hi = r_ptr[t + 1]
+        if hi - lo > 1:
+            by = np.argsort(r_len[lo:hi], kind="mergesort")
+            r_src[lo:hi] = r_src[lo:hi][by]
+            r_len[lo:hi] = r_len[lo:hi][by]
     return r_ptr, r_src, r_len
 
 
@@ -249,8 +269,38 @@ def frontier_order(node: np.ndarray, R: np.ndarray, E: np.ndarray, n: int) -> np
     for j in range(n):
         lo = ptr[j]
         hi = ptr[j + 1]
-        if hi - lo > 1:
+        if hi - lo > 32:
             seg = order[lo:hi]
             seg = seg[np.argsort(-E[seg], kind="mergesort")]
             order[lo:hi] = seg[np.argsort(R[seg], kind="mergesort")]
+        else:  # a few candidates (most points): in place, without two sorts' allocations
+            for a in range(lo + 1, hi):
+                c = order[a]
+                b = a
+                while b > lo and (
+                    R[order[b - 1]] > R[c] or (R[order[b - 1]] == R[c] and E[order[b - 1]] < E[c])
+                ):
+                    order[b] = order[b - 1]
+                    b -= 1
+                order[b] = c
     return order
+
+
+@njit(cache=True)
+def label_table(R: np.ndarray, layer: np.ndarray, indptr: np.ndarray, layers: int) -> np.ndarray:
+    """The cost-to-go table from the labels sorted by (point, E ascending): row i, column m is
+    the least R over the rows i' >= i of its point with layer <= m. One pass per point from its
+    last row back, carrying the running minima: the same minima as ``cost_to_go``'s numpy
+    accumulate and doubling (exact: only comparisons), without a pass over the whole table
+    per doubling step."""
+    table = np.empty((R.shape[0], layers))
+    cur = np.empty(layers)
+    for j in range(indptr.shape[0] - 1):
+        cur[:] = np.inf
+        for i in range(indptr[j + 1] - 1, indptr[j] - 1, -1):
+            r = R[i]
+            for m in range(layer[i], layers):
+                if r < cur[m]:
+                    cur[m] = r
+            table[i, :] = cur
+    return table
