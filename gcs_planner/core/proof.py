@@ -83,6 +83,8 @@ def settled(
 
     ``live``: the open partial routes as (L, k, G per m, mass); ``best(mass)[c]``: the least
     found length with <= c corrections and probability >= mass."""
+    if not front:  # nothing to settle (a search stopped before any route: 250,000 open)
+        return []
     fewest = math.inf
     likeliest = -math.inf
     for L, k, to_go, mass in live:
