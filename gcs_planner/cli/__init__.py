@@ -72,7 +72,31 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"gcs-planner: error: {exc}", file=sys.stderr)
         return exc.exit_code
     except KeyboardInterrupt:
-        print("gcs-planner: interrupted", file=sys.stderr)
-        return 130
+        return _interrupted()
+    except SystemError as exc:
+        # A Ctrl-C that still reached numba's C code (a kernel's boundary) surfaces as a
+        # SystemError caused by the KeyboardInterrupt: the user pressed Ctrl-C, nothing failed.
+        if not _caused_by_interrupt(exc):
+            raise
+        return _interrupted()
     except BrokenPipeError:
         return 0
+
+
+def _interrupted() -> int:
+    from gcs_planner.interrupt import EXIT_CODE, MESSAGE
+
+    print(MESSAGE, file=sys.stderr)
+    return EXIT_CODE
+
+
+def _caused_by_interrupt(exc: BaseException) -> bool:
+    """Whether a KeyboardInterrupt is in ``exc``'s chain of causes and contexts."""
+    seen: set[int] = set()
+    cause: BaseException | None = exc
+    while cause is not None and id(cause) not in seen:
+        if isinstance(cause, KeyboardInterrupt):
+            return True
+        seen.add(id(cause))
+        cause = cause.__cause__ or cause.__context__
+    return False

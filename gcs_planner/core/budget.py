@@ -21,6 +21,8 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from gcs_planner import interrupt
+
 # The defaults of the CLI, plan() and sweeps: a time limit, no label limit. A label count
 # means nothing to a user and stops hard scenarios far short of what a minute proves (issue
 # 29: a 20,000-point corridor needs 10,403 labels, a 60-point R = 1000 m scenario more than
@@ -108,13 +110,21 @@ class Budget:
     def expired(self) -> bool:
         """Whether the time limit has passed (a limit of 0 always has): the set-up before a
         search asks this between its steps, and skips or cuts short what only speeds the proof
-        (``cost_to_go``'s ``stop``)."""
+        (``cost_to_go``'s ``stop``).
+
+        A Ctrl-C counts as expired: this runs inside the compiled search's ``objmode`` tick,
+        where raising would escape as a SystemError (see :mod:`gcs_planner.interrupt`), so the
+        search stops cleanly and :meth:`stopped` raises once back in Python."""
+        if interrupt.requested():
+            return True
         return self.deadline is not None and (
             self.time_limit == 0 or time.monotonic() >= self.deadline
         )
 
     def take(self) -> bool:
-        """Spend one label; False (and nothing spent) when the budget is used up."""
+        """Spend one label; False (and nothing spent) when the budget is used up. Raises
+        KeyboardInterrupt after a Ctrl-C (the Python search calls this between labels)."""
+        interrupt.check()
         if self.max_labels is not None and self.spent >= self.max_labels:
             return self._stop("labels")
         # A time limit of 0 stops before the first label: deterministic, whatever the machine.
@@ -132,7 +142,9 @@ class Budget:
     def stopped(self, why: str, labels: int) -> None:
         """Record ``labels`` spent outside ``take`` (a compiled search counts its own) and,
         unless ``why`` is empty, that the labels ("labels") or the time limit ("time") stopped
-        the search."""
+        the search. Raises KeyboardInterrupt after a Ctrl-C: the compiled search returns here,
+        in Python, when :meth:`expired` stopped it for one."""
+        interrupt.check()
         self.spent += labels
         self._root.used += labels
         if why:
@@ -149,7 +161,9 @@ class Budget:
         return True
 
     def setup(self, what: str) -> None:
-        """Report, when one is due, that the set-up is building ``what``."""
+        """Report, when one is due, that the set-up is building ``what``; raises
+        KeyboardInterrupt after a Ctrl-C (the set-up's steps call this from Python)."""
+        interrupt.check()
         if self.progress is not None and self.due():
             self.progress(Progress(0, 0, 0, math.inf, self.elapsed(), self.stage, setup=what))
 
