@@ -218,18 +218,27 @@ def plan_from_args(args: argparse.Namespace, scenario: Scenario) -> Plan:
         quiet=getattr(args, "quiet", False),
         force=getattr(args, "progress", False),
     )
+    from gcs_planner import compile_notice, interrupt
+
+    # Before the progress display starts (one display on the terminal at a time): a fresh
+    # install's first plan compiles for tens of seconds before it can show any progress.
+    compile_notice.maybe_notify(sys.stderr, quiet=getattr(args, "quiet", False))
+
+    # Ctrl-C inside a compiled kernel must not raise where numba's C code would turn it into
+    # a SystemError: taken as a flag during the plan, raised from Python (issue 28).
     try:
-        return plan(
-            scenario,
-            objectives=objectives,
-            choice=args.choose,
-            weights=weights,
-            max_corrections=args.max_corrections,
-            min_probability=args.min_probability,
-            max_labels=max_labels or None,
-            time_limit=getattr(args, "time_limit", DEFAULT_TIME_LIMIT),
-            progress=progress if progress.enabled else None,
-        )
+        with interrupt.deferred():
+            return plan(
+                scenario,
+                objectives=objectives,
+                choice=args.choose,
+                weights=weights,
+                max_corrections=args.max_corrections,
+                min_probability=args.min_probability,
+                max_labels=max_labels or None,
+                time_limit=getattr(args, "time_limit", DEFAULT_TIME_LIMIT),
+                progress=progress if progress.enabled else None,
+            )
     except ValueError as exc:
         raise InputError(str(exc)) from None
     finally:

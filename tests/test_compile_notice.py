@@ -1,0 +1,148 @@
+"""The notice before numba compiles the search kernels (issue 28): on a terminal only, only when
+a kernel is not cached, one line, and the check itself loads no numba."""
+
+from __future__ import annotations
+
+import os
+import pickle
+import pty
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from gcs_planner import compile_notice
+from gcs_planner.scenario.generate import DATASET1, random_scenario
+from gcs_planner.scenario.model import Kind
+
+ENTRY = Path(sys.executable).parent / "gcs-planner"
+LETTER = {Kind.A: "A", Kind.B: "B", Kind.V: "V", Kind.H: "H"}
+PARAMS = [
+    "--alpha1", "25", "--alpha2", "15", "--beta1", "20", "--beta2", "25", "--theta", "30",
+    "--delta", "0.001", "--turn-radius", "200", "--time-limit", "none",
+]  # fmt: skip
+NOTICE = "compiling the search kernels once, about"
+
+
+def small_scenario(path: Path) -> Path:
+    # 2,000 points: enough for the planner to use its compiled kernels.
+    s = random_scenario(2000, 3, params=DATASET1)
+    lines = ["id,x,y,z,kind,unreliable"]
+    for i in range(s.n):
+        x, y, z = (float(v) for v in s.xyz[i])
+        kind = LETTER[Kind(int(s.kind[i]))]
+        lines.append(f"{s.ids[i]},{x!r},{y!r},{z!r},{kind},{int(s.unreliable[i])}")
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return path
+
+
+def run_on_terminal(args: list[str], env: dict[str, str]) -> tuple[int, str]:
+    """Run with stderr on a pseudo-terminal (stdout a pipe); (exit status, stderr's text)."""
+    main, secondary = pty.openpty()
+    proc = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=secondary, env=env)
+    os.close(secondary)
+    chunks = []
+    while True:
+        try:
+            data = os.read(main, 4096)
+        except OSError:  # EIO: the child closed its end
+            break
+        if not data:
+            break
+        chunks.append(data)
+    os.close(main)
+    assert proc.stdout is not None
+    proc.stdout.read()
+    return proc.wait(timeout=600), b"".join(chunks).decode("utf-8", "replace")
+
+
+def test_a_fresh_cache_gets_one_notice_on_a_terminal(tmp_path: Path) -> None:
+    """The one test that compiles: NUMBA_CACHE_DIR an empty folder, stderr a terminal."""
+    assert ENTRY.exists(), f"{ENTRY} missing: install the package (pip install -e .)"
+    scenario = small_scenario(tmp_path / "points.csv")
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba-cache")}
+    code, err = run_on_terminal([str(ENTRY), "plan", str(scenario), *PARAMS], env)
+    assert code == 0, err
+    assert err.count(NOTICE) == 1, err
+    # The notice comes first, a line of its own, before any progress display.
+    assert err.lstrip().startswith("gcs-planner: " + NOTICE), err
+
+
+def test_no_notice_off_a_terminal(tmp_path: Path) -> None:
+    """A pipe gets nothing, even with an empty cache (logs and CI keep clean stderr); the plan
+    is the same small one, so this costs no compile when its cache is warm."""
+    assert not compile_notice.maybe_notify(open(os.devnull, "w"))
+
+
+class _Terminal:
+    def __init__(self) -> None:
+        self.text = ""
+
+    def isatty(self) -> bool:
+        return True
+
+    def write(self, text: str) -> int:
+        self.text += text
+        return len(text)
+
+    def flush(self) -> None:
+        pass
+
+
+def _fake_cache(folder: Path, version: str) -> None:
+    """Index files for every kernel of the notice, as numba names them, written now."""
+    import importlib.util
+
+    tag = f"py{sys.version_info.major}{sys.version_info.minor}"
+    for module, name in compile_notice.KERNELS:
+        spec = importlib.util.find_spec(module)
+        assert spec is not None and spec.origin is not None
+        source = Path(spec.origin)
+        sub = compile_notice._cache_dirs(source)[0]
+        sub.mkdir(parents=True, exist_ok=True)
+        with (sub / f"{source.stem}.{name}-10.{tag}.nbi").open("wb") as f:
+            pickle.dump(version, f)
+            f.write(b"rest of the index")
+        os.utime(sub / f"{source.stem}.{name}-10.{tag}.nbi", (time.time() + 5, time.time() + 5))
+
+
+def test_the_check_reads_numba_files_without_loading_numba(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import importlib.metadata
+
+    version = importlib.metadata.version("numba")
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "empty"))
+    assert compile_notice.uncached_seconds() == sum(compile_notice.KERNELS.values())
+    assert not compile_notice.maybe_notify(_Terminal(), quiet=True)
+    # Written at the first compile of one of the package's kernels, once.
+    stream = _Terminal()
+    notice = compile_notice._Notice(stream, 30.0)
+
+    class Event:
+        def __init__(self, module: str) -> None:
+            py_func = type("F", (), {"__module__": module})()
+            self.data = {"dispatcher": type("D", (), {"py_func": py_func})()}
+
+    notice.on_compile(Event("numpy.somewhere"))
+    assert stream.text == ""
+    notice.on_compile(Event("gcs_planner.core.probe_kernel"))
+    notice.on_compile(Event("gcs_planner.core.search_kernel"))
+    assert stream.text == f"gcs-planner: {NOTICE} 30 s\n"
+
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "cached"))
+    _fake_cache(tmp_path / "cached", version)
+    assert compile_notice.uncached_seconds() == 0
+    assert not compile_notice.maybe_notify(_Terminal())
+
+    # Another numba's index is one numba ignores: compiled again, so the notice is due.
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "other"))
+    _fake_cache(tmp_path / "other", "0.0.1")
+    assert compile_notice.uncached_seconds() == sum(compile_notice.KERNELS.values())
+
+    code = "import sys; from gcs_planner import compile_notice as c; c.uncached_seconds(); "
+    code += "print('numba' in sys.modules)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False"
