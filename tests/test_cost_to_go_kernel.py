@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 from helpers import mixed_scenario
 
@@ -79,7 +80,7 @@ def test_layers_fanned_on_threads_make_the_same_table(monkeypatch) -> None:
         graph = build_reach_graph(scenario)
         tables = []
         for threads in (1, 2, 3, 7):
-            monkeypatch.setattr(module, "get_num_threads", lambda t=threads: t)
+            monkeypatch.setattr(numba, "get_num_threads", lambda t=threads: t)
             tables.append(cost_to_go(scenario, graph, compiled=True))
         for other in tables[1:]:
             np.testing.assert_array_equal(tables[0].indptr, other.indptr)

@@ -31,7 +31,6 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 
 import numpy as np
-from numba import get_num_threads
 
 from gcs_planner.core.reach import ReachGraph, use_compiled
 from gcs_planner.core.search import _summarise, not_dominated, staircase
@@ -332,6 +331,8 @@ def _fan_on_threads(
     equal arc counts (the work is the arcs a label fans over: a label's own count varies a
     hundredfold), slices concatenated in label order. numba's thread count
     (NUMBA_NUM_THREADS) sets how many."""
+    from numba import get_num_threads  # here: importing this module must not load numba
+
     packed = np.stack(summary, axis=1)
     r_ptr = args[0]
     arcs = np.cumsum(r_ptr[node + 1] - r_ptr[node])
