@@ -34,7 +34,7 @@ KERNELS: dict[tuple[str, str], float] = {
     ("gcs_planner.core.probe_kernel", "probe"): 22.0,
     ("gcs_planner.core.kernel", "fewest_corrections"): 11.0,
     ("gcs_planner.geometry.airplane_kernel", "airplane_lengths"): 1.0,
-    ("gcs_planner.core.search_kernel", "search"): 20.0,
+    ("gcs_planner.core.search_kernel", "search"): 32.0,
 }
 
 
