@@ -250,6 +250,7 @@ class MissionServer:
         self.acks_sent: list[int] = []  # MAV_MISSION_RESULT of every MISSION_ACK sent
         self.conflicts = 0  # uploads aborted because two senders with the same ids interleaved
         self.int_mode = flavour != "ardupilot"  # PX4 answers in the spelling it last heard
+        self.request_slowdown = 0.0  # ArduPilot's stream slowdown from its radio's reports
         self.commit([])
 
     # What it holds ----------------------------------------------------------------------------
@@ -301,7 +302,7 @@ class MissionServer:
             self.upload = None
             self.ack(up.peer, mavlink.MAV_MISSION_OPERATION_CANCELLED)
             self.statustext("Mission upload timed out", mavlink.MAV_SEVERITY_WARNING)
-        elif now - up.last_request > self.request_timeout:
+        elif now - up.last_request > self.request_timeout + self.request_slowdown:
             self._request(up, now)
 
     # Handlers ---------------------------------------------------------------------------------
@@ -375,8 +376,16 @@ class MissionServer:
         mtype = int(getattr(msg, "mission_type", 0))
         if up is None or mtype != MAV_MISSION_TYPE_MISSION:
             if up is None and self.completed == (peer, int(msg.seq) + 1):
-                # The final item resent: the acknowledgement was lost (PX4 answers the same).
-                self.ack(peer, mavlink.MAV_MISSION_ACCEPTED)
+                # The final item resent: the acknowledgement was lost. PX4 answers ACCEPTED
+                # again (handle_mission_item_both, idle with _transfer_seq == seq + 1);
+                # ArduPilot, no longer receiving, answers any item with MAV_MISSION_ERROR
+                # (GCS_MAVLINK::handle_mission_item in GCS_Common.cpp).
+                result = (
+                    mavlink.MAV_MISSION_ERROR
+                    if self.flavour == "ardupilot"
+                    else mavlink.MAV_MISSION_ACCEPTED
+                )
+                self.ack(peer, result)
             return  # otherwise a late copy of an item from a finished transfer
         if not self._transfer_owner(peer, address):
             self.ack(peer, mavlink.MAV_MISSION_DENIED)

@@ -35,6 +35,7 @@ from typing import Any
 
 from gcs_planner.autopilot import EffectiveParameters, autopilot_for
 from gcs_planner.link.connection import Link, mavlink
+from gcs_planner.link.pacing import RadioFlow
 from gcs_planner.mission.items import MissionItem
 from gcs_planner.scenario.model import Scenario
 from gcs_planner.vehicle import FIRMWARES
@@ -142,6 +143,7 @@ class MockVehicle:
         self.params = ParamServer(
             self.mav, self._send, table, self._lock, flavour=flavour, statustext=self._statustext
         )
+        self.radio = RadioFlow()  # its telemetry radio's RADIO_STATUS, as ArduPilot reads it
         self.handler_errors = 0  # messages whose handling failed; the vehicle went on
         self.flight_errors = 0  # flights that raised; the vehicle said so and went on
         # (address, frame bytes) -> when it last arrived, for the duplicate window.
@@ -328,6 +330,12 @@ class MockVehicle:
                 self._on_heartbeat(msg, peer)
             elif kind == "COMMAND_LONG":
                 self._on_command_long(msg, peer)
+            elif kind == "RADIO_STATUS" and self.flavour == "ardupilot":
+                # ArduPilot reads its own radio's reports (GCS_MAVLINK::handle_radio_status)
+                # and waits that much longer before asking again for a mission item
+                # (MissionItemProtocol::update: 1 s plus stream_slowdown_ms).
+                self.radio.observe(msg)
+                self.missions.request_slowdown = self.radio.extra_wait()
         except Exception:  # a hostile message must not end the vehicle
             self.handler_errors += 1
 

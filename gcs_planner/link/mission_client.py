@@ -8,6 +8,7 @@ only reported done after the mission has been read back and found equal to what 
 
 from __future__ import annotations
 
+import itertools
 import struct
 import time
 from collections.abc import Callable, Sequence
@@ -16,6 +17,7 @@ from typing import Any
 
 from gcs_planner.errors import InputError, LinkError
 from gcs_planner.link.connection import Link, mavlink
+from gcs_planner.link.pacing import RadioFlow, Window
 from gcs_planner.link.params import read_parameter, set_loiter_radius
 from gcs_planner.link.progress import Progress
 from gcs_planner.link.protocol import (
@@ -24,6 +26,7 @@ from gcs_planner.link.protocol import (
     ITEM_TIMEOUT_S,
     Tolerance,
     describe_result,
+    item_differences,
     item_from_message,
     item_to_message,
     mission_differences,
@@ -33,11 +36,18 @@ from gcs_planner.link.validate import item_problem
 from gcs_planner.mission.items import MAV_MISSION_TYPE_MISSION, MissionItem
 from gcs_planner.vehicle import FIRMWARE_OF_AUTOPILOT, FIRMWARES, LOITER_RADIUS_PARAM
 
-# Requests outstanding at once on download (MAVProxy keeps several too), and the shortest wait
-# before a resend however fast the link answers.
+# Requests outstanding at once when a download starts (MAVProxy keeps five); the window then
+# follows the link (pacing.Window). The shortest wait before a resend however fast the link
+# answers, and the most: consecutive resends of one thing past the fourth double their wait
+# (RFC 6298's backoff) up to the protocol's default timeout: a fade costs a few resends.
 DOWNLOAD_WINDOW = 8
+MAX_WINDOW = 32
 MIN_RESEND_S = 0.03
+# An answer that arrives after later ones overtook it is taken as lost after this many later
+# answers (the links are in order; a radio or router reorders little): asked again at once.
+REORDER_SLACK = 3
 _LEFTOVER_ACKS = (mavlink.MAV_MISSION_ACCEPTED, mavlink.MAV_MISSION_INVALID_SEQUENCE)
+_AFTER_UPLOAD = mavlink.MAV_MISSION_ERROR
 # Refusals of a MISSION_COUNT that mean "busy with another transfer": ArduPilot DENIED, PX4
 # ERROR ("Mission upload busy"), and a cancel of the transfer it was in that crossed our count.
 _BUSY = (
@@ -70,6 +80,23 @@ class UploadReport:
     upload_seconds: float
     verify_seconds: float
     retries: int
+    # The vehicle's final MISSION_ACK never came (or came as an error to a resent last item, as
+    # ArduPilot answers one): the read-back alone showed that it holds the mission.
+    unacknowledged: bool = False
+
+
+class ReadBackError(LinkError):
+    """The read-back after an upload could not be completed: what the vehicle holds is unknown
+    (never "it differs", which is a plain :class:`LinkError` listing the differences)."""
+
+
+class _Unconfirmed(Exception):
+    """Every item was sent and the vehicle went quiet, or answered a resent last item with an
+    error: whether it stored the mission is for the read-back to say."""
+
+    def __init__(self, reason: str) -> None:
+        super().__init__(reason)
+        self.reason = reason
 
 
 ProgressFactory = Callable[[str, int], Progress]
@@ -113,7 +140,15 @@ class MissionClient:
         if window < 1:
             raise LinkError("the download window must be at least 1 request")
         self.window = window
-        self._rtt = RoundTrip(floor=MIN_RESEND_S, ceiling=item_timeout)
+        # Resends wait the measured round trip (RFC 6298), from the specification's item
+        # timeout until there is a sample, up to the protocol's timeout (a radio's round trip
+        # can be longer than the item timeout: a SiK pair at 64 kbit/s needs a TDM round,
+        # about 0.24 s, per request and answer).
+        self._rtt = RoundTrip(floor=MIN_RESEND_S, ceiling=max(timeout, item_timeout))
+        self._rtt_initial = item_timeout
+        self.radio = RadioFlow()  # the local radio's RADIO_STATUS, when there is one
+        self.window_used = window  # the download window at the end of the last download
+        self._last_count: int | None = None  # the count the last download read
         self.vehicle: Vehicle | None = None
         self._last_gcs_heartbeat = 0.0
 
@@ -193,6 +228,8 @@ class MissionClient:
             msg = self.link.recv(min(remaining, 0.5))
             if msg is None:
                 continue
+            if self.radio.observe(msg):
+                continue  # our radio's report: read here, never a transfer's message
             if msg.get_type() not in types or not self._from_target(msg):
                 continue
             if mission_type is not None and getattr(msg, "mission_type", 0) != mission_type:
@@ -222,6 +259,20 @@ class MissionClient:
         )
 
     # Upload -----------------------------------------------------------------------------------
+    def _resend_wait(self, attempts: int) -> float:
+        """How long to wait for an answer before sending again, after ``attempts`` resends in
+        a row of the same thing: the round-trip timeout (the item timeout before any sample),
+        doubled per resend from the fifth on, at most the protocol timeout, plus the slowdown
+        the local radio's reports call for. The first four go at the round trip's pace: on a
+        link that loses frames at random (loopback at 20 % each way, 36 % of exchanges fail)
+        a few losses in a row are common and say nothing of the channel; more in a row are a
+        fade or a flood, where a copy sent sooner would only follow the last one into the
+        same hole or queue."""
+        base = self._rtt.timeout if self._rtt.srtt is not None else self._rtt_initial
+        doublings = min(max(0, attempts - 4), 8)
+        wait = min(max(base, self._rtt.floor) * (2**doublings), self.timeout)
+        return max(wait, base) + self.radio.extra_wait()
+
     def _stall_limit(self) -> float:
         """Seconds without progress after which a transfer is given up: the specification's
         retries of its default timeout. Resends within it go at the round-trip's pace."""
@@ -233,18 +284,35 @@ class MissionClient:
         """Send ``items`` (MISSION_COUNT, then each requested item, until MISSION_ACK).
 
         Answers MISSION_REQUEST and MISSION_REQUEST_INT alike, always with MISSION_ITEM_INT.
-        An item that gets no answer is sent again after the round-trip timeout. An
-        INVALID_SEQUENCE acknowledgement of a resent item says the vehicle already had it and
-        its request for the next one was lost: the next one is sent without waiting for the
-        vehicle's own re-request (ArduPilot's comes only after a second). Any other error result
-        ends the transfer with that result in words.
+        An item that gets no answer is sent again after the round-trip timeout, doubled for
+        each resend in a row, plus the slowdown the local radio's RADIO_STATUS calls for; no
+        resend goes while that radio says its buffer is nearly full (the first copy is still
+        in it). A request for an item sent less than a round-trip timeout ago crossed that
+        copy and is not answered again. An INVALID_SEQUENCE acknowledgement of a resent item
+        says the vehicle already had it and its request for the next one was lost: the next
+        one is sent without waiting for the vehicle's own re-request (ArduPilot's comes only
+        after a second). Any other error result ends the transfer with that result in words.
 
         A vehicle still inside an earlier upload of ours (one that died mid-transfer) is
         restarted: requests it makes for that transfer before asking for item 0 of this one are
         not ours and are ignored, and a MISSION_COUNT it refuses as busy is followed by a
         MISSION_ACK OPERATION_CANCELLED and the count again, once (PX4 restarts only after a
         cancel; ArduPilot restarts on the count of the same ids).
+
+        When every item was sent but the final acknowledgement never came, or came as an
+        error to a resent last item (ArduPilot, no longer receiving, answers any item with
+        MAV_MISSION_ERROR), whether the vehicle stored the mission is unknown: a
+        :class:`LinkError` says so. :meth:`upload_verified` reads the mission back instead.
         """
+        try:
+            self._upload(items, mission_type)
+        except _Unconfirmed as exc:
+            raise LinkError(
+                f"every item was sent but {exc.reason}: whether the vehicle holds the mission "
+                "is unknown (run `gcs-planner download` to see)"
+            ) from None
+
+    def _upload(self, items: Sequence[MissionItem], mission_type: int) -> None:
         ts, tc = self._target()
         items = [it.with_seq(i) if it.seq != i else it for i, it in enumerate(items)]
         self._check_packable(items, ts, tc)
@@ -255,6 +323,8 @@ class MissionClient:
         requested: int | None = None  # the item last sent, answering a request
         sent_at = time.monotonic()
         resent = False
+        attempts = 0  # resends in a row without progress, for the backoff
+        copies: dict[int, float] = {}  # item -> when a copy of it last went out
         highest = -1  # the highest item the vehicle asked for
         sent_upto = -1  # the highest item sent, asked for or inferred
         last_progress = time.monotonic()
@@ -262,9 +332,18 @@ class MissionClient:
         last_ack: int | None = None  # the last MISSION_ACK the vehicle sent that we went past
         early_ack_waits = -1  # timeouts since an ACCEPTED came before the last item was sent
         stale: int | None = None  # a request of an earlier transfer, ignored
+        all_sent = count == 0  # every item has gone out at least once
+
+        def send_item(seq: int, now: float) -> None:
+            copies[seq] = now
+            self.link.send(item_to_message(self.mav, items[seq], ts, tc))
+
         try:
             while True:
-                wait = self.timeout if requested is None else self._rtt.timeout
+                if requested is None:
+                    wait = self.timeout * (2 ** min(attempts, 2)) + self.radio.extra_wait()
+                else:
+                    wait = self._resend_wait(attempts)
                 msg = self._recv(
                     wait, {"MISSION_REQUEST", "MISSION_REQUEST_INT", "MISSION_ACK"}, mission_type
                 )
@@ -273,13 +352,18 @@ class MissionClient:
                     if early_ack_waits >= 0:
                         early_ack_waits += 1
                     if early_ack_waits > 2 or now - last_progress > self._stall_limit():
+                        if all_sent and early_ack_waits < 0:
+                            raise _Unconfirmed("no MISSION_ACK came for the last item")
                         raise self._upload_stalled(requested, sent_upto, count, last_ack, stale)
+                    if self.radio.congested():
+                        continue  # the radio's buffer still holds the first copy: no second
                     self.retry_count += 1
+                    attempts += 1
                     resent, sent_at = True, now
                     if requested is None:
                         self.link.send(count_msg)
                     else:
-                        self.link.send(item_to_message(self.mav, items[requested], ts, tc))
+                        send_item(requested, now)
                     continue
                 if msg.get_type() == "MISSION_ACK":
                     if msg.type == mavlink.MAV_MISSION_ACCEPTED:
@@ -298,11 +382,29 @@ class MissionClient:
                         # otherwise) and its request for j + 1 was lost. A wrong guess costs
                         # only a refusal; the vehicle's own re-request sets us right.
                         if resent and requested is not None and requested + 1 < count:
-                            requested += 1
+                            nxt = requested + 1
+                            if now - copies.get(nxt, -1e9) < self._resend_wait(0):
+                                continue  # a copy of it is already on its way
+                            requested = nxt
+                            attempts = 0  # progress: the vehicle has the item resent
                             sent_upto = max(sent_upto, requested)
+                            all_sent = all_sent or sent_upto == count - 1
                             resent, sent_at = False, now
-                            self.link.send(item_to_message(self.mav, items[requested], ts, tc))
+                            send_item(requested, now)
                         continue
+                    if (
+                        all_sent
+                        and msg.type == mavlink.MAV_MISSION_ERROR
+                        and requested == count - 1
+                        and resent
+                    ):
+                        # ArduPilot's answer to an item when it is not receiving: the first
+                        # copy of the last item ended the transfer and its ACK was lost, or the
+                        # transfer failed; only the read-back can tell which.
+                        raise _Unconfirmed(
+                            "the vehicle answered the resent last item with MISSION_ACK "
+                            f"{describe_result(msg.type)}"
+                        )
                     if requested is None and not cancelled_once and msg.type in _BUSY:
                         # Refused before it asked for anything: most often it is still inside
                         # an earlier upload of ours that died. Cancel that one and count again.
@@ -320,9 +422,7 @@ class MissionClient:
                     if highest < 0:
                         stale = seq
                         continue  # a request of an earlier, longer transfer
-                    raise LinkError(
-                        f"the vehicle requested item {seq} of a {count}-item mission"
-                    )
+                    raise LinkError(f"the vehicle requested item {seq} of a {count}-item mission")
                 if seq > sent_upto + 1:
                     if highest < 0:
                         # It has not asked for item 0 of this transfer yet: a re-request left
@@ -340,11 +440,17 @@ class MissionClient:
                 if seq > highest:
                     last_progress = now
                     early_ack_waits = -1
+                    attempts = 0
+                if seq <= highest and now - copies.get(seq, -1e9) < self._resend_wait(0):
+                    # A re-request that crossed the copy we sent: that copy can still arrive,
+                    # and a second one would only queue behind it on a slow link.
+                    continue
                 requested = seq
                 highest = max(highest, seq)
                 sent_upto = max(sent_upto, seq)
+                all_sent = all_sent or sent_upto == count - 1
                 resent, sent_at = False, now
-                self.link.send(item_to_message(self.mav, items[seq], ts, tc))
+                send_item(seq, now)
                 bar.update(highest + 1)
         except LinkError:
             # Leave the vehicle idle rather than waiting out its upload timeout (PX4 honours
@@ -406,66 +512,21 @@ class MissionClient:
         self, mission_type: int = MAV_MISSION_TYPE_MISSION, *, validate: bool = True
     ) -> list[MissionItem]:
         """The vehicle's mission (MISSION_REQUEST_LIST, MISSION_COUNT, MISSION_REQUEST_INT for
-        each item with up to ``window`` requests outstanding, as MAVProxy does, then our
-        MISSION_ACK).
+        each item with several requests outstanding, as MAVProxy does, then our MISSION_ACK).
+
+        How many requests are out at once follows the link (:class:`pacing.Window`: delivery
+        rate times the shortest round trip), starting from ``window``; none is added while the
+        local radio says its buffer is nearly full. A request is asked again when later items
+        overtook its answer (the link is in order, so it was lost) or after the round-trip
+        timeout, doubled for each time it was asked already: never while its first copy can
+        still be in the channel.
 
         With ``validate`` (the default) an item no mission file may hold (validate.py: unknown
         frame or command, a position out of range or not set, a non-finite altitude or
         parameter) is a :class:`LinkError` naming its seq and field: what a vehicle sends is
         input like any other. The read-back after an upload compares instead."""
-        ts, tc = self._target()
-        count = self._download_count(ts, tc, mission_type)
         got: dict[int, MissionItem] = {}
-        sent: dict[int, tuple[float, bool]] = {}  # seq -> (when asked, asked more than once)
-        bar = self.progress("download", count)
-        last_progress = time.monotonic()
-        next_new = 0
-        try:
-            while len(got) < count:
-                now = time.monotonic()
-                rto = self._rtt.timeout
-                for seq, (when, _) in list(sent.items()):
-                    if now - when > rto:  # no answer in time: ask again
-                        self.retry_count += 1
-                        sent[seq] = (now, True)
-                        self.link.send(
-                            self.mav.mission_request_int_encode(ts, tc, seq, mission_type)
-                        )
-                while len(sent) < self.window and next_new < count:
-                    if next_new not in got:
-                        sent[next_new] = (now, False)
-                        self._request_item(ts, tc, next_new, mission_type)
-                    next_new += 1
-                msg = self._recv(
-                    rto, {"MISSION_ITEM_INT", "MISSION_ITEM", "MISSION_ACK"}, mission_type
-                )
-                now = time.monotonic()
-                if msg is None:
-                    if now - last_progress > self._stall_limit():
-                        missing = min(set(range(count)) - set(got))
-                        raise self._give_up(f"download: item {missing}")
-                    continue
-                if msg.get_type() == "MISSION_ACK":
-                    if msg.type in (
-                        mavlink.MAV_MISSION_ACCEPTED,
-                        mavlink.MAV_MISSION_INVALID_SEQUENCE,
-                    ):
-                        continue  # leftovers of an earlier transfer
-                    raise LinkError(f"download refused: {describe_result(msg.type)}")
-                seq = int(msg.seq)
-                if seq in got or not 0 <= seq < count:
-                    continue  # a duplicate or late answer to an earlier request
-                asked = sent.pop(seq, None)
-                if asked is not None and not asked[1]:
-                    self._rtt.sample(now - asked[0])
-                got[seq] = item_from_message(msg)
-                last_progress = now
-                bar.update(len(got))
-        finally:
-            bar.close()
-        done = self.mav.mission_ack_encode(ts, tc, mavlink.MAV_MISSION_ACCEPTED, mission_type)
-        self.link.send(done)
-        mission = [got[seq] for seq in range(count)]
+        mission = self._download_into(got, mission_type)
         if validate:
             for item in mission:
                 problem = item_problem(item)
@@ -475,6 +536,115 @@ class MissionClient:
                         f"{problem.field!r}: {problem.reason}"
                     )
         return mission
+
+    def _download_into(
+        self,
+        got: dict[int, MissionItem],
+        mission_type: int,
+        expect: int | None = None,
+        leftovers: tuple[int, ...] = _LEFTOVER_ACKS,
+    ) -> list[MissionItem]:
+        """Download into ``got`` (items already there are not asked for again, so a read-back
+        retried after a failure resumes). ``expect``: the count an earlier attempt read; a
+        different one now means the mission changed and ``got`` is started afresh.
+        ``leftovers``: the MISSION_ACK results taken as answers to an earlier transfer."""
+        ts, tc = self._target()
+        count = self._download_count(ts, tc, mission_type)
+        if expect is not None and count != expect:
+            got.clear()
+        self._last_count = count
+        sent: dict[int, tuple[float, int]] = {}  # seq -> (when last asked, times asked)
+        ticket: dict[int, int] = {}  # seq -> the number of its last request, in sending order
+        overtaken: dict[int, int] = {}  # seq -> answers to later requests that came first
+        tickets = itertools.count()
+        fixed = self.window == 1  # the classic client: one request at a time, always
+        window = Window(self.window, low=1 if fixed else 2, high=1 if fixed else MAX_WINDOW)
+        bar = self.progress("download", count)
+        bar.update(len(got))
+        last_progress = time.monotonic()
+        missing = [seq for seq in range(count) if seq not in got]
+        next_new = 0  # index into missing
+        stalls = 0  # timeouts in a row with no answer: the backoff of the whole link
+        try:
+            while len(got) < count:
+                now = time.monotonic()
+                congested = self.radio.congested()
+                # Only the oldest request is timed (TCP's one retransmission timer): on an
+                # in-order link every later answer waits behind its answer, so timing them
+                # too would ask again for what is still on its way. The others are asked
+                # again when later answers overtake theirs.
+                oldest = min(sent, key=ticket.__getitem__, default=None)
+                for seq, (when, asked) in list(sent.items()):
+                    lost = overtaken[seq] >= REORDER_SLACK
+                    due = seq == oldest and now - when > self._resend_wait(stalls)
+                    if not (lost or due) or congested:
+                        continue
+                    self.retry_count += 1
+                    window.lost()
+                    sent[seq] = (now, asked + 1)
+                    ticket[seq], overtaken[seq] = next(tickets), 0
+                    self._request_item(ts, tc, seq, mission_type)
+                    if due:
+                        stalls += 1
+                        # The timer restarts for what is still out, as TCP's does.
+                        for other, (_, n) in sent.items():
+                            if other != seq:
+                                sent[other] = (now, n)
+                while len(sent) < window.size and next_new < len(missing) and not congested:
+                    seq = missing[next_new]
+                    next_new += 1
+                    if seq in got:
+                        continue
+                    sent[seq] = (now, 1)
+                    ticket[seq], overtaken[seq] = next(tickets), 0
+                    self._request_item(ts, tc, seq, mission_type)
+                oldest = min(sent, key=ticket.__getitem__, default=None)
+                wait = (
+                    self._resend_wait(stalls) - (now - sent[oldest][0])
+                    if oldest is not None
+                    else self._resend_wait(0)
+                )
+                msg = self._recv(
+                    max(wait, 0.005),
+                    {"MISSION_ITEM_INT", "MISSION_ITEM", "MISSION_ACK"},
+                    mission_type,
+                )
+                now = time.monotonic()
+                if msg is None:
+                    if now - last_progress > self._stall_limit():
+                        first = min(set(range(count)) - set(got))
+                        raise self._give_up(f"download: item {first}")
+                    continue
+                if msg.get_type() == "MISSION_ACK":
+                    if msg.type in leftovers:
+                        continue  # leftovers of an earlier transfer
+                    raise LinkError(f"download refused: {describe_result(msg.type)}")
+                seq = int(msg.seq)
+                if seq in got or not 0 <= seq < count:
+                    continue  # a duplicate or late answer to an earlier request
+                limited = len(sent) >= window.size
+                asked = sent.pop(seq, None)
+                mine = ticket.pop(seq, None)
+                overtaken.pop(seq, None)
+                if mine is not None:
+                    for other, theirs in ticket.items():
+                        if theirs < mine:
+                            overtaken[other] += 1
+                if asked is not None and asked[1] == 1:
+                    # Karn's rule: a round trip only from a request asked once.
+                    self._rtt.sample(now - asked[0])
+                    window.rtt(now - asked[0])
+                window.delivered(now, limited)
+                stalls = 0
+                got[seq] = item_from_message(msg)
+                last_progress = now
+                bar.update(len(got))
+        finally:
+            bar.close()
+            self.window_used = window.size
+        done = self.mav.mission_ack_encode(ts, tc, mavlink.MAV_MISSION_ACCEPTED, mission_type)
+        self.link.send(done)
+        return [got[seq] for seq in range(count)]
 
     def _request_item(self, ts: int, tc: int, seq: int, mission_type: int) -> None:
         self.link.send(self.mav.mission_request_int_encode(ts, tc, seq, mission_type))
@@ -558,22 +728,68 @@ class MissionClient:
             self.retry_count += 1
         raise self._give_up(f"set current item {seq}")
 
-    def _read_back(self, attempts: int = 3) -> list[MissionItem]:
-        """The mission just uploaded, read back. The vehicle acknowledged the whole upload, so a
-        read-back that fails is said as such: "could not read it back" is not "it differs"."""
+    def _read_back(
+        self,
+        sent: Sequence[MissionItem],
+        tol: Tolerance,
+        *,
+        acknowledged: bool = True,
+        attempts: int = 3,
+    ) -> list[MissionItem]:
+        """The mission just uploaded, read back. A read-back that fails is said as such: "could
+        not read it back" is a :class:`ReadBackError`, never "it differs". Each attempt resumes
+        where the last one stopped (the items read stay read), so a link that drops out for a
+        while costs the time it is out, not the whole read-back again."""
+        got: dict[int, MissionItem] = {}
+        expect: int | None = None
+        self._last_count = None
         for attempt in range(attempts):
             try:
-                return self.download(validate=False)
+                # Late copies of our items reach an ArduPilot no longer receiving, which
+                # answers each with MAV_MISSION_ERROR: left over from the upload, not a refusal.
+                return self._download_into(
+                    got, MAV_MISSION_TYPE_MISSION, expect, (*_LEFTOVER_ACKS, _AFTER_UPLOAD)
+                )
             except LinkError as exc:
-                if attempt == attempts - 1:
-                    # An acknowledgement is not a read-back: what the vehicle holds is unknown.
+                expect = self._last_count
+                if attempt < attempts - 1:
+                    continue
+                # What was read is compared all the same: a difference is a difference.
+                wrong = self._partial_differences(sent, got, tol)
+                said = (
+                    "the vehicle acknowledged the whole upload (MISSION_ACK ACCEPTED)"
+                    if acknowledged
+                    else "the vehicle never acknowledged the end of the upload"
+                )
+                read = (
+                    f"{len(got)} of {expect} items were read back"
+                    if expect is not None
+                    else "not even the item count was read back"
+                )
+                if wrong:
                     raise LinkError(
-                        "the vehicle acknowledged the whole upload (MISSION_ACK ACCEPTED) but "
-                        f"it could not be read back to verify it: {exc}. The read-back failed, "
-                        "so whether the vehicle holds this mission is unknown: run "
-                        "`gcs-planner download` to check"
+                        f"the mission read back differs from the upload ({read} before the "
+                        f"link failed): {'; '.join(wrong[:5])}"
                     ) from None
+                raise ReadBackError(
+                    f"{said} but it could not be read back to verify it: {exc}. {read}"
+                    f"{', all as uploaded' if got and expect is not None else ''}; the "
+                    "read-back failed, so whether the vehicle holds this mission is unknown: "
+                    "run `gcs-planner download` to check"
+                ) from None
         raise AssertionError("unreachable")
+
+    def _partial_differences(
+        self, sent: Sequence[MissionItem], got: dict[int, MissionItem], tol: Tolerance
+    ) -> list[str]:
+        """The differences between the items read back so far and the ones sent."""
+        out: list[str] = []
+        for seq in sorted(got):
+            if seq >= len(sent):
+                out.append(f"item {seq}: read back, but only {len(sent)} items were uploaded")
+            elif not (seq == 0 and self.firmware == "ardupilot"):
+                out.extend(f"item {seq}: {d}" for d in item_differences(sent[seq], got[seq], tol))
+        return out
 
     def check_loiter_parameter(self) -> None:
         """Raise a :class:`LinkError` naming the parameter when the vehicle has no loiter-radius
@@ -605,17 +821,23 @@ class MissionClient:
         start = time.perf_counter()
         self._target()
         retries_before = self.retry_count
-        self.upload(items)
+        tol = tolerance or Tolerance()
+        sent = [it.with_seq(i) if it.seq != i else it for i, it in enumerate(items)]
+        unconfirmed: str | None = None
+        try:
+            self._upload(sent, MAV_MISSION_TYPE_MISSION)
+        except _Unconfirmed as exc:
+            # The read-back decides: the same mission is a success, anything else is not.
+            unconfirmed = exc.reason
         uploaded = time.perf_counter()
-        got = self._read_back()
+        got = self._read_back(sent, tol, acknowledged=unconfirmed is None)
         skip_home = self.firmware == "ardupilot"
-        diffs = mission_differences(
-            list(items), got, skip_home=skip_home, tol=tolerance or Tolerance()
-        )
+        diffs = mission_differences(list(items), got, skip_home=skip_home, tol=tol)
         if diffs:
             more = f"; and {len(diffs) - 5} more" if len(diffs) > 5 else ""
             shown = "; ".join(diffs[:5]) + more
-            raise LinkError(f"the mission read back differs from the upload: {shown}")
+            why = f" (every item was sent but {unconfirmed})" if unconfirmed else ""
+            raise LinkError(f"the mission read back differs from the upload{why}: {shown}")
         verified = time.perf_counter()
         if loiter_radius is not None:
             set_loiter_radius(
@@ -632,4 +854,5 @@ class MissionClient:
             upload_seconds=uploaded - start,
             verify_seconds=verified - uploaded,
             retries=self.retry_count - retries_before,
+            unacknowledged=unconfirmed is not None,
         )
