@@ -1,6 +1,10 @@
 """`gcs-planner mock-vehicle --connect CONN --scenario SCENARIO`: a simulated autopilot any ground
 station can talk to, until Ctrl-C. It stores what it is sent and, on MAV_CMD_MISSION_START,
-flies it against the scenario's correction points with telemetry."""
+flies it against the scenario's correction points with telemetry.
+
+With ``--radio sik[:AIR_RATE]`` the ground station reaches it through an emulated SiK radio pair
+(:mod:`sim.radio`): CONN is then the ground radio's side, and the vehicle sits behind the air
+radio on a free port of 127.0.0.1."""
 
 from __future__ import annotations
 
@@ -11,11 +15,13 @@ from collections.abc import Callable
 
 from gcs_planner.cli.common import add_scenario_arguments, load_scenario_from_args
 from gcs_planner.cli.upload import id_in
+from gcs_planner.errors import InputError
 from gcs_planner.link.connection import check_connection
 from gcs_planner.link.signing import key_from_passphrase
 from sim.faults import FaultRates
+from sim.radio import RadioConfig, SikRadio, parse_radio
 from sim.replay import DEFAULT_CAPTURE_RADIUS_M
-from sim.vehicle import FLAVOURS, MockVehicle
+from sim.vehicle import FLAVOURS, MockVehicle, free_udp_port
 
 
 def _rate(text: str) -> float:
@@ -53,14 +59,50 @@ def _count(low: int, what: str) -> Callable[[str], int]:
     return parse
 
 
+def _radio_kind(text: str) -> int:
+    try:
+        return parse_radio(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def _loss(text: str) -> float:
+    value = _rate(text)
+    if value >= 1.0:
+        raise argparse.ArgumentTypeError("a radio that loses every packet carries nothing")
+    return value
+
+
+def _burst(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number >= 1, got {text!r}") from None
+    if not value >= 1.0 or value == float("inf"):
+        raise argparse.ArgumentTypeError(f"expected a number >= 1 (packets), got {text!r}")
+    return value
+
+
 def run(args: argparse.Namespace) -> int:
     check_connection(args.connect)  # a typo is named before the scenario is read
+    radio: SikRadio | None = None
+    vehicle_connect = args.connect
+    if args.radio is not None:
+        scheme = args.connect.partition(":")[0].lower()
+        if scheme not in ("udpin", "udpout"):
+            raise InputError(
+                "--radio runs the radio pair as a UDP relay: --connect must be udpin:HOST:PORT "
+                "or udpout:HOST:PORT (the ground radio's side)",
+                field="--connect",
+            )
+        vehicle_port = free_udp_port()
+        vehicle_connect = f"udpin:127.0.0.1:{vehicle_port}"
     scenario = load_scenario_from_args(args, args.scenario)
     faults = FaultRates(
         drop=args.drop, duplicate=args.duplicate, delay=args.delay, reorder=args.reorder
     )
     vehicle = MockVehicle(
-        args.connect,
+        vehicle_connect,
         scenario=scenario,
         flavour=args.flavour,
         system_id=args.system_id,
@@ -74,6 +116,27 @@ def run(args: argparse.Namespace) -> int:
         baud=args.baud,
         speedup=args.speedup or None,
     )
+    if args.radio is not None:
+        config = RadioConfig(
+            air_rate=args.radio,
+            serial_baud=args.baud,
+            loss=args.radio_loss,
+            burst=args.radio_burst,
+            seed=args.seed,
+        )
+        try:
+            radio = SikRadio(args.connect, f"udpout:127.0.0.1:{vehicle_port}", config)
+        except (OSError, ValueError) as exc:
+            vehicle.stop()
+            raise InputError(f"cannot start the radio on {args.connect}: {exc}") from None
+        radio.start()
+        t = radio.timing
+        print(
+            f"through a SiK radio pair at {config.air_rate} kbit/s (TDM windows "
+            f"{t.window_s * 1000:.0f} ms), serial {config.serial_baud} baud, "
+            f"{config.loss:.0%} burst loss (mean burst {config.burst:g} packets)",
+            file=sys.stderr,
+        )
     print(
         f"mock vehicle ({args.flavour}, system {args.system_id}) on {args.connect} with "
         f"{scenario.n} landmarks from {scenario.source}; Ctrl-C to stop",
@@ -94,6 +157,8 @@ def run(args: argparse.Namespace) -> int:
         for sig, handler in previous.items():
             signal.signal(sig, handler)
         vehicle.stop()
+        if radio is not None:
+            radio.stop()
     print(f"mock vehicle stopped; it holds {len(vehicle.mission)} items", file=sys.stderr)
     return 0
 
@@ -137,6 +202,20 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         metavar="N",
         help="a flight started by MISSION_START plays N times faster than real time "
         "(1: real time; 0: as fast as the link takes it; default 100)",
+    )
+    r = p.add_argument_group("radio (sim/radio.py; seeded by --seed)")
+    r.add_argument(
+        "--radio",
+        type=_radio_kind,
+        metavar="sik[:AIR_RATE]",
+        help="reach the vehicle through an emulated SiK radio pair: half-duplex TDM at "
+        "AIR_RATE kbit/s (default 64), serial at --baud, SiK's buffers, RADIO_STATUS",
+    )
+    r.add_argument(
+        "--radio-loss", type=_loss, default=0.0, help="mean air packet loss in [0, 1) (bursts)"
+    )
+    r.add_argument(
+        "--radio-burst", type=_burst, default=4.0, help="mean loss burst, packets (default 4)"
     )
     g = p.add_argument_group("fault injection (seeded)")
     for name in ("drop", "duplicate", "delay", "reorder"):
