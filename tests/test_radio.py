@@ -301,3 +301,47 @@ def test_mock_vehicle_refuses_a_radio_on_a_serial_connection(capsys):
         main(["mock-vehicle", "--connect", "udpin:127.0.0.1:1", "--scenario", SCENARIO,
               "--radio", "lora"])  # fmt: skip
     assert exc.value.code == 2
+
+
+def test_upload_and_download_through_mock_vehicle_radio_process(tmp_path, capsys):
+    """`gcs-planner mock-vehicle --radio sik:250` in one process, `upload` / `download` in
+    this one, as a user would run them from two terminals."""
+    import json
+    import signal
+    import subprocess
+    import sys
+
+    from gcs_planner.mission.waypoints import dumps_items
+
+    port = free_udp_port()
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "gcs_planner", "mock-vehicle", "--connect",
+         f"udpin:127.0.0.1:{port}", "--scenario", SCENARIO, "--radio", "sik:250",
+         "--radio-loss", "0.05", "--seed", "3"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )  # fmt: skip
+    try:
+        items = [
+            MissionItem(i, 0, 16, param2=30.0, x=305_000_000 + 500 * i, y=1_235_000_000, z=120.0)
+            for i in range(15)
+        ]
+        wp = tmp_path / "m.waypoints"
+        wp.write_text(dumps_items(items, "ardupilot", (30.5, 123.5, 0.0)))
+        conn = ["--connect", f"udpout:127.0.0.1:{port}", "--quiet", "--wait", "60"]
+        assert main(["upload", str(wp), *conn, "--keep-loiter-radius"]) == 0
+        assert "uploaded and verified 15 items" in capsys.readouterr().out
+        out = tmp_path / "back.json"
+        assert main(["download", *conn, "--out", str(out)]) == 0
+        back = json.loads(out.read_text())["items"]
+        assert [row["x"] for row in back[1:]] == [it.x for it in items[1:]]
+    finally:
+        proc.send_signal(signal.SIGINT)
+        try:
+            err = proc.communicate(timeout=30)[1]
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            err = proc.communicate()[1]
+    assert proc.returncode == 0, err
+    assert "SiK radio pair at 250 kbit/s" in err and "holds 15 items" in err
