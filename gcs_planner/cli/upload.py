@@ -154,6 +154,11 @@ def run(args: argparse.Namespace) -> int:
         f"uploaded and verified {report.items} items to system {vehicle.system} "
         f"({vehicle.firmware}) in {report.seconds:.2f} s"
         + (f", {report.retries} resends" if report.retries else "")
+        + (
+            " (its final acknowledgement never came: the read-back shows it holds the mission)"
+            if report.unacknowledged
+            else ""
+        )
     )
     if radius is not None:
         print(f"loiter radius set to {radius:g} m")

@@ -1,9 +1,15 @@
 """The ground-station side of the MAVLink mission protocol: upload, download, clear, set current.
 
-One object per vehicle. Every wait has a deadline (1.5 s by default, 0.25 s for a single item as
-the specification recommends) and is retried a bounded number of times; every failure is a
+One object per vehicle. Every wait has a deadline (1.5 s by default; for a single item the
+measured round trip, 0.25 s as the specification recommends until there is one) and a transfer
+that makes no progress for its retries of the timeout is given up; every failure is a
 :class:`~gcs_planner.errors.LinkError` whose message says what the vehicle answered. An upload is
-only reported done after the mission has been read back and found equal to what was sent.
+only reported done after the mission has been read back and found equal to what was sent; a
+read-back that cannot be completed is a :class:`ReadBackError` ("unknown"), never "it differs".
+
+The client paces itself to the link (:mod:`gcs_planner.link.pacing`): it reads the RADIO_STATUS
+a telemetry radio writes to it as ArduPilot does, sends no resend while the first copy can still
+be in the channel, and sizes the download's outstanding requests to what the link delivers.
 """
 
 from __future__ import annotations
