@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
 from gcs_planner.scenario.generate import random_scenario
-from gcs_planner.scenario.model import Parameters, Scenario
+from gcs_planner.scenario.model import Kind, Parameters, Scenario
 
 
 def contest_params(**changes: float) -> Parameters:
@@ -34,3 +36,17 @@ def mixed_scenario(seed: int, n_min: int = 2, n_max: int = 7) -> Scenario:
     length = rng.uniform(10_000, 60_000)
     box = (length, length * rng.uniform(0.1, 1.0), length * rng.uniform(0.01, 0.3))
     return random_scenario(n, seed, params=params, box=box)
+
+
+_LETTER = {Kind.A: "A", Kind.B: "B", Kind.V: "V", Kind.H: "H"}
+
+
+def write_scenario_csv(scenario: Scenario, path: Path) -> Path:
+    """The scenario as the CSV the command line reads (id,x,y,z,kind,unreliable; exact floats)."""
+    lines = ["id,x,y,z,kind,unreliable"]
+    for i in range(scenario.n):
+        x, y, z = (float(v) for v in scenario.xyz[i])
+        kind = _LETTER[Kind(int(scenario.kind[i]))]
+        lines.append(f"{scenario.ids[i]},{x!r},{y!r},{z!r},{kind},{int(scenario.unreliable[i])}")
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return path

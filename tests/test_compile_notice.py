@@ -12,13 +12,12 @@ import time
 from pathlib import Path
 
 import pytest
+from helpers import write_scenario_csv
 
 from gcs_planner import compile_notice
 from gcs_planner.scenario.generate import DATASET1, random_scenario
-from gcs_planner.scenario.model import Kind
 
 ENTRY = Path(sys.executable).parent / "gcs-planner"
-LETTER = {Kind.A: "A", Kind.B: "B", Kind.V: "V", Kind.H: "H"}
 PARAMS = [
     "--alpha1", "25", "--alpha2", "15", "--beta1", "20", "--beta2", "25", "--theta", "30",
     "--delta", "0.001", "--turn-radius", "200", "--time-limit", "none",
@@ -28,14 +27,7 @@ NOTICE = "compiling the search kernels once, about"
 
 def small_scenario(path: Path) -> Path:
     # 2,000 points: enough for the planner to use its compiled kernels.
-    s = random_scenario(2000, 3, params=DATASET1)
-    lines = ["id,x,y,z,kind,unreliable"]
-    for i in range(s.n):
-        x, y, z = (float(v) for v in s.xyz[i])
-        kind = LETTER[Kind(int(s.kind[i]))]
-        lines.append(f"{s.ids[i]},{x!r},{y!r},{z!r},{kind},{int(s.unreliable[i])}")
-    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
-    return path
+    return write_scenario_csv(random_scenario(2000, 3, params=DATASET1), path)
 
 
 def run_on_terminal(args: list[str], env: dict[str, str]) -> tuple[int, str]:

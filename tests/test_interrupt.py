@@ -15,11 +15,10 @@ import time
 from pathlib import Path
 
 import pytest
+from helpers import write_scenario_csv
 
 from gcs_planner.scenario.generate import DATASET1, random_scenario
-from gcs_planner.scenario.model import Kind
 
-LETTER = {Kind.A: "A", Kind.B: "B", Kind.V: "V", Kind.H: "H"}
 ENTRY = Path(sys.executable).parent / "gcs-planner"
 PARAMS = [
     "--alpha1", "25", "--alpha2", "15", "--beta1", "20", "--beta2", "25", "--theta", "30",
@@ -33,14 +32,7 @@ WAIT = 300.0
 
 
 def write_scenario(path: Path, n: int) -> Path:
-    s = random_scenario(n, 3, params=DATASET1)
-    lines = ["id,x,y,z,kind,unreliable"]
-    for i in range(s.n):
-        x, y, z = (float(v) for v in s.xyz[i])
-        kind = LETTER[Kind(int(s.kind[i]))]
-        lines.append(f"{s.ids[i]},{x!r},{y!r},{z!r},{kind},{int(s.unreliable[i])}")
-    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
-    return path
+    return write_scenario_csv(random_scenario(n, 3, params=DATASET1), path)
 
 
 def _default_sigint() -> None:

@@ -994,15 +994,18 @@ def _search(
     # limit here. Past the limit plus ENDING_GRACE the rest stay open unexamined: bounds and
     # "optimal" marks only weaker for it, never wrong.
     stop_at = None if budget.deadline is None else budget.deadline + ENDING_GRACE
+
+    def still_open(e: tuple) -> tuple:  # (f, L, k, bounds to go, mass), as ``_ending`` takes
+        return (e[0], e[2], e[4], e[8], sum(e[5].values()))
+
     for at, e in enumerate(heap):
-        mass = sum(e[5].values())
         if stop_at is not None and at % 1024 == 0 and time.monotonic() > stop_at:
-            live.extend((r[0], r[2], r[4], r[8], sum(r[5].values())) for r in heap[at:])
+            live.extend(map(still_open, heap[at:]))
             break
-        if not inc.covers(e[2], e[4], e[8], mass) and not by_level(
-            e[2], e[4], e[3], e[5], mass, e[8]
-        ):
-            live.append((e[0], e[2], e[4], e[8], mass))
+        row = still_open(e)
+        _, L, k, to_go, mass = row
+        if not inc.covers(L, k, to_go, mass) and not by_level(L, k, e[3], e[5], mass, to_go):
+            live.append(row)
     return _ending(ctx, inc, live, labels, t0, exhausted, probe_labels)
 
 

@@ -17,10 +17,11 @@ G_j(e, m) = the least length with at most m more corrections, which is what prun
 route with k corrections: it can only end as (>= L + G_j(e, m), k + m), and that is dominated as
 soon as, for each m, a route already found has <= k + m corrections and length <= L + G_j(e, m).
 
-On large maps the layers take seconds each (20,000 points: about 0.8 s a layer). A caller with a
-deadline passes ``stop``: the layers end when it says so, and one last column bounds every walk
-with more corrections than the layers made by the straight distance to B (``ReachGraph.to_end``,
-no longer than any walk): weaker, still admissible, so a search over it stays exact.
+On large maps the layers are slow (20,000 points: about 0.5 s a layer on two cores). A caller
+with a deadline passes ``stop``: the layers end when it says so, and one last column bounds
+every walk with more corrections than the layers made by the straight distance to B
+(``ReachGraph.to_end``, no longer than any walk): weaker, still admissible, so a search over it
+stays exact.
 """
 
 from __future__ import annotations
@@ -108,7 +109,6 @@ def cost_to_go(
     compiled = use_compiled(scenario.n, compiled)
     if compiled:
         from gcs_planner.core.cost_to_go_kernel import (
-            backward_fan,
             frontier_order,
             merge_frontier,
             reverse_arcs,
@@ -195,10 +195,7 @@ def cost_to_go(
             break
         if compiled:
             arcs = (r_ptr, r_src, r_len, is_v, lim_v, lim_h, own, f_ptr, front_R, front_E)
-            j, newR, newE = _fan_on_threads(backward_fan, node, R, E, arcs, summary)
-        else:
-            j, newR, newE = _fan(node, R, E, r_ptr, r_src, r_len, is_v, own, graph, summary)
-        if compiled:
+            j, newR, newE = _fan_on_threads(node, R, E, arcs, summary)
             # Most candidates lie behind the frontier (kept as rows per point, sorted by R): the
             # fan drops them by bisection; sort the rest alone and merge them into the frontier.
             # The same labels as ``_filter`` keeps, without sorting the frontier each layer.
@@ -207,6 +204,7 @@ def cost_to_go(
                 j, newR, newE, order, f_ptr, front_R, front_E
             )
         else:
+            j, newR, newE = _fan(node, R, E, r_ptr, r_src, r_len, is_v, own, graph, summary)
             keep, stays = _filter(j, newR, newE, front_node, front_R, front_E)
             front_node = np.concatenate([front_node[stays], j[keep]])
             front_R = np.concatenate([front_R[stays], newR[keep]])
@@ -319,7 +317,6 @@ def _filter(
 
 
 def _fan_on_threads(
-    backward_fan: Callable[..., tuple[np.ndarray, np.ndarray, np.ndarray]],
     node: np.ndarray,
     R: np.ndarray,
     E: np.ndarray,
@@ -332,6 +329,8 @@ def _fan_on_threads(
     hundredfold), slices concatenated in label order. numba's thread count
     (NUMBA_NUM_THREADS) sets how many."""
     from numba import get_num_threads  # here: importing this module must not load numba
+
+    from gcs_planner.core.cost_to_go_kernel import backward_fan
 
     packed = np.stack(summary, axis=1)
     r_ptr = args[0]
