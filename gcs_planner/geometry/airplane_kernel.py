@@ -31,7 +31,10 @@ def airplane_lengths(
 ) -> tuple[np.ndarray, np.ndarray]:
     """(flown lengths, horizontal headings at the targets (m, 3)) of the airplane legs from
     ``start`` with horizontal ``heading`` to each row of ``ends``; inf and NaN where a target
-    lies inside the turning circle. ``radius`` > 0; tangents inf for limits of 90 degrees."""
+    lies inside the turning circle; tangents inf for limits of 90 degrees. ``radius`` 0 flies
+    the chord whatever the heading, and a leg too steep for it is inf (no helix), as numpy's."""
+    if radius <= 0.0:
+        return free_airplane_lengths(start, ends, radius, tan_climb, tan_descent)
     m = ends.shape[0]
     length = np.empty(m)
     head = np.empty((m, 3))
@@ -77,11 +80,14 @@ def _flown(
     horizontal: float, dz: float, radius: float, tan_climb: float, tan_descent: float
 ) -> float:
     """The flown length of a leg of ``horizontal`` metres and climb ``dz``: with the whole
-    helix turns it needs where too steep (``airplane.helix_turns``)."""
+    helix turns it needs where too steep (``airplane.helix_turns``); inf where it is too steep
+    and ``radius`` is 0."""
     g = tan_climb if dz > 0 else tan_descent
     need = 0.0 if math.isinf(g) else abs(dz) / g
     k = 0.0
     if need - horizontal > STEEP_SLACK_M:
+        if radius <= 0.0:
+            return math.inf
         k = max(math.ceil((need - horizontal - STEEP_SLACK_M) / (TWO_PI * radius)), 0.0)
     flat = horizontal + TWO_PI * radius * k
     return math.sqrt(flat * flat + dz * dz)
