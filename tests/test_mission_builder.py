@@ -414,6 +414,8 @@ def test_helices_become_loiters_at_the_turning_radius_where_the_plan_climbs(firm
         assert math.copysign(1, radius_param) == -geo["arc"]["sense"]
         if firmware == "ardupilot":
             assert item.param1 == leg["helix_turns"]
+            # heading required: leave on the tangent exit once the turns are done (common.xml)
+            assert item.param2 == 1
         assert item.param4 == 1  # leave on the tangent, towards the next item
         x, y, z = frame.to_local(item.lat, item.lon, item.z)
         start = np.array(geo["start"])

@@ -531,6 +531,11 @@ def build_mission(
                     mav_frame,
                     note,
                     param1=turns,
+                    # 1: leave on the tangent exit once the turns are done, as planned
+                    # (common.xml MAV_CMD_NAV_LOITER_TURNS param2 "heading required"; 0 would
+                    # let an autopilot leave wherever the turns end; ArduPlane's
+                    # verify_loiter_turns waits for the heading either way).
+                    param2=1,
                     param3=signed,
                     param4=1,
                     **at(centre),
