@@ -285,10 +285,28 @@ def cli(*args: str) -> list[str]:
     return [str(BIN / "gcs-planner"), "sweep", *args]
 
 
-def test_cli_interrupted_sweep_resumes_where_it_stopped(tmp_path: Path) -> None:
-    # 80 cells of 400 points (some 0.2 s each): several seconds of work left after the first
-    # save (a second in), so the interrupt finds the sweep running on any machine; cells of 24
-    # points all finished before the first save on a quick one.
+# What differs between two runs of one cell: where and when it ran, how long it took.
+VOLATILE = ("plan_seconds", "cell_seconds", "worker", "finished_at")
+
+
+def comparable(rows: list[dict]) -> list[dict]:
+    keep = [{k: v for k, v in r.items() if k not in VOLATILE} for r in rows]
+    return sorted(keep, key=lambda r: (r["cell"], r["route"]))
+
+
+def saved_cells(out: Path) -> int:
+    """Cells in out's saved table (0 before the first save)."""
+    if not (out / PARQUET).exists():
+        return 0
+    return len(by_cell(read_results(out)))
+
+
+def test_terminal_ctrl_c_stops_saves_and_resume_gives_the_uninterrupted_table(
+    tmp_path: Path, cluster
+) -> None:
+    # A terminal's Ctrl-C reaches the whole process group: the command and its local cluster's
+    # worker processes. 80 cells of 400 points (some 0.2 s each): work left after the first
+    # saved cell on any machine.
     cells = 80
     spec_path = small_spec(tmp_path, seeds=cells - 1, deltas="[0.001]", corrections=400)
     out = tmp_path / "out"
@@ -297,19 +315,22 @@ def test_cli_interrupted_sweep_resumes_where_it_stopped(tmp_path: Path) -> None:
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
+        start_new_session=True,  # its own process group, as a terminal's foreground job
     )
     try:
-        wait_for(lambda: (out / PARQUET).exists(), "the first save of results", proc)
-        proc.send_signal(signal.SIGINT)
+        wait_for(lambda: saved_cells(out) > 0, "a saved cell", proc)
+        os.killpg(os.getpgid(proc.pid), signal.SIGINT)
         _, err = proc.communicate(timeout=DEADLINE_S)
     finally:
         if proc.poll() is None:
-            proc.kill()
+            os.killpg(os.getpgid(proc.pid), signal.SIGKILL)
+            proc.wait()
     assert proc.returncode == 130, err
-    assert "interrupted" in err and "Traceback" not in err
     first = read_results(out)
     done_first = {r["cell_key"] for r in first}
     assert 0 < len(done_first) < cells
+    assert f"interrupted, {len(done_first)} cells saved, resume with --resume" in err
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err, err
 
     again = subprocess.run(
         cli(str(spec_path), "--out", str(out), "--resume"),
@@ -328,6 +349,48 @@ def test_cli_interrupted_sweep_resumes_where_it_stopped(tmp_path: Path) -> None:
         if r["cell_key"] in done_first:
             assert r == kept[(r["cell_key"], r["route"])]
     assert len(ResultTable.open(out, resume=True).rows) == len(rows)
+    # the same table as a sweep nobody interrupted
+    whole = tmp_path / "whole"
+    run_sweep(spec_path, whole, scheduler=cluster.scheduler_address)
+    assert comparable(rows) == comparable(read_results(whole))
+
+
+def start_scheduler(tmp_path: Path) -> tuple[subprocess.Popen, str]:
+    """A `dask scheduler` on 127.0.0.1 started as a user would, and its address."""
+    import json
+
+    scheduler_file = tmp_path / "scheduler.json"
+    proc = subprocess.Popen(
+        [str(BIN / "dask"), "scheduler", "--host", "127.0.0.1", "--port", "0",
+         "--no-dashboard", "--scheduler-file", str(scheduler_file)],
+        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+    )  # fmt: skip
+    try:
+        wait_for(scheduler_file.exists, "the scheduler file", proc)
+        wait_for(lambda: "address" in scheduler_file.read_text(), "the scheduler's address")
+        return proc, json.loads(scheduler_file.read_text())["address"]
+    except BaseException:
+        proc.kill()
+        raise
+
+
+def test_a_scheduler_without_workers_stops_the_sweep_with_a_message(tmp_path: Path) -> None:
+    scheduler, address = start_scheduler(tmp_path)
+    try:
+        done = subprocess.run(
+            cli(str(small_spec(tmp_path)), "--out", str(tmp_path / "out"),
+                "--scheduler", address, "--no-workers-timeout", "3"),
+            capture_output=True,
+            text=True,
+            timeout=DEADLINE_S,
+        )  # fmt: skip
+    finally:
+        scheduler.terminate()
+        scheduler.wait(timeout=60)
+    assert done.returncode == 5, done.stderr
+    assert done.stderr.count("\n") == 1, done.stderr
+    assert "no Dask worker for 3 s" in done.stderr
+    assert "0 cells saved" in done.stderr and "--resume" in done.stderr
 
 
 def test_cli_on_a_separately_started_scheduler_and_workers(tmp_path: Path) -> None:

@@ -36,6 +36,14 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "--resume", action="store_true", help="keep the finished cells in DIR, run the others"
     )
     p.add_argument(
+        "--no-workers-timeout",
+        type=float,
+        default=60.0,
+        metavar="SECONDS",
+        help="stop, the finished cells saved, once the scheduler has had no worker for this "
+        "long (default 60; exit status 5)",
+    )
+    p.add_argument(
         "--dashboard-address",
         default="127.0.0.1:0",
         help="the local cluster's dashboard (default: a free port on 127.0.0.1, printed)",
@@ -55,19 +63,32 @@ def run(args: argparse.Namespace) -> int:
     if args.scheduler is not None and not args.scheduler.strip():
         raise InputError("is empty: give the scheduler's address", field="--scheduler")
 
+    if not args.no_workers_timeout > 0:
+        raise InputError(
+            f"must be > 0 (got {args.no_workers_timeout:g})", field="--no-workers-timeout"
+        )
+
+    from gcs_planner.interrupt import EXIT_CODE
     from gcs_planner.sweep import read_spec, run_sweep
+    from gcs_planner.sweep.runner import SweepInterrupted
 
     spec = read_spec(args.spec)
-    result = run_sweep(
-        spec,
-        args.out,
-        scheduler=args.scheduler,
-        workers=args.workers,
-        resume=args.resume,
-        dashboard_address=args.dashboard_address,
-        stream=sys.stdout,
-        quiet=args.quiet,
-    )
+    try:
+        result = run_sweep(
+            spec,
+            args.out,
+            scheduler=args.scheduler,
+            workers=args.workers,
+            resume=args.resume,
+            dashboard_address=args.dashboard_address,
+            stream=sys.stdout,
+            quiet=args.quiet,
+            no_workers_timeout=args.no_workers_timeout,
+        )
+    except SweepInterrupted as exc:
+        # the table is saved: say how much, and how to go on
+        print(f"gcs-planner: {exc}", file=sys.stderr)
+        return EXIT_CODE
     print(
         f"{result.ran} cells run ({result.failed} failed, {result.infeasible} infeasible), "
         f"{result.skipped} already done, in {result.seconds:.1f} s"

@@ -33,7 +33,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TextIO
 
-from gcs_planner.errors import InputError
+from gcs_planner.errors import GcsPlannerError, InputError
 from gcs_planner.progress import Counter
 from gcs_planner.sweep.cells import Cell, expand
 from gcs_planner.sweep.spec import SweepSpec, read_spec
@@ -63,9 +63,34 @@ LEAN_CLUSTER = {
     # glibc's own adaptive thresholds serve. (None: Dask leaves the variable out.)
     "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,
 }
+# The sweep's own local workers ignore SIGINT (see worker_setup): a terminal's Ctrl-C reaches
+# the whole process group, and the client, not each worker, decides what a stop means.
+LOCAL_WORKERS = {"distributed.worker.preload": ["gcs_planner.sweep.worker_setup"]}
+# How often the client looks up from its wait for results: the Ctrl-C flag and the workers are
+# checked at least this often, however long a cell takes.
+POLL_S = 0.25
+# How often, while no result comes, the client asks the scheduler how many workers it has.
+WORKER_CHECK_S = 2.0
+# A sweep with no worker at all for this long stops with a message, its table saved.
+NO_WORKERS_TIMEOUT_S = 60.0
 # What the user's environment said before any Dask nanny of this process wrote Dask's value
 # into it (a nanny sets its pre-spawn variables in its own process, for good).
 _USER_MALLOC_TRIM = os.environ.get("MALLOC_TRIM_THRESHOLD_")
+
+
+class SweepInterrupted(KeyboardInterrupt):
+    """Ctrl-C stopped the sweep; its table is saved with ``saved`` cells in ``out``."""
+
+    def __init__(self, saved: int, out: Path) -> None:
+        self.saved = saved
+        self.out = out
+        super().__init__(f"interrupted, {saved} cells saved, resume with --resume")
+
+
+class NoWorkersError(GcsPlannerError):
+    """The scheduler had no worker for too long; the table is saved."""
+
+    exit_code = 5
 
 
 @dataclass(frozen=True)
@@ -95,6 +120,7 @@ def run_sweep(
     task: Callable[[Cell], list[dict]] = run_cell,
     quiet: bool = False,
     progress_stream: TextIO | None = None,
+    no_workers_timeout: float = NO_WORKERS_TIMEOUT_S,
 ) -> SweepResult:
     """Run the sweep ``spec`` (a SweepSpec or the path of its TOML) into the folder ``out``.
 
@@ -104,6 +130,9 @@ def run_sweep(
     go (None: nowhere). ``task`` runs one cell on a worker; it must be importable there. The
     cells done, failed and the time left are one line on ``progress_stream`` (default stderr)
     when it is a terminal and ``quiet`` is False.
+
+    Ctrl-C (SIGINT) saves the table and raises :class:`SweepInterrupted`; a scheduler without
+    any worker for ``no_workers_timeout`` seconds saves it and raises :class:`NoWorkersError`.
     """
     from gcs_planner.sweep.summary import summary_png
     from gcs_planner.sweep.table import CSV, PARQUET, ResultTable
@@ -131,14 +160,22 @@ def run_sweep(
             say(f"running on {where}; dashboard: {dashboard or '(none)'}")
             progress = Counter("cells", len(todo), unit="cell", stream=progress_stream, quiet=quiet)
             try:
-                ran, failed, infeasible = _run(client, todo, table, task, progress, save_interval)
+                ran, failed, infeasible = _run(
+                    client, todo, table, task, progress, save_interval, no_workers_timeout
+                )
             finally:
                 progress.close()  # ends the line, interrupted or not, before anything is said
-        except BaseException:
+        except BaseException as exc:
             try:
                 table.save()
             finally:
                 _disconnect(client, cluster)
+            if isinstance(exc, KeyboardInterrupt) and not isinstance(exc, SweepInterrupted):
+                raise SweepInterrupted(len(table.done), out) from None
+            if isinstance(exc, NoWorkersError):
+                raise NoWorkersError(
+                    f"{exc}; {len(table.done)} cells saved in {out}, resume with --resume"
+                ) from None
             raise
         table.save()
         # Stopping the workers is mostly waiting for their processes to exit: draw the
@@ -191,7 +228,7 @@ def _connect(scheduler: str | None, workers: int, threads: int, dashboard_addres
     if scheduler is None:
         # The scheduler reads these when it starts, each nanny hands them to its worker
         # process (and to a worker it restarts).
-        with dask.config.set(LEAN_CLUSTER), _malloc_trim(_USER_MALLOC_TRIM):
+        with dask.config.set({**LEAN_CLUSTER, **LOCAL_WORKERS}), _malloc_trim(_USER_MALLOC_TRIM):
             cluster = LocalCluster(
                 n_workers=workers,
                 threads_per_worker=threads,
@@ -221,7 +258,15 @@ def _disconnect(client, cluster) -> None:
             cluster.close()
 
 
-def _run(client, todo: list[Cell], table, task, progress: Counter, save_interval: float):
+def _run(
+    client,
+    todo: list[Cell],
+    table,
+    task,
+    progress: Counter,
+    save_interval: float,
+    no_workers_timeout: float = NO_WORKERS_TIMEOUT_S,
+):
     from distributed import as_completed
 
     token = uuid.uuid4().hex[:8]  # keys unique across sweeps sent to one long-lived scheduler
@@ -236,8 +281,43 @@ def _run(client, todo: list[Cell], table, task, progress: Counter, save_interval
             new.append(future)
         return new
 
+    workers = _WorkerWatch(client, no_workers_timeout)
     with _interrupt_flag() as interrupted:
-        return _collect(submit, futures, as_completed, table, progress, save_interval, interrupted)
+        return _collect(
+            submit, futures, as_completed, table, progress, save_interval, interrupted, workers
+        )
+
+
+class _WorkerWatch:
+    """Whether the scheduler has had no worker for ``timeout`` seconds, asked at most every
+    WORKER_CHECK_S while the client waits: a sweep whose workers are all gone (a cluster's
+    jobs ended, a scheduler started without any) would otherwise wait forever, silently."""
+
+    def __init__(self, client, timeout: float) -> None:
+        self.client = client
+        self.timeout = timeout
+        self.last_check = -float("inf")
+        self.none_since: float | None = None
+
+    def check(self) -> None:
+        now = time.monotonic()
+        if now - self.last_check < min(WORKER_CHECK_S, max(self.timeout / 4, 0.1)):
+            return
+        self.last_check = now
+        try:
+            count = len(self.client.nthreads())
+        except Exception:  # the scheduler itself is unreachable: the same wait, nothing runs
+            count = 0
+        if count:
+            self.none_since = None
+            return
+        if self.none_since is None:
+            self.none_since = now
+        elif now - self.none_since >= self.timeout:
+            raise NoWorkersError(f"no Dask worker for {self.timeout:g} s, the sweep stopped")
+
+    def seen_results(self) -> None:
+        self.none_since = None
 
 
 @contextlib.contextmanager
@@ -257,27 +337,38 @@ def _interrupt_flag() -> Iterator[threading.Event]:
         signal.signal(signal.SIGINT, previous)
 
 
-def _collect(submit, futures, as_completed, table, progress, save_interval, interrupted):
+def _collect(submit, futures, as_completed, table, progress, save_interval, interrupted, workers):
     flow = as_completed(submit(IN_FLIGHT))
     done = failed = infeasible = 0
     last_save = time.perf_counter()
     wait = save_interval
-    for future in flow:
+    while not flow.is_empty():
         if interrupted.is_set():
             raise KeyboardInterrupt
-        for new in submit(1):  # one in for each one out: the scheduler holds IN_FLIGHT at most
-            flow.add(new)
-        cell = futures.pop(future)
-        try:
-            rows = future.result()
-        except Exception as exc:  # the task itself could not run (e.g. its worker kept dying)
-            rows = [_error_row(cell, exc)]
-        future.release()
-        if table.add(rows):
-            done += 1
-            status = rows[0].get("status")
-            failed += status == "error"
-            infeasible += status == "infeasible"
+        batch = flow.next_batch(block=False)
+        if not batch:
+            # A wait with a timeout, not as_completed's blocking one: the Ctrl-C flag and the
+            # workers are looked at while a long cell runs, not only when one finishes.
+            workers.check()
+            with flow.thread_condition:
+                flow.thread_condition.wait(timeout=POLL_S)
+            continue
+        workers.seen_results()
+        for future in batch:
+            # one in for each one out: the scheduler holds IN_FLIGHT at most
+            for new in submit(1):
+                flow.add(new)
+            cell = futures.pop(future)
+            try:
+                rows = future.result()
+            except Exception as exc:  # the task itself could not run (its worker kept dying)
+                rows = [_error_row(cell, exc)]
+            future.release()
+            if table.add(rows):
+                done += 1
+                status = rows[0].get("status")
+                failed += status == "error"
+                infeasible += status == "infeasible"
         progress.update(done, failed=failed)
         if time.perf_counter() - last_save >= wait:
             t0 = time.perf_counter()
