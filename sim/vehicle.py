@@ -42,6 +42,7 @@ from gcs_planner.vehicle import FIRMWARES
 from sim import replay as replay_mod
 from sim import telemetry
 from sim.faults import FaultInjector, FaultRates
+from sim.ftp_server import FtpServer
 from sim.guidance import AutopilotParams
 from sim.mission_server import MissionServer, seq_from_param
 from sim.param_server import ParamServer, parameter_table
@@ -144,6 +145,10 @@ class MockVehicle:
             self.mav, self._send, table, self._lock, flavour=flavour, statustext=self._statustext
         )
         self.radio = RadioFlow()  # its telemetry radio's RADIO_STATUS, as ArduPilot reads it
+        # MAVLink FTP (sim/ftp_server.py): ArduPilot serves its mission as @MISSION/mission.dat.
+        self.ftp = FtpServer(
+            self.mav, self._send, self.missions, flavour=flavour, baud=baud, radio=self.radio
+        )
         self.handler_errors = 0  # messages whose handling failed; the vehicle went on
         self.flight_errors = 0  # flights that raised; the vehicle said so and went on
         # (address, frame bytes) -> when it last arrived, for the duplicate window.
@@ -160,6 +165,7 @@ class MockVehicle:
         self.acks_sent = self.missions.acks_sent  # MAV_MISSION_RESULT of every MISSION_ACK
         self.last_report: replay_mod.ReplayReport | None = None
         self.flying = False  # HEARTBEAT says armed, mode AUTO while the flight plays
+        self.advertise_ftp = True  # AUTOPILOT_VERSION sets MAV_PROTOCOL_CAPABILITY_FTP
 
     # Lifecycle --------------------------------------------------------------------------------
     def start(self) -> MockVehicle:
@@ -266,6 +272,7 @@ class MockVehicle:
                     self._mission_current()
                     next_current = now + 1.0
                 self.missions.timers(now)
+                self.ftp.timers(now)
                 self._release_held(now)
                 msg = self.link.recv(0.01)
                 if msg is None:
@@ -330,6 +337,8 @@ class MockVehicle:
                 self._on_heartbeat(msg, peer)
             elif kind == "COMMAND_LONG":
                 self._on_command_long(msg, peer)
+            elif kind == "FILE_TRANSFER_PROTOCOL":
+                self.ftp.handle(msg, peer)
             elif kind == "RADIO_STATUS" and self.flavour == "ardupilot":
                 # ArduPilot reads its own radio's reports (GCS_MAVLINK::handle_radio_status)
                 # and waits that much longer before asking again for a mission item
@@ -362,8 +371,41 @@ class MockVehicle:
             result = self._start_flight()
         elif msg.command == mavlink.MAV_CMD_DO_SET_MODE:
             result = self._set_mode(msg.param1, msg.param2, msg.param3)
+        elif msg.command == mavlink.MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES or (
+            msg.command == mavlink.MAV_CMD_REQUEST_MESSAGE
+            and msg.param1 == mavlink.MAVLINK_MSG_ID_AUTOPILOT_VERSION
+        ):
+            result = mavlink.MAV_RESULT_ACCEPTED
         self.commands.append((int(msg.command), result))
         self._send(self.mav.command_ack_encode(msg.command, result))
+        if result == mavlink.MAV_RESULT_ACCEPTED and msg.command in (
+            mavlink.MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES,
+            mavlink.MAV_CMD_REQUEST_MESSAGE,
+        ):
+            self._autopilot_version()
+
+    def _autopilot_version(self) -> None:
+        """AUTOPILOT_VERSION with the capabilities each autopilot sets: ArduPilot's
+        ``GCS_MAVLINK::capabilities`` (GCS_Common.cpp: MAVLink 2, MISSION_INT, COMMAND_INT,
+        PARAM_FLOAT, fence and rally missions, FTP where AP_MAVLINK_FTP_ENABLED), PX4's
+        ``Mavlink::send_autopilot_capabilities`` (mavlink_main.cpp: the same with MISSION_FLOAT,
+        FTP among them, though PX4 serves no @MISSION file)."""
+        cap = (
+            mavlink.MAV_PROTOCOL_CAPABILITY_MAVLINK2
+            | mavlink.MAV_PROTOCOL_CAPABILITY_MISSION_INT
+            | mavlink.MAV_PROTOCOL_CAPABILITY_COMMAND_INT
+            | mavlink.MAV_PROTOCOL_CAPABILITY_PARAM_FLOAT
+            | mavlink.MAV_PROTOCOL_CAPABILITY_MISSION_FENCE
+            | mavlink.MAV_PROTOCOL_CAPABILITY_MISSION_RALLY
+            | mavlink.MAV_PROTOCOL_CAPABILITY_FTP
+        )
+        if self.flavour == "px4":
+            cap |= mavlink.MAV_PROTOCOL_CAPABILITY_MISSION_FLOAT
+        if not self.advertise_ftp:
+            cap &= ~mavlink.MAV_PROTOCOL_CAPABILITY_FTP
+        self._send(
+            self.mav.autopilot_version_encode(cap, 0, 0, 0, 0, [0] * 8, [0] * 8, [0] * 8, 0, 0, 0)
+        )
 
     def _set_mode(self, base: float, main: float, sub: float) -> int:
         """MAV_CMD_DO_SET_MODE. The mission mode starts the flight as MISSION_START does (what

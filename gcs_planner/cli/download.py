@@ -54,7 +54,8 @@ def run(args: argparse.Namespace) -> int:
         except LinkError as exc:
             raise LinkError(f"{exc}; nothing was written to {out}") from None
         write_atomic(out, dumps_items(items, firmware, home))
-    print(f"downloaded {len(items)} items from system {client.target_system} to {out}")
+    how = " by MAVFTP" if client.transfer_used == "ftp" else ""
+    print(f"downloaded {len(items)} items from system {client.target_system}{how} to {out}")
     return 0
 
 

@@ -10,7 +10,7 @@ from pathlib import Path
 from gcs_planner.cli.common import add_quiet_argument
 from gcs_planner.errors import LinkError
 from gcs_planner.link.connection import open_link
-from gcs_planner.link.mission_client import FIRMWARES, MissionClient
+from gcs_planner.link.mission_client import FIRMWARES, TRANSFERS, MissionClient
 from gcs_planner.link.mission_file import load_mission_file
 from gcs_planner.link.progress import Progress
 from gcs_planner.link.signing import key_from_passphrase
@@ -48,6 +48,13 @@ def add_link_arguments(p: argparse.ArgumentParser) -> None:
     )
     g.add_argument(
         "--firmware", choices=FIRMWARES, help="autopilot firmware (default: from its heartbeat)"
+    )
+    g.add_argument(
+        "--transfer",
+        choices=TRANSFERS,
+        default="auto",
+        help="how missions travel: MAVFTP (@MISSION/mission.dat, ArduPilot), the mission "
+        "protocol, or auto: MAVFTP when the vehicle offers it (default auto)",
     )
     g.add_argument("--timeout", type=float, default=1.5, help="seconds per wait (default 1.5)")
     g.add_argument("--retries", type=int, default=5, help="resends per wait (default 5)")
@@ -98,6 +105,7 @@ def connect_client(args: argparse.Namespace) -> MissionClient:
         timeout=args.timeout,
         retries=args.retries,
         progress=progress,
+        transfer=getattr(args, "transfer", "auto"),
     )
     if not quiet:
         # Said at once: the wait may be long, and silence looks like a hang.
@@ -153,6 +161,7 @@ def run(args: argparse.Namespace) -> int:
     print(
         f"uploaded and verified {report.items} items to system {vehicle.system} "
         f"({vehicle.firmware}) in {report.seconds:.2f} s"
+        + (" by MAVFTP" if report.transfer == "ftp" else "")
         + (f", {report.retries} resends" if report.retries else "")
         + (
             " (its final acknowledgement never came: the read-back shows it holds the mission)"

@@ -10,6 +10,14 @@ read-back that cannot be completed is a :class:`ReadBackError` ("unknown"), neve
 The client paces itself to the link (:mod:`gcs_planner.link.pacing`): it reads the RADIO_STATUS
 a telemetry radio writes to it as ArduPilot does, sends no resend while the first copy can still
 be in the channel, and sizes the download's outstanding requests to what the link delivers.
+
+Missions can also travel by MAVLink FTP (:mod:`gcs_planner.link.ftp`,
+:mod:`gcs_planner.link.mission_ftp`): ``transfer="auto"`` writes and reads
+``@MISSION/mission.dat`` when the vehicle's AUTOPILOT_VERSION sets MAV_PROTOCOL_CAPABILITY_FTP
+and it runs ArduPilot (PX4 sets the bit but serves no @MISSION), and falls back to the mission
+protocol when the vehicle answers that it has no such file; ``"ftp"`` and ``"mission"`` force
+one. The library's default is ``"mission"``; the command line's is ``auto``. The read-back
+goes the way the upload went, with the same verdicts (differs / could not read it back).
 """
 
 from __future__ import annotations
@@ -23,6 +31,13 @@ from typing import Any
 
 from gcs_planner.errors import InputError, LinkError
 from gcs_planner.link.connection import Link, mavlink
+from gcs_planner.link.ftp import FILE_NOT_FOUND, NAK, UNKNOWN_COMMAND, FtpClient, FtpError
+from gcs_planner.link.mission_ftp import (
+    MISSION_PATH,
+    decode_mission,
+    encode_mission,
+    mission_length,
+)
 from gcs_planner.link.pacing import RadioFlow, Window
 from gcs_planner.link.params import read_parameter, set_loiter_radius
 from gcs_planner.link.progress import Progress
@@ -63,6 +78,11 @@ _BUSY = (
 )
 _COMMAND_OK = (mavlink.MAV_RESULT_ACCEPTED, mavlink.MAV_RESULT_IN_PROGRESS)
 _NOT_VEHICLES = {mavlink.MAV_TYPE_GCS, mavlink.MAV_TYPE_GIMBAL, mavlink.MAV_TYPE_ADSB}
+# How missions travel: MAVFTP where the vehicle offers @MISSION/mission.dat (ArduPilot, with
+# MAV_PROTOCOL_CAPABILITY_FTP), the mission protocol otherwise; or either, by choice.
+TRANSFERS = ("auto", "ftp", "mission")
+# An open refused with these says the vehicle has no such file or no FTP: auto falls back.
+_NO_MISSION_FILE = (FILE_NOT_FOUND, UNKNOWN_COMMAND)
 
 
 def _span(first: int, last: int) -> str:
@@ -89,6 +109,7 @@ class UploadReport:
     # The vehicle's final MISSION_ACK never came (or came as an error to a resent last item, as
     # ArduPilot answers one): the read-back alone showed that it holds the mission.
     unacknowledged: bool = False
+    transfer: str = "mission"  # "ftp" (MAVFTP, @MISSION/mission.dat) or "mission"
 
 
 class ReadBackError(LinkError):
@@ -128,7 +149,13 @@ class MissionClient:
         retries: int = DEFAULT_RETRIES,
         progress: ProgressFactory | None = None,
         window: int = DOWNLOAD_WINDOW,
+        transfer: str = "mission",
     ) -> None:
+        if transfer not in TRANSFERS:
+            raise LinkError(f"unknown transfer {transfer!r}: expected one of {TRANSFERS}")
+        self.transfer = transfer
+        self.capabilities: int | None = None  # AUTOPILOT_VERSION's, once asked
+        self.transfer_used = "mission"  # how the last upload or download went
         if firmware is not None and firmware not in FIRMWARES:
             raise LinkError(f"unknown firmware {firmware!r}: expected one of {FIRMWARES}")
         self.link = link
@@ -531,8 +558,18 @@ class MissionClient:
         frame or command, a position out of range or not set, a non-finite altitude or
         parameter) is a :class:`LinkError` naming its seq and field: what a vehicle sends is
         input like any other. The read-back after an upload compares instead."""
-        got: dict[int, MissionItem] = {}
-        mission = self._download_into(got, mission_type)
+        mission: list[MissionItem] | None = None
+        self.transfer_used = "mission"
+        if mission_type == MAV_MISSION_TYPE_MISSION and self._use_ftp():
+            self.transfer_used = "ftp"
+            try:
+                mission = self._ftp_read({})
+            except FtpError as exc:
+                if not self._fallback(exc):
+                    raise
+                self.transfer_used = "mission"
+        if mission is None:
+            mission = self._download_into({}, mission_type)
         if validate:
             for item in mission:
                 problem = item_problem(item)
@@ -811,6 +848,109 @@ class MissionClient:
                 "--keep-loiter-radius to upload without setting it)"
             ) from None
 
+    # Missions by MAVFTP ------------------------------------------------------------------------
+    def autopilot_capabilities(self) -> int:
+        """AUTOPILOT_VERSION.capabilities: asked with MAV_CMD_REQUEST_MESSAGE, then the older
+        MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES (both autopilots answer either); 0 when the
+        vehicle says nothing (it offers no optional protocol then)."""
+        if self.capabilities is not None:
+            return self.capabilities
+        ts, tc = self._target()
+        asks = [
+            self.mav.command_long_encode(ts, tc, mavlink.MAV_CMD_REQUEST_MESSAGE, 0,
+                                         mavlink.MAVLINK_MSG_ID_AUTOPILOT_VERSION,
+                                         0, 0, 0, 0, 0, 0),
+            self.mav.command_long_encode(ts, tc, mavlink.MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES,
+                                         0, 1, 0, 0, 0, 0, 0, 0),
+        ]  # fmt: skip
+        for attempt in range(min(self.retries, 2) + 1):
+            self.link.send(asks[attempt % 2])
+            deadline = time.monotonic() + self.timeout
+            while (remaining := deadline - time.monotonic()) > 0:
+                msg = self._recv(remaining, {"AUTOPILOT_VERSION"}, None)
+                if msg is not None:
+                    self.capabilities = int(msg.capabilities)
+                    return self.capabilities
+        self.capabilities = 0
+        return 0
+
+    def _use_ftp(self) -> bool:
+        if self.transfer == "mission":
+            return False
+        if self.transfer == "ftp":
+            return True
+        offers = self.autopilot_capabilities() & mavlink.MAV_PROTOCOL_CAPABILITY_FTP
+        # Only ArduPilot serves @MISSION (PX4 sets the FTP bit for its file system).
+        return bool(offers) and self.firmware == "ardupilot"
+
+    def _ftp(self) -> FtpClient:
+        return FtpClient(
+            self.mav,
+            self.link.send,
+            lambda t: self._recv(t, {"FILE_TRANSFER_PROTOCOL"}, None),
+            self._target(),
+            timeout=self.timeout,
+            retries=self.retries,
+            extra_wait=self.radio.extra_wait,
+            congested=self.radio.congested,
+        )
+
+    def _fallback(self, exc: FtpError) -> bool:
+        """Whether an FTP failure sends an automatic choice back to the mission protocol: the
+        vehicle has no mission file (or no FTP) at all."""
+        return self.transfer == "auto" and exc.code in _NO_MISSION_FILE
+
+    def _ftp_upload(self, items: Sequence[MissionItem]) -> None:
+        data = encode_mission(items)
+        client = self._ftp()
+        try:
+            client.reset()
+            reply = client.write(MISSION_PATH, data)
+        finally:
+            self.retry_count += client.retry_count
+        if reply is None:
+            raise _Unconfirmed(f"no answer came to the close of {MISSION_PATH}")
+        if reply.opcode == NAK:
+            raise LinkError(
+                f"upload refused: the vehicle did not store {MISSION_PATH} when it was closed "
+                f"(TerminateSession NAK: {reply.nak_text()}); ArduPilot refuses the whole file "
+                "when its header's count and the items disagree or an item is one it does not "
+                "store, and keeps the mission it had"
+            )
+
+    def _ftp_read(self, chunks: dict[int, bytes]) -> list[MissionItem]:
+        client = self._ftp()
+        try:
+            data = client.read(MISSION_PATH, mission_length, chunks)
+        finally:
+            self.retry_count += client.retry_count
+        return decode_mission(data)
+
+    def _ftp_read_back(
+        self, sent: Sequence[MissionItem], tol: Tolerance, *, acknowledged: bool, attempts: int = 3
+    ) -> list[MissionItem]:
+        """The read-back by MAVFTP: as :meth:`_read_back`, resuming across attempts from the
+        bytes already read."""
+        chunks: dict[int, bytes] = {}
+        for attempt in range(attempts):
+            try:
+                return self._ftp_read(chunks)
+            except LinkError as exc:
+                if attempt < attempts - 1:
+                    continue
+                said = (
+                    "the vehicle acknowledged the close of the mission file"
+                    if acknowledged
+                    else "the vehicle never acknowledged the close of the mission file"
+                )
+                held = sum(len(c) for c in chunks.values())
+                raise ReadBackError(
+                    f"{said} but it could not be read back to verify it: {exc}. {held} bytes "
+                    "were read back; the read-back failed, so whether the vehicle holds this "
+                    "mission is unknown: run `gcs-planner download` to check"
+                ) from None
+        raise AssertionError("unreachable")
+
     # The whole job ----------------------------------------------------------------------------
     def upload_verified(
         self,
@@ -830,13 +970,25 @@ class MissionClient:
         tol = tolerance or Tolerance()
         sent = [it.with_seq(i) if it.seq != i else it for i, it in enumerate(items)]
         unconfirmed: str | None = None
+        self.transfer_used = "ftp" if self._use_ftp() else "mission"
         try:
-            self._upload(sent, MAV_MISSION_TYPE_MISSION)
+            if self.transfer_used == "ftp":
+                try:
+                    self._ftp_upload(sent)
+                except FtpError as exc:
+                    if not self._fallback(exc):
+                        raise
+                    self.transfer_used = "mission"
+            if self.transfer_used == "mission":
+                self._upload(sent, MAV_MISSION_TYPE_MISSION)
         except _Unconfirmed as exc:
             # The read-back decides: the same mission is a success, anything else is not.
             unconfirmed = exc.reason
         uploaded = time.perf_counter()
-        got = self._read_back(sent, tol, acknowledged=unconfirmed is None)
+        if self.transfer_used == "ftp":
+            got = self._ftp_read_back(sent, tol, acknowledged=unconfirmed is None)
+        else:
+            got = self._read_back(sent, tol, acknowledged=unconfirmed is None)
         skip_home = self.firmware == "ardupilot"
         diffs = mission_differences(list(items), got, skip_home=skip_home, tol=tol)
         if diffs:
@@ -861,4 +1013,5 @@ class MissionClient:
             verify_seconds=verified - uploaded,
             retries=self.retry_count - retries_before,
             unacknowledged=unconfirmed is not None,
+            transfer=self.transfer_used,
         )

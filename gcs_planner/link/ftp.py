@@ -1,0 +1,458 @@
+"""MAVLink FTP, ground-station side: the payload of FILE_TRANSFER_PROTOCOL, and the reads and
+writes of one file with burst reads and resumption of what a lossy link lost.
+
+The payload (https://mavlink.io/en/services/ftp.html, "Payload"; ArduPilot's
+``GCS_FTP::handle_file_transfer_protocol`` and ``send_reply`` in
+libraries/GCS_MAVLink/GCS_FTP.cpp read and write the same layout): seq_number u16, session
+u8, opcode u8, size u8, req_opcode u8, burst_complete u8, a padding byte, offset u32, then
+239 data bytes, little-endian. A reply carries the request's sequence number plus one, its
+opcode in req_opcode, and ACK (128) or NAK (129) with the error code in data[0].
+
+What the vehicle sends is input like any other: a size over 239, data past the end of the
+file, a reply to a session that is not ours, or two different contents for one offset end the
+transfer with a :class:`FtpError` that says which, never a traceback.
+"""
+
+from __future__ import annotations
+
+import struct
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+from gcs_planner.errors import LinkError
+from gcs_planner.link.pacing import Window
+from gcs_planner.link.rtt import RoundTrip
+
+# Opcodes (the specification's table; GCS_FTP.h, enum FTP_OP).
+NONE, TERMINATE_SESSION, RESET_SESSIONS, LIST_DIRECTORY, OPEN_FILE_RO, READ_FILE = range(6)
+CREATE_FILE, WRITE_FILE, REMOVE_FILE = 6, 7, 8
+OPEN_FILE_WO, BURST_READ_FILE = 11, 15
+ACK, NAK = 128, 129
+# NAK codes (data[0]).
+ERRORS = {
+    0: "no error",
+    1: "failed",
+    2: "failed with errno",
+    3: "invalid data size",
+    4: "invalid session",
+    5: "no sessions available",
+    6: "end of file",
+    7: "unknown command",
+    8: "file exists",
+    9: "file protected",
+    10: "file not found",
+}
+FAIL_ERRNO, EOF, UNKNOWN_COMMAND, FILE_NOT_FOUND = 2, 6, 7, 10
+DATA_MAX = 239  # data bytes in one payload
+WRITE_WINDOW = 6  # WriteFile requests out at once, at most
+FIRST_WAIT_S = 0.5
+PAYLOAD_LEN = 251
+_HEAD = struct.Struct("<HBBBBBxI")
+
+
+class FtpError(LinkError):
+    """An FTP transfer failed: the vehicle refused it, went quiet, or sent what cannot be."""
+
+    def __init__(self, message: str, code: int | None = None) -> None:
+        super().__init__(message)
+        self.code = code  # the NAK code when the vehicle refused
+
+
+@dataclass(frozen=True)
+class Packet:
+    seq: int
+    session: int
+    opcode: int
+    size: int
+    req_opcode: int
+    burst_complete: int
+    offset: int
+    data: bytes  # the first ``size`` data bytes
+
+    def nak_text(self) -> str:
+        code = self.data[0] if self.data else 0
+        text = ERRORS.get(code, f"error code {code}")
+        if code == FAIL_ERRNO and len(self.data) > 1:
+            text += f" {self.data[1]}"
+        return text
+
+
+def pack(
+    seq: int,
+    session: int,
+    opcode: int,
+    offset: int = 0,
+    data: bytes = b"",
+    *,
+    size: int | None = None,
+    req_opcode: int = 0,
+    burst_complete: int = 0,
+) -> list[int]:
+    """A FILE_TRANSFER_PROTOCOL payload (251 bytes) as pymavlink's encoder takes it."""
+    if len(data) > DATA_MAX:
+        raise ValueError(f"at most {DATA_MAX} data bytes, got {len(data)}")
+    head = _HEAD.pack(seq & 0xFFFF, session & 0xFF, opcode, len(data) if size is None else size,
+                      req_opcode, burst_complete, offset & 0xFFFFFFFF)  # fmt: skip
+    return list(head + data + bytes(DATA_MAX - len(data)))
+
+
+def unpack(payload: Any) -> Packet:
+    """The header and data of a payload; a size past the 239 data bytes is a :class:`FtpError`."""
+    raw = bytes(payload)
+    if len(raw) < _HEAD.size:
+        raw = raw + bytes(_HEAD.size - len(raw))
+    seq, session, opcode, size, req, burst, offset = _HEAD.unpack_from(raw)
+    if size > DATA_MAX:
+        raise FtpError(
+            f"the vehicle sent an FTP reply (opcode {opcode} to {req}) claiming {size} data "
+            f"bytes: a payload carries at most {DATA_MAX}"
+        )
+    data = raw[_HEAD.size : _HEAD.size + size]
+    return Packet(seq, session, opcode, size, req, burst, offset, data + bytes(size - len(data)))
+
+
+Recv = Callable[[float], Any]
+
+
+class FtpClient:
+    """One file at a time with a vehicle over ``send``/``recv`` (the mission client's, so that
+    heartbeats and the radio's RADIO_STATUS are kept up during a transfer).
+
+    ``recv(timeout)`` returns the next FILE_TRANSFER_PROTOCOL message from the vehicle or None.
+    ``congested()`` says the local radio's buffer is nearly full (no new request then).
+    """
+
+    def __init__(
+        self,
+        mav: Any,
+        send: Callable[[Any], None],
+        recv: Recv,
+        target: tuple[int, int],
+        *,
+        timeout: float = 1.5,
+        retries: int = 5,
+        extra_wait: Callable[[], float] = lambda: 0.0,
+        congested: Callable[[], bool] = lambda: False,
+    ) -> None:
+        self.mav = mav
+        self._send = send
+        self._recv = recv
+        self.target = target
+        self.timeout = timeout
+        self.retries = retries
+        self.extra_wait = extra_wait
+        self.congested = congested
+        # Resends wait the measured round trip of FTP requests (RFC 6298, Karn's rule), from
+        # FIRST_WAIT_S until there is a sample: a 260-byte WriteFile on a TDM radio takes a
+        # round and a serial time, longer than the mission protocol's item timeout.
+        self._rtt = RoundTrip(floor=0.03, ceiling=timeout)
+        self.seq = 0
+        self.session = 0
+        self.retry_count = 0
+        self.foreign_sessions: set[int] = set()  # sessions answered that are not ours
+
+    def resend_wait(self, attempts: int) -> float:
+        """The round-trip timeout (FIRST_WAIT_S before a sample), doubled per resend in a row
+        past the fourth up to the protocol timeout, plus the local radio's slowdown."""
+        base = self._rtt.timeout if self._rtt.srtt is not None else FIRST_WAIT_S
+        doublings = min(max(0, attempts - 4), 8)
+        return max(base, min(base * 2**doublings, self.timeout)) + self.extra_wait()
+
+    # One request and its reply ----------------------------------------------------------------
+    def _request(self, opcode: int, offset: int = 0, data: bytes = b"", size: int | None = None,
+                 seq: int | None = None) -> int:  # fmt: skip
+        if seq is None:
+            seq = self.seq
+            self.seq = (self.seq + 1) & 0xFFFF
+        payload = pack(seq, self.session, opcode, offset, data, size=size)
+        self._send(self.mav.file_transfer_protocol_encode(0, *self.target, payload))
+        return seq
+
+    def _reply(self, timeout: float) -> Packet | None:
+        """The next reply of our session within ``timeout`` (others are counted, not used)."""
+        deadline = time.monotonic() + timeout
+        while (remaining := deadline - time.monotonic()) > 0:
+            msg = self._recv(remaining)
+            if msg is None:
+                return None
+            p = unpack(msg.payload)
+            if p.opcode not in (ACK, NAK):
+                continue
+            if self.session and p.session != self.session:
+                self.foreign_sessions.add(p.session)
+                continue
+            return p
+        return None
+
+    def _exchange(self, opcode: int, what: str, offset: int = 0, data: bytes = b"",
+                  size: int | None = None) -> Packet:  # fmt: skip
+        """Send a request until its reply comes, resending the same sequence number (the
+        vehicle answers a re-request with its last reply: GCS_FTP::worker)."""
+        seq = self._request(opcode, offset, data, size)
+        asked = time.monotonic()
+        for attempt in range(self.retries + 1):
+            deadline = time.monotonic() + max(self.resend_wait(attempt), self.timeout)
+            while (remaining := deadline - time.monotonic()) > 0:
+                p = self._reply(remaining)
+                if p is None:
+                    break
+                if p.req_opcode == opcode and p.seq == (seq + 1) & 0xFFFF:
+                    if attempt == 0:
+                        self._rtt.sample(time.monotonic() - asked)
+                    return p
+            if attempt < self.retries:
+                self.retry_count += 1
+                self._request(opcode, offset, data, size, seq=seq)
+        raise self._quiet(what)
+
+    def _quiet(self, what: str) -> FtpError:
+        extra = ""
+        if self.foreign_sessions:
+            extra = (
+                f"; it answered for session(s) {sorted(self.foreign_sessions)}, not ours "
+                f"({self.session})"
+            )
+        return FtpError(f"MAVFTP {what}: no answer after {self.retries + 1} attempts{extra}")
+
+    def _refused(self, p: Packet, what: str) -> FtpError:
+        return FtpError(f"MAVFTP {what} refused: {p.nak_text()}", p.data[0] if p.data else 0)
+
+    # Sessions ---------------------------------------------------------------------------------
+    def reset(self) -> None:
+        """ResetSessions: closes what an earlier client of ours left open (an upload that died
+        holds ArduPilot's mission file for 30 s otherwise)."""
+        saved, self.session = self.session, 0
+        try:
+            self._exchange(RESET_SESSIONS, "ResetSessions")
+        finally:
+            self.session = saved
+
+    def _open(self, opcode: int, path: str) -> Packet:
+        self.session = 0
+        self.foreign_sessions.clear()
+        name = path.encode()
+        p = self._exchange(opcode, f"open {path}", data=name)
+        if p.opcode == NAK:
+            raise self._refused(p, f"open {path}")
+        self.session = p.session  # the vehicle allocates it (GCS_FTP::worker)
+        return p
+
+    def terminate(self) -> Packet:
+        p = self._exchange(TERMINATE_SESSION, "TerminateSession")
+        return p
+
+    # Reading ----------------------------------------------------------------------------------
+    def read(
+        self,
+        path: str,
+        length_of: Callable[[bytes], int | None],
+        chunks: dict[int, bytes] | None = None,
+    ) -> bytes:
+        """The whole file at ``path``: a burst read from the start, then the missing ranges
+        asked again (ReadFile, several at once), a burst again from where the data stops.
+
+        ``length_of(prefix)`` gives the file's length from its first bytes when the format
+        says it (ArduPilot's stat of mission.dat answers a fixed 1 MiB: the header's item
+        count is the truth). ``chunks`` (offset -> bytes) keeps what was read across calls so
+        a retried read resumes.
+        """
+        chunks = {} if chunks is None else chunks
+        self._open(OPEN_FILE_RO, path)
+        try:
+            data = self._read_all(path, length_of, chunks)
+        finally:
+            try:
+                self.terminate()
+            except FtpError:
+                pass  # ArduPilot closes an idle session after 20 s
+        return data
+
+    def _contiguous(self, chunks: dict[int, bytes]) -> bytes:
+        out = bytearray()
+        while len(out) in chunks:
+            out += chunks[len(out)]
+        return bytes(out)
+
+    def _read_all(self, path: str, length_of: Callable[[bytes], int | None],
+                  chunks: dict[int, bytes]) -> bytes:  # fmt: skip
+        end: int | None = None  # the file's length, once known
+        last_progress = time.monotonic()
+        window = Window(4, low=1, high=16)
+        outstanding: dict[int, float] = {}  # offset -> when asked (ReadFile)
+        by_seq: dict[int, int] = {}  # the reply's sequence number -> the offset asked
+        bursting = False
+        stall_limit = (self.retries + 1) * self.timeout
+        while True:
+            head = self._contiguous(chunks)
+            if end is None:
+                end = length_of(head)
+            if end is not None and len(head) >= end:
+                return head[:end]
+            now = time.monotonic()
+            if now - last_progress > stall_limit:
+                raise self._quiet(f"read of {path} stalled at byte {len(head)}")
+            if not bursting:
+                tail = max((o + len(c) for o, c in chunks.items()), default=0)
+                inside = self._gaps(chunks, tail, len(head))
+                if end is None or (not inside and tail < end):
+                    # Nothing known missing below the highest byte read: a burst from there
+                    # (from the first missing byte while the length is not known).
+                    start = len(head) if end is None else tail
+                    self._request(BURST_READ_FILE, start, size=DATA_MAX)
+                    bursting = True
+                else:
+                    for offset, _ in self._gaps(chunks, end, len(head)):
+                        if len(outstanding) >= window.size or self.congested():
+                            break
+                        asked = outstanding.get(offset)
+                        if asked is not None and now - asked < self.resend_wait(0):
+                            continue  # its answer can still come
+                        if asked is not None:
+                            self.retry_count += 1
+                            window.lost()
+                        outstanding[offset] = now
+                        seq = self._request(READ_FILE, offset, size=DATA_MAX)
+                        by_seq[(seq + 1) & 0xFFFF] = offset
+            wait = max(self.timeout, self.resend_wait(0)) if bursting else self.resend_wait(0)
+            p = self._reply(wait)
+            now = time.monotonic()
+            if p is None:
+                bursting = False  # the burst's end was lost: ask for what is missing
+                continue
+            if p.req_opcode == READ_FILE:
+                asked_offset = by_seq.pop(p.seq, None)
+                if asked_offset is None:
+                    continue  # an answer to a request already answered
+                asked_at = outstanding.pop(asked_offset, None)
+            elif p.req_opcode == BURST_READ_FILE:
+                asked_offset, asked_at = p.offset, None
+            else:
+                continue  # a late reply to the open
+            if p.opcode == NAK:
+                code = p.data[0] if p.data else 0
+                if code != EOF:
+                    raise self._refused(p, f"read of {path}")
+                bursting = bursting and p.req_opcode != BURST_READ_FILE
+                if end is None:
+                    end = asked_offset if p.req_opcode == READ_FILE else p.offset
+                    continue
+                if asked_offset < end:
+                    raise FtpError(
+                        f"{path} ends at byte {asked_offset} (the vehicle's end-of-file), "
+                        f"but its own header says {end} bytes"
+                    )
+                continue
+            if p.req_opcode == BURST_READ_FILE and p.burst_complete:
+                bursting = False
+            if p.opcode != ACK:
+                continue
+            self._take(p, chunks, end, path)
+            if p.size:
+                last_progress = now
+            if asked_at is not None:
+                self._rtt.sample(now - asked_at)
+                window.rtt(now - asked_at)
+                window.delivered(now, True)
+
+    @staticmethod
+    def _gaps(chunks: dict[int, bytes], end: int | None, start: int) -> list[tuple[int, int]]:
+        """Missing (offset, length) ranges from ``start``, in DATA_MAX pieces, to ``end`` (or
+        to the highest byte read when the end is not known yet)."""
+        covered = sorted((o, o + len(c)) for o, c in chunks.items())
+        limit = end if end is not None else max((b for _, b in covered), default=0)
+        gaps: list[tuple[int, int]] = []
+        pos = start
+        for a, b in covered:
+            if b <= pos:
+                continue
+            while pos < min(a, limit):
+                gaps.append((pos, min(DATA_MAX, min(a, limit) - pos)))
+                pos += DATA_MAX
+            pos = max(pos, b)
+        while pos < limit:
+            gaps.append((pos, min(DATA_MAX, limit - pos)))
+            pos += DATA_MAX
+        return gaps
+
+    def _take(self, p: Packet, chunks: dict[int, bytes], end: int | None, path: str) -> None:
+        if p.size == 0:
+            return
+        if end is not None and p.offset + p.size > end:
+            raise FtpError(
+                f"the vehicle sent bytes {p.offset}..{p.offset + p.size - 1} of {path}, past "
+                f"its end at {end} bytes"
+            )
+        old = chunks.get(p.offset)
+        if old is not None and old != p.data:
+            raise FtpError(f"the vehicle sent two different contents for byte {p.offset} of {path}")
+        for o, c in chunks.items():  # an overlap that is not the same piece is a lie
+            if o != p.offset and o < p.offset + p.size and p.offset < o + len(c):
+                lo, hi = max(o, p.offset), min(o + len(c), p.offset + p.size)
+                if c[lo - o : hi - o] != p.data[lo - p.offset : hi - p.offset]:
+                    raise FtpError(
+                        f"the vehicle sent two different contents for byte {lo} of {path}"
+                    )
+                if o > p.offset:
+                    continue
+                return  # already held
+        chunks[p.offset] = p.data
+
+    # Writing ----------------------------------------------------------------------------------
+    def write(self, path: str, data: bytes) -> Packet | None:
+        """Write ``data`` as the new ``path`` (CreateFile, WriteFile pieces, several out at
+        once, each resent until acknowledged by its offset, then TerminateSession). Returns
+        the TerminateSession reply (an ACK, or the NAK with which the vehicle refused the file
+        when it closed it), or None when that reply never came."""
+        self._open(CREATE_FILE, path)
+        pieces = {o: data[o : o + DATA_MAX] for o in range(0, len(data), DATA_MAX)}
+        acked: set[int] = set()
+        sent: dict[int, tuple[float, int]] = {}  # offset -> (when, times)
+        # Each piece is a 260-byte frame: WRITE_WINDOW of them fill a SiK radio's 1,850-byte
+        # serial buffer, past which it drops what the host writes.
+        window = Window(2, low=1, high=WRITE_WINDOW)
+        last_progress = time.monotonic()
+        pending = sorted(pieces)
+        stall_limit = (self.retries + 1) * self.timeout
+        while len(acked) < len(pieces):
+            now = time.monotonic()
+            if now - last_progress > stall_limit:
+                first = min(set(pieces) - acked)
+                raise self._quiet(f"write of {path} stalled at byte {first}")
+            oldest = min(sent, key=lambda o: sent[o][0], default=None)
+            if oldest is not None and now - sent[oldest][0] > self.resend_wait(sent[oldest][1]):
+                if not self.congested():
+                    self.retry_count += 1
+                    window.lost()
+                    sent[oldest] = (now, sent[oldest][1] + 1)
+                    self._request(WRITE_FILE, oldest, pieces[oldest])
+            while pending and len(sent) < window.size and not self.congested():
+                o = pending.pop(0)
+                sent[o] = (now, 0)
+                self._request(WRITE_FILE, o, pieces[o])
+            p = self._reply(max(0.005, self.resend_wait(0) / 2))
+            now = time.monotonic()
+            if p is None or p.req_opcode != WRITE_FILE:
+                continue
+            if p.opcode == NAK:
+                raise self._refused(p, f"write of {path} at byte {p.offset}")
+            if p.offset not in pieces:
+                raise FtpError(
+                    f"the vehicle acknowledged a write at byte {p.offset} of {path}, which "
+                    f"was never sent (the file is {len(data)} bytes)"
+                )
+            if p.offset in acked:
+                continue
+            acked.add(p.offset)
+            limited = len(sent) >= window.size
+            when = sent.pop(p.offset, None)
+            if when is not None and when[1] == 0:
+                self._rtt.sample(now - when[0])
+                window.rtt(now - when[0])
+            window.delivered(now, limited)
+            last_progress = now
+        try:
+            return self.terminate()
+        except FtpError:
+            return None

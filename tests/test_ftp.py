@@ -1,0 +1,249 @@
+"""Missions by MAVLink FTP (@MISSION/mission.dat, as ArduPilot serves it): the file's layout,
+upload and download over loopback and over the emulated SiK radio with burst loss, a 5 s fade
+in the middle of a burst read, the read-back by FTP, the fall back to the mission protocol
+where the vehicle has no mission file (PX4), and hostile replies.
+
+No test asserts wall-clock time; deadlines are generous and what is compared is what the
+vehicle and the radio counted."""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+
+import pytest
+
+from gcs_planner.cli import main
+from gcs_planner.errors import LinkError
+from gcs_planner.link import ftp
+from gcs_planner.link.connection import open_link
+from gcs_planner.link.mission_client import MissionClient, ReadBackError
+from gcs_planner.link.mission_ftp import decode_mission, encode_mission, mission_length
+from gcs_planner.link.protocol import mission_differences
+from gcs_planner.mission.items import MissionItem
+from sim import ftp_server
+from sim.radio import RadioConfig, SikRadio
+from sim.vehicle import MockVehicle, free_udp_port
+
+
+def _mission(n: int) -> list[MissionItem]:
+    return [
+        MissionItem(i, 0, 16, x=305_000_000 + 97 * i, y=1_235_000_000 + 89 * i, z=500.0 + i % 7)
+        for i in range(n)
+    ]
+
+
+def _holds(vehicle: MockVehicle, items: list[MissionItem]) -> bool:
+    return not mission_differences(items, vehicle.mission, skip_home=vehicle.flavour == "ardupilot")
+
+
+@contextmanager
+def _loopback(
+    flavour: str = "ardupilot", **client: object
+) -> Iterator[tuple[MockVehicle, MissionClient]]:
+    port = free_udp_port()
+    with MockVehicle(f"udpin:127.0.0.1:{port}", flavour=flavour, capacity=2000) as vehicle:
+        link = open_link(f"udpout:127.0.0.1:{port}")
+        try:
+            c = MissionClient(link, **client)  # type: ignore[arg-type]
+            c.connect(timeout=10.0)
+            yield vehicle, c
+        finally:
+            link.close()
+
+
+@contextmanager
+def _over_radio(**radio: object) -> Iterator[tuple[MockVehicle, SikRadio, MissionClient]]:
+    port = free_udp_port()
+    with MockVehicle(f"udpin:127.0.0.1:{port}", capacity=2000) as vehicle:
+        with SikRadio("udpin:127.0.0.1:0", f"udpout:127.0.0.1:{port}", RadioConfig(**radio)) as r:  # type: ignore[arg-type]
+            link = open_link(r.ground_connection)
+            try:
+                c = MissionClient(link, transfer="auto")
+                c.connect(timeout=30.0)
+                yield vehicle, r, c
+            finally:
+                link.close()
+
+
+# The file ------------------------------------------------------------------------------------
+def test_mission_dat_is_ardupilots_header_and_item_int_payloads():
+    items = _mission(3)
+    data = encode_mission(items)
+    # struct header: magic 0x763d, data_type 0, options 0, start 0, num_items; then 38 bytes
+    # (MISSION_ITEM_INT's payload) per item.
+    assert data[:10] == bytes([0x3D, 0x76, 0, 0, 0, 0, 0, 0, 3, 0])
+    assert len(data) == 10 + 3 * 38 == mission_length(data[:10])
+    assert [(it.x, it.y, it.z) for it in decode_mission(data)] == [
+        (it.x, it.y, it.z) for it in items
+    ]
+    with pytest.raises(LinkError, match="magic"):
+        mission_length(b"\x00" * 10)
+    with pytest.raises(LinkError, match="header's 3 items"):
+        decode_mission(data + b"\x01")
+
+
+def test_payload_round_trip_and_an_oversized_size_is_refused():
+    p = ftp.unpack(ftp.pack(7, 2, ftp.READ_FILE, 478, b"abc"))
+    assert (p.seq, p.session, p.opcode, p.offset, p.data) == (7, 2, ftp.READ_FILE, 478, b"abc")
+    raw = ftp.pack(7, 2, ftp.ACK, 0, b"")
+    raw[4] = 250
+    with pytest.raises(ftp.FtpError, match="250 data bytes"):
+        ftp.unpack(raw)
+
+
+# Transfers -----------------------------------------------------------------------------------
+def test_upload_and_download_by_ftp_over_loopback():
+    items = _mission(300)
+    with _loopback(transfer="auto") as (vehicle, client):
+        report = client.upload_verified(items)
+        assert report.transfer == "ftp" and _holds(vehicle, items)
+        assert vehicle.ftp.writes_stored == 1
+        assert vehicle.acks_sent == []  # not one MISSION_ACK: the mission protocol was not used
+        assert client.autopilot_capabilities() & ftp_capability()
+        got = client.download()
+        assert client.transfer_used == "ftp"
+        assert [(it.x, it.y) for it in got[1:]] == [(it.x, it.y) for it in items[1:]]
+
+
+def ftp_capability() -> int:
+    from gcs_planner.link.connection import mavlink
+
+    return mavlink.MAV_PROTOCOL_CAPABILITY_FTP
+
+
+def test_upload_by_ftp_over_a_radio_with_burst_loss():
+    items = _mission(200)
+    with _over_radio(loss=0.05, burst=4.0, seed=7) as (vehicle, r, client):
+        report = client.upload_verified(items)
+        assert report.transfer == "ftp" and _holds(vehicle, items)
+        assert r.counts.packets_lost > 0  # there was loss, and the missing ranges were asked again
+        got = client.download()
+        assert [(it.x, it.y) for it in got[1:]] == [(it.x, it.y) for it in items[1:]]
+
+
+def test_a_5_s_fade_in_the_middle_of_a_burst_read_is_survived():
+    items = _mission(400)
+    with _over_radio(loss=0.0, seed=3) as (vehicle, r, client):
+        vehicle.missions.commit(items)
+        faded = threading.Event()
+
+        def watch() -> None:
+            deadline = time.monotonic() + 300.0
+            while time.monotonic() < deadline:
+                b = vehicle.ftp._burst
+                if b is not None and b.offset > 3000:
+                    r.fade(5.0)
+                    faded.set()
+                    return
+                time.sleep(0.01)
+
+        t = threading.Thread(target=watch, daemon=True)
+        t.start()
+        got = client.download()
+        t.join(timeout=5.0)
+        assert faded.is_set() and client.transfer_used == "ftp"
+        assert [(it.x, it.y) for it in got[1:]] == [(it.x, it.y) for it in items[1:]]
+        assert client.retry_count > 0  # the ranges the fade took were asked again
+
+
+def test_the_read_back_by_ftp_tells_differs_from_could_not_read():
+    items = _mission(20)
+    with _loopback(transfer="ftp") as (vehicle, client):
+        real = vehicle.ftp._parse
+
+        def shifted(data: bytes):  # the vehicle stores something else than it was sent
+            got = real(data)
+            return [got[0], *[it.with_seq(it.seq) for it in got[2:]], got[1]]
+
+        vehicle.ftp._parse = shifted  # type: ignore[method-assign]
+        with pytest.raises(LinkError, match="differs") as err:
+            client.upload_verified(items)
+        assert not isinstance(err.value, ReadBackError)
+    with _loopback(transfer="ftp", timeout=0.3, retries=1) as (vehicle, client):
+        handle = vehicle.ftp.handle
+
+        def no_reads(msg, peer):  # the write goes through, no read is ever answered
+            if ftp.unpack(msg.payload).opcode == ftp.OPEN_FILE_RO:
+                return
+            handle(msg, peer)
+
+        vehicle.ftp.handle = no_reads  # type: ignore[method-assign]
+        with pytest.raises(ReadBackError, match="could not be read back"):
+            client.upload_verified(items)
+        assert _holds(vehicle, items)
+
+
+def test_px4_falls_back_to_the_mission_protocol():
+    items = _mission(15)
+    with _loopback("px4", transfer="auto") as (vehicle, client):
+        report = client.upload_verified(items)
+        assert report.transfer == "mission" and _holds(vehicle, items)
+        assert vehicle.ftp.writes_stored == 0
+    with _loopback("ardupilot", transfer="auto") as (vehicle, client):
+        vehicle.advertise_ftp = False  # an ArduPilot built without MAVFTP
+        assert client.upload_verified(items).transfer == "mission" and _holds(vehicle, items)
+    with _loopback("px4", transfer="ftp") as (vehicle, client):
+        with pytest.raises(LinkError, match="file not found"):
+            client.upload_verified(items)
+
+
+def test_an_ardupilot_refusing_the_file_is_an_error_and_keeps_its_mission():
+    items = [*_mission(5), MissionItem(5, 0, 4242, x=1, y=1, z=1.0)]  # a command it lacks
+    with _loopback(transfer="ftp") as (vehicle, client):
+        before = vehicle.mission
+        with pytest.raises(LinkError, match="did not store"):
+            client.upload_verified(items)
+        assert vehicle.mission == before
+
+
+# Hostile replies ----------------------------------------------------------------------------
+def _tamper(vehicle: MockVehicle, change) -> None:
+    send = vehicle.ftp._send_payload
+
+    def tampered(peer, payload):
+        p = ftp.unpack(payload)
+        if p.req_opcode in (ftp.READ_FILE, ftp.BURST_READ_FILE) and p.opcode == ftp.ACK:
+            payload = change(list(payload))
+        send(peer, payload)
+
+    vehicle.ftp._send_payload = tampered  # type: ignore[method-assign]
+
+
+def test_hostile_replies_are_clear_errors(monkeypatch):
+    def oversize(payload):
+        payload[4] = 250
+        return payload
+
+    def other_session(payload):
+        payload[2] = (payload[2] + 1) % 256
+        return payload
+
+    for change, message in ((oversize, "250 data bytes"), (other_session, "not ours")):
+        with _loopback(transfer="ftp", timeout=0.3, retries=1) as (vehicle, client):
+            vehicle.missions.commit(_mission(30))
+            _tamper(vehicle, change)
+            with pytest.raises(LinkError, match=message):
+                client.download()
+    # A file longer than its header says: bytes past its end.
+    real = ftp_server.encode_mission
+    monkeypatch.setattr(ftp_server, "encode_mission", lambda items: real(items) + b"\x01" * 300)
+    with _loopback(transfer="ftp", timeout=0.3, retries=1) as (vehicle, client):
+        vehicle.missions.commit(_mission(30))
+        with pytest.raises(LinkError, match="past its end"):
+            client.download()
+
+
+def test_a_garbage_mission_file_is_a_one_line_error_from_download(monkeypatch, tmp_path, capsys):
+    monkeypatch.setattr(ftp_server, "encode_mission", lambda items: b"\x55" * 700)
+    port = free_udp_port()
+    with MockVehicle(f"udpin:127.0.0.1:{port}"):
+        out = tmp_path / "m.json"
+        conn = ["--connect", f"udpout:127.0.0.1:{port}", "--quiet", "--transfer", "auto"]
+        code = main(["download", *conn, "--out", str(out), "--timeout", "0.5", "--retries", "1"])
+    err = capsys.readouterr().err
+    assert code == 4 and not out.exists()
+    assert "not a mission file" in err and "Traceback" not in err
+    assert len(err.strip().splitlines()) == 1
