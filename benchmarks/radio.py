@@ -18,6 +18,12 @@ Columns:
   waits for its sender's window (a radio that yielded its window cannot send again until its
   next one: tdm.c, ``transmit_yield``): one TDM round per item. The read-back is the air time
   of its frames;
+* **FTP air time**: the same for MAVFTP (``@MISSION/mission.dat``: 239-byte WriteFile pieces
+  and their ACKs, then the burst read back), MAVLink 2 trimming the payloads' trailing zeros;
+* **FTP**: the project's client by MAVFTP against the mock's ArduPilot FTP server, which
+  paces a burst to a third of the serial rate as ArduPilot does on a port without flow
+  control (GCS_FTP.cpp, BurstReadFile) — the read-back's floor, at 57,600 baud about 7
+  packets (1.7 kB) a second;
 * **project** / **classic**: medians of wall seconds for upload and verified read-back, and
   how many of the runs verified. "classic" is the specification's plain client: one request at
   a time, a fixed 0.25 s item timeout, no reading of RADIO_STATUS.
@@ -80,6 +86,37 @@ def _frame_bytes(n: int) -> dict[str, int]:
     }
 
 
+def _ftp_frame_bytes(n: int) -> dict[str, int]:
+    """Bytes of a loss-free MAVFTP upload and burst read-back of ``n`` items, by phase and
+    direction (MAVLink 2 frames as pymavlink packs them)."""
+    from gcs_planner.link import ftp
+    from gcs_planner.link.mission_ftp import MISSION_PATH, encode_mission
+
+    mav = mavlink.MAVLink(None, 255, 190)
+    data = encode_mission(mission(n))
+    pieces = [data[o : o + ftp.DATA_MAX] for o in range(0, len(data), ftp.DATA_MAX)]
+
+    def size(opcode: int, data: bytes = b"", offset: int = 0) -> int:
+        payload = ftp.pack(1, 1, opcode, offset, data)
+        return len(mav.file_transfer_protocol_encode(0, 1, 1, payload).pack(mav))
+
+    name = MISSION_PATH.encode()
+    ack = size(ftp.ACK, offset=len(data))
+    control = size(ftp.RESET_SESSIONS) + size(ftp.CREATE_FILE, name) + size(ftp.TERMINATE_SESSION)
+    return {
+        "upload_ground": control + sum(size(ftp.WRITE_FILE, p, 9999) for p in pieces),
+        "upload_vehicle": (len(pieces) + 3) * ack,
+        "back_ground": size(ftp.OPEN_FILE_RO, name) + 2 * size(ftp.BURST_READ_FILE),
+        "back_vehicle": 3 * ack + sum(size(ftp.ACK, p, 9999) for p in pieces),
+    }
+
+
+def ftp_air_time(n: int, air_rate: int) -> float:
+    """Seconds of air the frames of a MAVFTP upload and its burst read-back need."""
+    t = Timing.of(RadioConfig(air_rate=air_rate))
+    return sum(_air(b, t) for b in _ftp_frame_bytes(n).values())
+
+
 def _air(nbytes: int, t: Timing) -> float:
     """Air time of ``nbytes`` in full SiK packets."""
     packets = math.ceil(nbytes / t.max_data)
@@ -107,7 +144,7 @@ class Case:
     items: int
     air_rate: int
     loss: float
-    client: str  # "project" or "classic"
+    client: str  # "project", "classic" or "ftp"
     seed: int
 
 
@@ -138,7 +175,7 @@ def transfer(case: Case) -> dict[str, object]:
         error = ""
         upload_s = verify_s = 0.0
         try:
-            client = MissionClient(link)
+            client = MissionClient(link, transfer="ftp" if case.client == "ftp" else "mission")
             if case.client == "classic":
                 _classic(client)
             client.connect(timeout=30.0)
@@ -187,8 +224,8 @@ def render(results: list[dict[str, object]]) -> str:
         groups.setdefault((c.items, c.air_rate, c.loss), {}).setdefault(c.client, []).append(r)
     head = [
         "| items | air rate | burst loss | air time | TDM floor | project | verified | "
-        "classic | verified | false fail / success |",
-        "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
+        "classic | verified | FTP air time | FTP | verified | false fail / success |",
+        "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
     rows = []
     for (n, rate, loss), by in sorted(groups.items()):
@@ -196,7 +233,9 @@ def render(results: list[dict[str, object]]) -> str:
         cells = [f"{n:,}", f"{rate} kbit/s", f"{loss:.0%}", f"{air:.1f} s",
                  f"{tdm_floor(n, rate):.1f} s"]  # fmt: skip
         falses = [0, 0]
-        for who in ("project", "classic"):
+        for who in ("project", "classic", "ftp"):
+            if who == "ftp":
+                cells.append(f"{ftp_air_time(n, rate):.1f} s")
             done = by.get(who, [])
             if not done:
                 cells += ["–", "–"]
@@ -211,17 +250,17 @@ def render(results: list[dict[str, object]]) -> str:
     return "\n".join(head + rows)
 
 
-def target_line(results: list[dict[str, object]]) -> str:
+def target_line(results: list[dict[str, object]], who: str = "project") -> str:
     done = [
         r
         for r in results
         if isinstance(r["case"], Case)
         and (r["case"].items, r["case"].air_rate, r["case"].loss, r["case"].client)
-        == (1000, 64, 0.05, "project")
+        == (1000, 64, 0.05, who)
     ]
     if not done:
         return ""
-    air = air_time(1000, 64)
+    air = air_time(1000, 64) if who != "ftp" else ftp_air_time(1000, 64)
     med = _median(done, "seconds")
     worst = max(float(d["seconds"]) for d in done)  # type: ignore[arg-type]
     up = _median(done, "upload_s")
@@ -230,7 +269,8 @@ def target_line(results: list[dict[str, object]]) -> str:
     fs = sum(1 for d in done if d["verified"] and not d["holds"])
     met = med <= TARGET_FACTOR * air and ff == 0 and fs == 0
     return (
-        f"Target (1,000 items, 64 kbit/s, 5 % burst loss, {len(done)} runs): median "
+        f"Target{' by MAVFTP' if who == 'ftp' else ''} (1,000 items, 64 kbit/s, 5 % burst "
+        f"loss, {len(done)} runs): median "
         f"{med:.1f} s (upload {up:.1f} s, read-back {back:.1f} s; slowest {worst:.1f} s) "
         f"against {TARGET_FACTOR:g} x {air:.1f} s of air time = {TARGET_FACTOR * air:.1f} s: "
         f"{'met' if met else 'NOT met'}; {ff} false failures, {fs} false successes."
@@ -244,6 +284,8 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--runs", type=int, default=None, help="runs per cell (default 5; 20 target)")
     p.add_argument("--jobs", type=int, default=4, help="runs at once (separate processes)")
     p.add_argument("--classic-runs", type=int, default=None, help="runs of the classic client")
+    p.add_argument("--ftp-runs", type=int, default=None, help="runs by MAVFTP (default: --runs)")
+    p.add_argument("--no-project", action="store_true", help="skip the mission-protocol runs")
     args = p.parse_args(argv)
     if args.target:
         runs = args.runs or 20
@@ -255,15 +297,22 @@ def main(argv: list[str] | None = None) -> None:
         runs = args.runs or 5
         cells = [(n, r, lo) for n in (100, 1000) for r in (64, 250) for lo in (0.0, 0.05)]
     classic_runs = args.classic_runs if args.classic_runs is not None else min(runs, 3)
-    cases = [Case(n, r, lo, "project", s) for n, r, lo in cells for s in range(runs)]
+    ftp_runs = args.ftp_runs if args.ftp_runs is not None else runs
+    cases = (
+        []
+        if args.no_project
+        else [Case(n, r, lo, "project", s) for n, r, lo in cells for s in range(runs)]
+    )
     cases += [Case(n, r, lo, "classic", s) for n, r, lo in cells for s in range(classic_runs)]
+    cases += [Case(n, r, lo, "ftp", s) for n, r, lo in cells for s in range(ftp_runs)]
     print(f"{len(cases)} transfers, {args.jobs} at a time; {machine()}", file=sys.stderr)
     start = time.perf_counter()
     results = run_cases(cases, args.jobs)
     print(render(results))
-    line = target_line(results)
-    if line:
-        print("\n" + line)
+    for who in ("project", "ftp"):
+        line = target_line(results, who)
+        if line:
+            print("\n" + line)
     errors = sorted({str(r["error"])[:160] for r in results if r["error"]})
     for e in errors[:5]:
         print(f"- failure: {e}")
