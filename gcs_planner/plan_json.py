@@ -90,6 +90,9 @@ def plan_to_dict(plan: Plan) -> dict[str, Any]:
             "bank_angle_deg": s.vehicle.bank_angle,
             "radius_source": s.vehicle.radius_source,
             "description": s.vehicle.describe(),
+            # How the radius and angles were derived from the autopilot's terms and the
+            # design wind (None: stated directly or assumed).
+            "envelope": None if s.envelope is None else s.envelope.to_dict(),
         },
         "warnings": list(plan.warnings),
         "objectives": list(plan.objectives),

@@ -169,7 +169,9 @@ class VehicleProfile:
             legs = "straight legs"
         else:
             legs = f"{self.leg_model} legs, turning radius {self.turn_radius:g} m"
-            if self.radius_source != "turn_radius":
+            if self.radius_source == "derived":
+                legs += " (derived: see the envelope lines)"
+            elif self.radius_source != "turn_radius":
                 legs += (
                     f" (from {self.cruise_airspeed:g} m/s at {self.bank_angle:.1f} deg bank)"
                 )
@@ -187,3 +189,188 @@ def _rate(airspeed: float, angle_deg: float) -> float:
     if angle_deg >= UNLIMITED_ANGLE_DEG:
         return math.inf
     return airspeed * math.sin(math.radians(angle_deg))
+
+
+# ---------------------------------------------------------------------------------------------
+# The envelope derived from the autopilot's terms (issue 32; MODEL.md "Flight in the real world")
+
+# ISA troposphere (ICAO Doc 7488): sea-level temperature 288.15 K, lapse 0.0065 K/m, and the
+# density exponent g / (R L) - 1 = 4.2559 (R = 287.053 J/(kg K)).
+ISA_T0_K = 288.15
+ISA_LAPSE_K_PER_M = 0.0065
+ISA_DENSITY_EXPONENT = G / (287.053 * ISA_LAPSE_K_PER_M) - 1.0
+ISA_TROPOPAUSE_M = 11_000.0
+
+
+def isa_density_ratio(altitude_m: float) -> float:
+    """sigma = rho / rho0 in the ISA troposphere at ``altitude_m`` metres (AMSL), capped at the
+    tropopause (11 km); below sea level the formula continues."""
+    h = min(float(altitude_m), ISA_TROPOPAUSE_M)
+    return (1.0 - ISA_LAPSE_K_PER_M * h / ISA_T0_K) ** ISA_DENSITY_EXPONENT
+
+
+def tas_from_eas(eas: float, altitude_m: float) -> float:
+    """True airspeed (m/s) of equivalent airspeed ``eas`` at ``altitude_m``: EAS / sqrt(sigma).
+
+    Both autopilots hold the airspeed they are given as EAS and scale by this ratio
+    (ArduPilot ``AP_Baro::get_EAS2TAS``, PX4 ``airspeed`` module's ``calc_true_from_equivalent
+    _airspeed``); with the ISA temperature profile both give this value."""
+    return eas / math.sqrt(isa_density_ratio(altitude_m))
+
+
+@dataclass(frozen=True)
+class DerivedEnvelope:
+    """Flight-path angles and turning radius derived from the autopilot's terms.
+
+    The aircraft holds ``eas`` (m/s EAS), banks at most ``bank_deg``, climbs at ``climb_rate``
+    and sinks at ``sink_rate`` m/s (inf: unlimited) under ``autopilot``. Over the ground, in a
+    wind of ``wind`` m/s from any direction, it can fly as fast as V + W with V the TAS at
+    ``altitude`` (the scenario's highest: the largest TAS, so conservative for every leg), so
+
+    * climb angle <= atan(climb_rate / (V + W)), descent likewise;
+    * turning radius R = (V + W)^2 / (g tan(bank)) (the ground-track radius of a turn flown
+      downwind at full bank).
+
+    ``wind_from`` (degrees, or None) is the design wind's direction; the any-direction bound is
+    used with it too (conservative: a per-leg rule needs the search's leg model). ``sources``
+    names where each input came from (flag, scenario file, vehicle, firmware default).
+    """
+
+    eas: float
+    bank_deg: float
+    climb_rate: float
+    sink_rate: float
+    wind: float
+    wind_from: float | None
+    altitude: float
+    autopilot: str | None
+    sources: tuple[tuple[str, str], ...] = ()
+
+    @property
+    def tas(self) -> float:
+        return tas_from_eas(self.eas, self.altitude)
+
+    @property
+    def ground_speed_max(self) -> float:
+        return self.tas + self.wind
+
+    @property
+    def climb_angle(self) -> float:
+        return _angle(self.climb_rate, self.ground_speed_max)
+
+    @property
+    def descent_angle(self) -> float:
+        return _angle(self.sink_rate, self.ground_speed_max)
+
+    @property
+    def turn_radius(self) -> float:
+        """0 with no bank (straight legs)."""
+        if self.bank_deg <= 0:
+            return 0.0
+        v = self.ground_speed_max
+        return v * v / (G * math.tan(math.radians(self.bank_deg)))
+
+    def refusals(self) -> list[tuple[str, str]]:
+        """(field, why) for each input the envelope cannot be derived from; empty when sound."""
+        bad = []
+        if not (math.isfinite(self.eas) and 0 < self.eas <= 300):
+            bad.append(("cruise_airspeed", f"must lie in (0, 300] m/s (got {self.eas!r})"))
+        if not (math.isfinite(self.bank_deg) and 0 < self.bank_deg < 90):
+            bad.append(("max_bank_angle", f"must lie in (0, 90) degrees (got {self.bank_deg!r})"))
+        for name, v in (("max_climb_rate", self.climb_rate), ("max_sink_rate", self.sink_rate)):
+            if not (v > 0) or math.isnan(v):
+                bad.append((name, f"must be a rate > 0 m/s (got {v!r})"))
+        if not (math.isfinite(self.wind) and self.wind >= 0):
+            bad.append(("wind", f"must be a speed >= 0 m/s (got {self.wind!r})"))
+        elif math.isfinite(self.eas) and self.eas > 0 and self.wind >= self.tas:
+            bad.append(
+                (
+                    "wind",
+                    f"{self.wind:g} m/s is not below the true airspeed {self.tas:.1f} m/s "
+                    f"({self.eas:g} m/s EAS at {self.altitude:.0f} m): the aircraft cannot "
+                    "make way against it",
+                )
+            )
+        return bad
+
+    def describe(self) -> list[str]:
+        """Lines for the plan's output: each figure with how it was derived."""
+        v = self.ground_speed_max
+        wind = (
+            "no design wind"
+            if self.wind == 0
+            else f"design wind {self.wind:g} m/s"
+            + (
+                f" from {self.wind_from:g} deg (held from any direction: conservative)"
+                if self.wind_from is not None
+                else " from any direction"
+            )
+        )
+        src = ", ".join(f"{k} from {v}" for k, v in self.sources)
+        lines = [
+            f"envelope derived for {self.autopilot or 'the aircraft'}: {self.eas:g} m/s EAS = "
+            f"{self.tas:.2f} m/s TAS at {self.altitude:.0f} m (ISA, the scenario's highest "
+            f"altitude: conservative for every leg); {wind}; ground speed <= {v:.2f} m/s",
+            (
+                f"  turning radius R = (TAS + W)^2 / (g tan {self.bank_deg:.4g} deg) = "
+                f"{self.turn_radius:.1f} m"
+                if self.bank_deg > 0
+                else "  straight legs (no turning radius)"
+            ),
+            "  climb <= atan(" + _rate_text(self.climb_rate) + " / (TAS + W)) = "
+            f"{self.climb_angle:.2f} deg; descent <= atan(" + _rate_text(self.sink_rate)
+            + f" / (TAS + W)) = {self.descent_angle:.2f} deg",
+        ]
+        if src:
+            lines.append(f"  inputs: {src}")
+        return lines
+
+    def to_dict(self) -> dict[str, object]:
+        def num(x: float) -> float | None:
+            return None if math.isinf(x) else float(x)
+
+        return {
+            "autopilot": self.autopilot,
+            "cruise_eas": self.eas,
+            "altitude_m": self.altitude,
+            "tas": self.tas,
+            "bank_limit_deg": self.bank_deg,
+            "climb_rate": num(self.climb_rate),
+            "sink_rate": num(self.sink_rate),
+            "design_wind": self.wind,
+            "design_wind_from_deg": self.wind_from,
+            "wind_rule": "any direction (conservative)",
+            "ground_speed_max": self.ground_speed_max,
+            "turn_radius": self.turn_radius,
+            "max_climb_angle": self.climb_angle,
+            "max_descent_angle": self.descent_angle,
+            "derivation": "TAS from EAS through ISA at the scenario's highest altitude; "
+            "angle = atan(rate / (TAS + W)); R = (TAS + W)^2 / (g tan(bank))",
+            "sources": dict(self.sources),
+        }
+
+
+def _angle(rate: float, ground_speed: float) -> float:
+    if math.isinf(rate):
+        return UNLIMITED_ANGLE_DEG
+    return math.degrees(math.atan2(rate, ground_speed))
+
+
+def _rate_text(rate: float) -> str:
+    return "unlimited" if math.isinf(rate) else f"{rate:g} m/s"
+
+
+def parse_wind(text: str) -> tuple[float, float | None]:
+    """``SPEED[@FROM_DEG]`` -> (speed m/s, direction it blows from in degrees or None);
+    ValueError with the reason otherwise."""
+    speed_text, _, from_text = str(text).partition("@")
+    try:
+        speed = float(speed_text)
+        direction = float(from_text) if from_text else None
+    except ValueError:
+        raise ValueError(f"expected SPEED[@FROM_DEG], got {text!r}") from None
+    if not (math.isfinite(speed) and speed >= 0):
+        raise ValueError(f"wind speed must be a number >= 0 m/s, got {text!r}")
+    if direction is not None and not math.isfinite(direction):
+        raise ValueError(f"wind direction must be a number of degrees, got {text!r}")
+    return speed, (None if direction is None else direction % 360.0)

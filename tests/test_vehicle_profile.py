@@ -1,133 +1,173 @@
-"""The vehicle profile: where the aircraft's envelope comes from (TOML `[vehicle]`, flags,
-airspeed and bank), what the plan says of it, and bad values named by file, row and field."""
+"""The envelope derived from the autopilot's terms (issue 32): TAS from EAS through ISA at the
+scenario's highest altitude, climb/descent angle = atan(rate / (TAS + W)), turning radius
+R = (TAS + W)^2 / (g tan(bank)); flags, firmware defaults, ``--vehicle-from`` (PX4's mission
+rates), bad values, and direct statements that leave today's fronts unchanged."""
 
 from __future__ import annotations
 
 import json
 import math
-import subprocess
-import sys
-from pathlib import Path
 
 import pytest
-from test_readers import _toml_with, expect_error
 
-from gcs_planner.errors import InputError
-from gcs_planner.scenario.readers import load_scenario
-from gcs_planner.vehicle import G, VehicleProfile, bank_angle_for, turn_radius_from
+import gcs_planner.cli.plan as plan_cli
+from gcs_planner.cli import main
+from gcs_planner.vehicle import DerivedEnvelope, isa_density_ratio, parse_wind, tas_from_eas
+from sim.param_server import parameter_table
+from sim.vehicle import MockVehicle, free_udp_port
 
-
-def with_vehicle(tmp_path: Path, body: str) -> Path:
-    path = _toml_with(tmp_path)
-    path.write_text(path.read_text() + "[vehicle]\n" + body)
-    return path
-
-
-def test_vehicle_table_sets_the_envelope(tmp_path: Path) -> None:
-    path = with_vehicle(
-        tmp_path,
-        "turn_radius = 250\nmax_climb_angle = 12\nmax_descent_angle = 14\n"
-        'cruise_airspeed = 30\nleg_model = "cs3d"\n',
-    )
-    v = load_scenario(path, {}).vehicle
-    assert (v.turn_radius, v.max_climb_angle, v.max_descent_angle) == (250, 12, 14)
-    assert (v.cruise_airspeed, v.leg_model, v.radius_source) == (30, "cs3d", "turn_radius")
-    assert v.climb_rate == pytest.approx(30 * math.sin(math.radians(12)))
+ROWS = [("P0", 0, 0, "A", 0), ("P1", 12_000, 300, "V", 0), ("P2", 24_000, 0, "H", 0),
+        ("P3", 36_000, 300, "V", 0), ("P4", 48_000, 0, "B", 0)]  # fmt: skip
+FLAGS = ["--alpha1", "25", "--alpha2", "15", "--beta1", "20", "--beta2", "25", "--theta", "30",
+         "--delta", "0.001"]  # fmt: skip
+G = 9.80665
 
 
-def test_airspeed_and_bank_give_the_turning_radius(tmp_path: Path) -> None:
-    path = with_vehicle(tmp_path, "cruise_airspeed = 25\nmax_bank_angle = 30\n")
-    v = load_scenario(path, {}).vehicle
-    assert v.turn_radius == pytest.approx(25**2 / (G * math.tan(math.radians(30))))
-    assert v.radius_source == "airspeed and bank"
-    assert "from 25 m/s at 30.0 deg bank" in v.describe()
-    # a radius on the command line wins over the file's bank, and says so
-    over = load_scenario(path, {"turn_radius": 180.0}).vehicle
-    assert over.turn_radius == 180.0 and over.radius_source == "turn_radius"
+@pytest.fixture
+def line_csv(tmp_path):
+    csv = tmp_path / "line.csv"
+    lines = ["id,x,y,z,kind,unreliable"]
+    lines += [f"{i},{x},{y},{3000 + (400 if k == 'V' else 0)},{k},{u}" for i, x, y, k, u in ROWS]
+    csv.write_text("\n".join(lines) + "\n")
+    return csv
 
 
-def test_radius_and_bank_together_in_a_file_are_refused(tmp_path: Path) -> None:
-    path = with_vehicle(tmp_path, "turn_radius = 200\ncruise_airspeed = 25\nmax_bank_angle = 30\n")
-    err = expect_error(path, {}, field="max_bank_angle")
-    assert "either turn_radius" in str(err)
+def plan_json(args, capsys) -> dict:
+    code = main(["plan", *args, "--json"])
+    out = capsys.readouterr()
+    assert code == 0, out.err
+    return json.loads(out.out)
+
+
+def test_isa_and_tas_against_hand_computation():
+    assert isa_density_ratio(0.0) == 1.0
+    # 5000 m: T = 288.15 - 32.5 = 255.65 K; sigma = (255.65 / 288.15)^4.2559 = 0.6009
+    assert isa_density_ratio(5000.0) == pytest.approx(0.6009, abs=2e-4)
+    assert tas_from_eas(20.0, 5000.0) == pytest.approx(20.0 / math.sqrt(0.6009), rel=2e-4)
+    # above the tropopause the ratio stays at 11 km's (the cap)
+    assert isa_density_ratio(12_000.0) == isa_density_ratio(11_000.0)
+
+
+def test_angles_and_radius_against_hand_computation():
+    env = DerivedEnvelope(20.0, 45.0, 5.0, 2.0, 5.0, None, 5000.0, "ardupilot")
+    v = 20.0 / math.sqrt(0.6009) + 5.0  # TAS + W, about 30.80 m/s
+    assert env.ground_speed_max == pytest.approx(v, rel=2e-4)
+    assert env.climb_angle == pytest.approx(math.degrees(math.atan(5.0 / v)), rel=1e-3)
+    assert env.descent_angle == pytest.approx(math.degrees(math.atan(2.0 / v)), rel=1e-3)
+    assert env.turn_radius == pytest.approx(v * v / G, rel=1e-3)  # tan 45 = 1
+    still = DerivedEnvelope(20.0, 45.0, 5.0, 2.0, 0.0, None, 0.0, None)
+    assert still.turn_radius == pytest.approx(400.0 / G)
+
+
+def test_wind_text():
+    assert parse_wind("5") == (5.0, None)
+    assert parse_wind("7.5@370") == (7.5, 10.0)
+    for bad in ("-1", "x", "5@north", "inf"):
+        with pytest.raises(ValueError):
+            parse_wind(bad)
+
+
+def test_firmware_defaults_derive_the_envelope(line_csv, capsys):
+    got = plan_json([str(line_csv), *FLAGS, "--firmware", "px4"], capsys)
+    env = got["vehicle"]["envelope"]
+    # PX4 ships FW_AIRSPD_TRIM 15, FW_R_LIM 50, mission rates min(3, 5) and min(2, 5)
+    assert env["cruise_eas"] == 15.0 and env["bank_limit_deg"] == 50.0
+    assert (env["climb_rate"], env["sink_rate"]) == (3.0, 2.0)
+    assert env["altitude_m"] == 3400.0
+    v = tas_from_eas(15.0, 3400.0)
+    assert env["tas"] == pytest.approx(v)
+    params = got["parameters"]
+    assert params["turn_radius"] == pytest.approx(v * v / (G * math.tan(math.radians(50))))
+    assert params["max_climb_angle"] == pytest.approx(math.degrees(math.atan(3.0 / v)))
+    assert params["max_descent_angle"] == pytest.approx(math.degrees(math.atan(2.0 / v)))
+
+
+def test_flags_win_over_firmware_and_wind_widens_everything(line_csv, capsys):
+    args = [str(line_csv), *FLAGS, "--firmware", "ardupilot", "--cruise-airspeed", "22",
+            "--max-climb-rate", "4", "--wind", "6@90"]  # fmt: skip
+    got = plan_json(args, capsys)
+    env = got["vehicle"]["envelope"]
+    v = tas_from_eas(22.0, 3400.0) + 6.0
+    assert env["cruise_eas"] == 22.0 and env["climb_rate"] == 4.0
+    assert env["sink_rate"] == 5.0  # ArduPlane's TECS_SINK_MAX default
+    assert env["design_wind"] == 6.0 and env["design_wind_from_deg"] == 90.0
+    assert env["ground_speed_max"] == pytest.approx(v)
+    assert got["parameters"]["turn_radius"] == pytest.approx(v * v / G)  # 45 deg bank
+    assert got["parameters"]["max_climb_angle"] == pytest.approx(math.degrees(math.atan(4 / v)))
+
+
+def test_text_output_says_how_each_figure_was_derived(line_csv, capsys):
+    code = main(["plan", str(line_csv), *FLAGS, "--firmware", "px4", "--wind", "5@270"])
+    out = capsys.readouterr().out
+    assert code == 0
+    assert "ISA, the scenario's highest altitude: conservative for every leg" in out
+    assert "from 270 deg (held from any direction: conservative)" in out
+    assert "R = (TAS + W)^2 / (g tan 50 deg)" in out
+    assert "max_climb_rate from px4's shipped default" in out
+
+
+def test_direct_statements_leave_the_front_unchanged(line_csv, capsys):
+    direct = ["--turn-radius", "300", "--max-climb-angle", "12", "--max-descent-angle", "10"]
+    before = plan_json([str(line_csv), *FLAGS, *direct], capsys)
+    after = plan_json([str(line_csv), *FLAGS, *direct, "--firmware", "px4", "--wind", "5"],
+                      capsys)  # fmt: skip
+    assert before["vehicle"]["envelope"] is None
+    assert after["vehicle"]["envelope"] is not None
+    assert after["parameters"] == before["parameters"]
+    assert after["front"] == before["front"]
+
+
+def test_the_wind_scales_a_stated_radius_when_no_bank_is_given(line_csv, capsys):
+    still = plan_json([str(line_csv), *FLAGS], capsys)
+    windy = plan_json([str(line_csv), *FLAGS, "--wind", "5"], capsys)
+    v = tas_from_eas(25.0, 3400.0)
+    r = still["parameters"]["turn_radius"]
+    assert windy["parameters"]["turn_radius"] == pytest.approx(r * ((v + 5) / v) ** 2)
+    # no rate given: the climb stays unlimited, and the plan still says it assumed so
+    assert windy["parameters"]["max_climb_angle"] == 90.0
+    assert any("unlimited" in w or "assum" in w for w in windy["warnings"])
 
 
 @pytest.mark.parametrize(
-    ("body", "field"),
+    "extra, flag",
     [
-        ("max_climb_angle = 0\n", "max_climb_angle"),
-        ("max_descent_angle = 95\n", "max_descent_angle"),
-        ('leg_model = "dubins"\n', "leg_model"),
-        ("max_bank_angle = 75\n", "max_bank_angle"),
-        ("cruise_airspeed = -3\n", "cruise_airspeed"),
-        ('cruise_airspeed = "fast"\n', "vehicle.cruise_airspeed"),
-        ("wingspan = 3\n", "vehicle.wingspan"),
-        ("reserve = -1\n", "reserve"),
+        (["--max-climb-rate", "-1"], "--max-climb-rate"),
+        (["--max-sink-rate", "0"], "--max-sink-rate"),
+        (["--max-bank-angle", "90", "--max-climb-rate", "3"], "--max-bank-angle"),
+        (["--wind", "40", "--cruise-airspeed", "20"], "--wind"),
+        (["--wind", "fast"], "--wind"),
     ],
 )
-def test_bad_vehicle_values_name_file_row_and_field(tmp_path: Path, body: str, field: str) -> None:
-    path = with_vehicle(tmp_path, body)
-    err = expect_error(path, {}, field=field)
-    assert err.row is not None
+def test_bad_values_are_one_line_errors_naming_the_flag(line_csv, capsys, extra, flag):
+    code = main(["plan", str(line_csv), *FLAGS, *extra])
+    err = capsys.readouterr().err
+    assert code == 2
+    # the flag, or its field as the scenario reader names a command-line value
+    assert flag in err or flag[2:].replace("-", "_") in err, err
+    assert "Traceback" not in err and len(err.strip().splitlines()) == 1
 
 
-def test_a_value_given_twice_is_refused(tmp_path: Path) -> None:
-    path = _toml_with(tmp_path, parameters="turn_radius = 150\n")
-    path.write_text(path.read_text() + "[vehicle]\nturn_radius = 200\n")
-    with pytest.raises(InputError, match="given twice"):
-        load_scenario(path, {})
+def test_px4_vehicle_gives_its_mission_rates(line_csv, monkeypatch, capsys):
+    """PX4 climbs in missions at min(FW_T_CLMB_R_SP, FW_T_CLMB_MAX) and sinks at
+    min(FW_T_SINK_R_SP, FW_T_SINK_MAX), not at the maxima (issue 32)."""
+    seen = {}
+    original = plan_cli.derive_envelope
 
+    def spy(args, *rest, **kw):
+        seen.update(vars(args))
+        return original(args, *rest, **kw)
 
-def test_the_flight_reserve_stands_in_the_vehicle_table_and_reaches_the_plan(
-    tmp_path: Path,
-) -> None:
-    """How far the autopilot strays from the plan is the aircraft's: `[vehicle] reserve`;
-    the plan JSON carries it with the parameters, and --reserve on the command line wins."""
-    path = with_vehicle(tmp_path, "reserve = 120\n")
-    assert load_scenario(path, {}).params.reserve == 120
-    assert load_scenario(path, {"reserve": 0.0}).params.reserve == 0
-    out = subprocess.run(
-        [sys.executable, "-m", "gcs_planner", "plan", str(path), "--json", "--reserve", "75"],
-        capture_output=True,
-        text=True,
-        timeout=300,
-    )
-    assert out.returncode == 0, out.stderr
-    assert json.loads(out.stdout)["parameters"]["reserve"] == 75
-    bad = subprocess.run(
-        [sys.executable, "-m", "gcs_planner", "plan", str(path), "--reserve", "1e9"],
-        capture_output=True,
-        text=True,
-        timeout=300,
-    )
-    assert bad.returncode == 2 and "Traceback" not in bad.stderr
-    assert "reserve" in bad.stderr and "command line" in bad.stderr
-
-
-def test_radius_and_bank_are_inverse() -> None:
-    for v, phi in ((20.0, 15.0), (25.0, 30.0), (40.0, 45.0)):
-        assert bank_angle_for(v, turn_radius_from(v, phi)) == pytest.approx(phi)
-    assert VehicleProfile(turn_radius=0).turn_rate == math.inf
-
-
-def test_flags_reach_the_plan_and_bad_flags_exit_2(tmp_path: Path) -> None:
-    path = _toml_with(tmp_path)
-    base = [sys.executable, "-m", "gcs_planner", "plan", str(path), "--json"]
-    ok = subprocess.run(
-        [*base, "--cruise-airspeed", "22", "--max-bank-angle", "35", "--max-climb-angle", "12"],
-        capture_output=True,
-        text=True,
-        timeout=300,
-    )
-    assert ok.returncode == 0, ok.stderr
-    vehicle = json.loads(ok.stdout)["vehicle"]
-    assert vehicle["radius_source"] == "airspeed and bank"
-    assert vehicle["bank_angle_deg"] == pytest.approx(35.0)
-    bad = subprocess.run(
-        [*base, "--leg-model", "helicopter"], capture_output=True, text=True, timeout=300
-    )
-    assert bad.returncode == 2 and "Traceback" not in bad.stderr
-    bad = subprocess.run(
-        [*base, "--max-bank-angle", "nan"], capture_output=True, text=True, timeout=300
-    )
-    assert bad.returncode == 2 and "Traceback" not in bad.stderr
+    monkeypatch.setattr(plan_cli, "derive_envelope", spy)
+    table = parameter_table("px4")
+    port = free_udp_port()
+    with MockVehicle(f"udpin:127.0.0.1:{port}", flavour="px4"):
+        got = plan_json([str(line_csv), *FLAGS, "--vehicle-from", f"udpout:127.0.0.1:{port}"],
+                        capsys)  # fmt: skip
+    climb = min(table["FW_T_CLMB_R_SP"][0], table["FW_T_CLMB_MAX"][0])
+    sink = min(table["FW_T_SINK_R_SP"][0], table["FW_T_SINK_MAX"][0])
+    assert sink < table["FW_T_SINK_MAX"][0]  # the setpoint is what tells the two apart
+    assert seen["max_climb_rate"] == pytest.approx(climb)
+    assert seen["max_sink_rate"] == pytest.approx(sink)
+    env = got["vehicle"]["envelope"]
+    assert env["sink_rate"] == pytest.approx(sink)
+    assert env["sources"]["max_sink_rate"] == "the px4 vehicle"

@@ -15,7 +15,12 @@ from gcs_planner.cli.common import (
     load_scenario_from_args,
     plan_from_args,
 )
-from gcs_planner.cli.vehicle_from import add_vehicle_from_argument, apply_vehicle_from
+from gcs_planner.cli.vehicle_from import (
+    add_envelope_arguments,
+    add_vehicle_from_argument,
+    apply_vehicle_from,
+    derive_envelope,
+)
 
 if TYPE_CHECKING:
     from gcs_planner.core.planner import Plan
@@ -31,6 +36,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     add_scenario_arguments(p)
     add_plan_arguments(p)
     add_vehicle_from_argument(p)
+    add_envelope_arguments(p)
     p.add_argument("--json", action="store_true", help="print one JSON object, nothing else")
     p.add_argument(
         "--out",
@@ -56,6 +62,7 @@ def run(args: argparse.Namespace) -> int:
         check_output_dir(args.out, replaceable=ALL_FILES)  # before the search, not after it
     apply_vehicle_from(args)
     scenario = load_scenario_from_args(args)
+    scenario = derive_envelope(args, scenario, wind_text=args.wind)
     result = plan_from_args(args, scenario)
     plan_dict = plan_json.plan_to_dict(result)
     text = plan_json.dumps_dict(plan_dict)
@@ -180,6 +187,7 @@ def render(result: Plan) -> str:
             else ""
         ),
         f"vehicle: {s.vehicle.describe()}",
+        *(s.envelope.describe() if s.envelope is not None else ()),
         reserve_line(p.reserve),
         *(f"warning: {w}" for w in result.warnings),
         f"optimality: {result.statement}",

@@ -1,28 +1,72 @@
-"""`--vehicle-from CONNECT`: the aircraft's envelope read from its autopilot's parameters, for the
-commands that plan. Flags given on the command line win over what the autopilot says."""
+"""The aircraft in its autopilot's terms, for the commands that plan: cruise EAS, bank limit,
+climb and sink rates and the autopilot, from flags, ``--vehicle-from CONNECT`` (the autopilot's
+own parameters) or the autopilot's shipped defaults (``--firmware``), and the design wind
+(``--wind``). From them the envelope the legs use (turning radius, climb and descent angles) is
+derived (:class:`gcs_planner.vehicle.DerivedEnvelope`); ``--turn-radius``, ``--max-climb-angle``
+and ``--max-descent-angle`` remain direct statements of the envelope and win over derivation.
+Flags given on the command line win over what the autopilot says."""
 
 from __future__ import annotations
 
 import argparse
+import math
 import sys
+
+from gcs_planner.autopilot import autopilot_for, effective
+from gcs_planner.errors import InputError
+from gcs_planner.scenario.model import Scenario
+from gcs_planner.vehicle import FIRMWARES, DerivedEnvelope, bank_angle_for, parse_wind
 
 
 def add_vehicle_from_argument(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--vehicle-from",
         metavar="CONN",
-        help="read cruise airspeed, bank limit and climb/sink limits from the autopilot on this "
-        "connection (its ArduPlane or PX4 parameters); flags given here win",
+        help="read cruise airspeed, bank limit and climb/sink rates from the autopilot on this "
+        "connection (its ArduPlane or PX4 parameters; PX4: the mission rates); flags given win",
     )
 
 
+def add_envelope_arguments(
+    p: argparse.ArgumentParser, *, wind: bool = True, firmware: bool = True
+) -> None:
+    """The autopilot's terms the envelope is derived from (plan; dry-run has its own --wind and
+    --firmware, which it passes in)."""
+    g = p.add_argument_group("the aircraft in its autopilot's terms (derive the envelope)")
+    g.add_argument(
+        "--max-climb-rate", type=float, metavar="M/S", help="climb rate a mission climbs at"
+    )
+    g.add_argument(
+        "--max-sink-rate", type=float, metavar="M/S", help="sink rate a mission descends at"
+    )
+    if firmware:
+        g.add_argument(
+            "--firmware",
+            choices=FIRMWARES,
+            help="the autopilot that flies the plan: its shipped defaults fill the cruise "
+            "airspeed, bank limit and climb/sink rates not given otherwise",
+        )
+    if wind:
+        g.add_argument(
+            "--wind",
+            metavar="SPEED[@FROM_DEG]",
+            help="design wind, m/s: the envelope holds in a wind of this speed from any "
+            "direction (a direction given is held from any direction too: conservative)",
+        )
+
+
 def apply_vehicle_from(args: argparse.Namespace) -> None:
-    """Fill the envelope flags the user left unset from the vehicle on ``args.vehicle_from``."""
+    """Fill the autopilot-term flags the user left unset from the vehicle on
+    ``args.vehicle_from``: cruise airspeed, bank limit and the rates a mission flies with
+    (:func:`gcs_planner.autopilot.effective`: ArduPlane TECS_CLMB_MAX / TECS_SINK_MAX; PX4
+    min(FW_T_CLMB_R_SP, FW_T_CLMB_MAX) and min(FW_T_SINK_R_SP, FW_T_SINK_MAX), the rates its
+    position controller gives TECS in missions)."""
     if not getattr(args, "vehicle_from", None):
         return
     # The link (pymavlink) loads only when an autopilot is asked: plan starts fast without it.
     from gcs_planner.cli.upload import connect_client
-    from gcs_planner.link.envelope import read_envelope
+    from gcs_planner.errors import LinkError
+    from gcs_planner.link.params import read_parameter
 
     link_args = argparse.Namespace(
         connect=args.vehicle_from,
@@ -40,9 +84,34 @@ def apply_vehicle_from(args: argparse.Namespace) -> None:
     )
     client = connect_client(link_args)
     try:
-        firmware, overrides = read_envelope(client)
+        firmware = client.firmware if client.firmware in FIRMWARES else None
+        if firmware is None:
+            raise LinkError(
+                f"the vehicle's autopilot is {client.firmware!r}: its parameter names are known "
+                f"for {' and '.join(FIRMWARES)} only"
+            )
+        ap = autopilot_for(firmware)
+        names = [ap.envelope["cruise_airspeed"], ap.envelope["bank_limit"]]
+        names += [*ap.mission_climb, *ap.mission_climb_bounds]
+        target = client._target()
+        values = {
+            name: read_parameter(
+                client.link, target, name, timeout=client.timeout, retries=client.retries
+            )
+            for name in names
+        }
     finally:
         client.link.close()
+    eff = effective(firmware, values)
+    overrides = {
+        "cruise_airspeed": eff.cruise_airspeed,
+        "max_bank_angle": eff.bank_limit,
+        "max_climb_rate": eff.climb_rate,
+        "max_sink_rate": eff.sink_rate,
+    }
+    for key, value in overrides.items():
+        if not (math.isfinite(value) and value > 0):
+            raise LinkError(f"the vehicle's {key.replace('_', ' ')} {value!r} is not usable")
     if getattr(args, "turn_radius", None) is not None:
         overrides.pop("max_bank_angle")  # a radius given here wins over the autopilot's bank
     used = []
@@ -50,4 +119,110 @@ def apply_vehicle_from(args: argparse.Namespace) -> None:
         if getattr(args, key, None) is None:
             setattr(args, key, value)
             used.append(f"{key} {value:.4g}")
+    if getattr(args, "firmware", None) is None:
+        args.firmware = firmware
+    args.vehicle_source = f"the {firmware} vehicle"
     print(f"gcs-planner: from the {firmware} vehicle: {', '.join(used)}", file=sys.stderr)
+
+
+def derive_envelope(
+    args: argparse.Namespace,
+    scenario: Scenario,
+    *,
+    wind_text: str | None = None,
+    wind_field: str = "--wind",
+    firmware: str | None = None,
+) -> Scenario:
+    """The scenario with its envelope derived from the autopilot's terms, when any is given
+    (rates, bank, firmware or a design wind); else ``scenario`` unchanged (today's envelope).
+
+    Direct statements on the command line (``--turn-radius``, ``--max-climb-angle``,
+    ``--max-descent-angle``) win; a figure that nothing derives keeps the scenario's value.
+    Bad values are InputError naming the flag."""
+    wind, wind_from = 0.0, None
+    if wind_text is not None:
+        try:
+            wind, wind_from = parse_wind(wind_text)
+        except ValueError as exc:
+            raise InputError(str(exc), field=wind_field) from None
+    firmware = firmware if firmware is not None else getattr(args, "firmware", None)
+    climb = getattr(args, "max_climb_rate", None)
+    sink = getattr(args, "max_sink_rate", None)
+    flag_bank = getattr(args, "max_bank_angle", None)
+    file_bank = (
+        bank_angle_for(scenario.cruise_airspeed, scenario.params.turn_radius)
+        if scenario.radius_source == "airspeed and bank"
+        else None
+    )
+    if climb is None and sink is None and firmware is None and wind == 0 and file_bank is None:
+        return scenario
+    origin = getattr(args, "vehicle_source", None) or "flag"
+    sources: list[tuple[str, str]] = []
+    shipped = effective(firmware, {}) if firmware is not None else None
+
+    def pick(name: str, given: float | None, default: float | None) -> float | None:
+        if given is not None:
+            sources.append((name, origin))
+            return float(given)
+        if default is not None:
+            sources.append((name, f"{firmware}'s shipped default"))
+            return float(default)
+        return None
+
+    altitude = float(scenario.xyz[:, 2].max()) + (scenario.origin.alt if scenario.origin else 0.0)
+    eas_flag = getattr(args, "cruise_airspeed", None)
+    if eas_flag is None and shipped is None:
+        eas = scenario.cruise_airspeed
+        sources.append(("cruise_airspeed", "scenario"))
+    else:
+        eas = pick("cruise_airspeed", eas_flag, shipped.cruise_airspeed if shipped else None)
+    if flag_bank is None and file_bank is not None:
+        bank: float | None = file_bank
+        sources.append(("max_bank_angle", "scenario"))
+    else:
+        bank = pick("max_bank_angle", flag_bank, shipped.bank_limit if shipped else None)
+    climb = pick("max_climb_rate", climb, shipped.climb_rate if shipped else None)
+    sink = pick("max_sink_rate", sink, shipped.sink_rate if shipped else None)
+    for name, value in (("--max-climb-rate", climb), ("--max-sink-rate", sink)):
+        if value is not None and not (math.isfinite(value) and value > 0):
+            raise InputError(f"must be a rate > 0 m/s (got {value:g})", field=name)
+    if bank is not None and not (math.isfinite(bank) and 0 < bank < 90):
+        raise InputError(f"must lie in (0, 90) degrees (got {bank:g})", field="--max-bank-angle")
+    assert eas is not None
+    given_radius = getattr(args, "turn_radius", None) is not None
+    r_stated = scenario.params.turn_radius
+    if bank is None and r_stated > 0:
+        # No bank given: the stated radius is the still-air radius at cruise; its bank at TAS
+        # turns the same way, and the wind widens the ground-track radius as (V + W)^2.
+        tas = DerivedEnvelope(eas, 45.0, 1.0, 1.0, 0.0, None, altitude, firmware).tas
+        bank = bank_angle_for(tas, r_stated)
+        sources.append(("max_bank_angle", f"implied by the turning radius {r_stated:g} m at TAS"))
+    env = DerivedEnvelope(
+        eas=float(eas),
+        bank_deg=float(bank) if bank is not None else 0.0,
+        climb_rate=math.inf if climb is None else climb,
+        sink_rate=math.inf if sink is None else sink,
+        wind=wind,
+        wind_from=wind_from,
+        altitude=altitude,
+        autopilot=firmware,
+        sources=tuple(sources),
+    )
+    for field, why in env.refusals():
+        if field == "max_bank_angle" and bank is None:
+            continue  # straight legs: no bank to derive a radius from
+        flag = {"wind": wind_field}.get(field, "--" + field.replace("_", "-"))
+        raise InputError(why, field=flag)
+    changes: dict[str, float] = {}
+    if bank is not None and not given_radius:
+        changes["turn_radius"] = env.turn_radius
+    if climb is not None and getattr(args, "max_climb_angle", None) is None:
+        changes["max_climb_angle"] = env.climb_angle
+    if sink is not None and getattr(args, "max_descent_angle", None) is None:
+        changes["max_descent_angle"] = env.descent_angle
+    out = scenario.with_params(**changes) if changes else scenario
+    return out.with_vehicle(
+        cruise_airspeed=float(eas),
+        envelope=env,
+        radius_source="derived" if "turn_radius" in changes else out.radius_source,
+    )

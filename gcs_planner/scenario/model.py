@@ -12,7 +12,12 @@ from enum import IntEnum
 
 import numpy as np
 
-from gcs_planner.vehicle import DEFAULT_CRUISE_AIRSPEED, DEFAULT_LEG_MODEL, VehicleProfile
+from gcs_planner.vehicle import (
+    DEFAULT_CRUISE_AIRSPEED,
+    DEFAULT_LEG_MODEL,
+    DerivedEnvelope,
+    VehicleProfile,
+)
 
 
 class Kind(IntEnum):
@@ -159,6 +164,9 @@ class Scenario:
     leg_model: str = DEFAULT_LEG_MODEL
     cruise_airspeed: float = DEFAULT_CRUISE_AIRSPEED
     radius_source: str = "turn_radius"
+    # The envelope derived from the autopilot's terms and the design wind (None: the angles
+    # and radius were stated directly, or assumed).
+    envelope: DerivedEnvelope | None = None
     _index: dict[str, int] = field(default_factory=dict, repr=False)
 
     def __post_init__(self) -> None:
