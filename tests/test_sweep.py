@@ -4,6 +4,7 @@ reported, and what one cell's rows say."""
 from __future__ import annotations
 
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -190,3 +191,89 @@ def test_out_that_is_a_file_is_bad_input(tmp_path: Path, capsys: pytest.CaptureF
 def test_workers_below_one_is_bad_input(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
     code = main(["sweep", str(EXAMPLE_SPEC), "--out", str(tmp_path / "o"), "--workers", "0"])
     assert code == 2 and "field '--workers'" in capsys.readouterr().err
+
+
+def test_reserve_reaches_generated_and_file_scenarios_and_the_table(tmp_path: Path) -> None:
+    from gcs_planner.core.planner import plan
+    from gcs_planner.scenario.generate import DATASET1, random_scenario
+
+    spec = read_spec(
+        write_spec(
+            tmp_path,
+            f'[[scenarios]]\nfile = "{EXAMPLE_SCENARIO}"\n'
+            '[[scenarios]]\ngenerate = "random"\ncorrections = 20\nseeds = [3]\n'
+            "box = [40000, 20000, 2000]\n[grid]\nreserve = [0, 3000]\n"
+            '[plan]\nobjectives = ["length", "corrections"]\n',
+        )
+    )
+    cells = expand(spec)
+    rows = {(c.index, c.overrides["reserve"]): run_cell(c) for c in cells}
+    for (_, reserve), cell_rows in rows.items():
+        assert all(r["status"] == "ok" and r["reserve"] == reserve for r in cell_rows)
+    # the generated cells plan with the reserve, as planning the scenario alone with it does
+    generated = random_scenario(20, 3, params=DATASET1, box=(40000.0, 20000.0, 2000.0))
+    for cell in cells[2:]:
+        reserve = float(cell.overrides["reserve"])  # type: ignore[arg-type]
+        alone = plan(generated.with_params(reserve=reserve), objectives=("length", "corrections"))
+        got = sorted(rows[(cell.index, reserve)], key=lambda r: r["route"])
+        assert [r["length"] for r in got] == pytest.approx([r.length for r in alone.routes])
+    # and the reserve changes the plan: 3 km of the 15 km a component may fly is not nothing
+    tight, loose = rows[(2, 0.0)], rows[(3, 3000.0)]
+    assert [r["route_ids"] for r in tight] != [r["route_ids"] for r in loose]
+
+
+def test_failed_cells_have_a_false_chosen_and_columns_carry_units(tmp_path: Path) -> None:
+    import pyarrow.parquet as pq
+
+    from gcs_planner.sweep.table import UNITS_CSV, ResultTable
+
+    points = tmp_path / "points.csv"
+    points.write_text("id,x,y,z,kind,unreliable\n0,0,0,0,A,0\n1,5,5,oops,V,0\n2,9,9,9,B,0\n")
+    (tmp_path / "bad.toml").write_text(
+        'points = "points.csv"\n[parameters]\nalpha1 = 25\nalpha2 = 15\nbeta1 = 20\n'
+        "beta2 = 25\ntheta = 30\ndelta = 0.001\n"
+    )
+    spec = read_spec(
+        write_spec(
+            tmp_path,
+            '[[scenarios]]\nfile = "bad.toml"\n'
+            '[[scenarios]]\ngenerate = "random"\ncorrections = 20\nseeds = [3]\n'
+            "box = [40000, 20000, 2000]\n[dry_run]\nruns = 5\n"
+            '[plan]\nobjectives = ["length", "corrections"]\n',
+        )
+    )
+    table = ResultTable.open(tmp_path / "out", resume=False)
+    for cell in expand(spec):
+        table.add(run_cell(cell))
+    table.save()
+    saved = pq.read_table(tmp_path / "out" / "results.parquet")
+    assert saved.column("chosen").null_count == 0
+    rows = saved.to_pylist()
+    assert [r["chosen"] for r in rows if r["status"] == "error"] == [False]
+    (chosen,) = [r for r in rows if r["chosen"]]
+    # the level of the interval, as the dry run computed it
+    from gcs_planner.core.planner import plan
+    from gcs_planner.dry_run import dry_run
+    from gcs_planner.sweep.task import load_cell_scenario
+
+    cell = expand(spec)[1]
+    report = dry_run(plan(load_cell_scenario(cell), objectives=("length", "corrections")),
+                     load_cell_scenario(cell), runs=5, seed=0)  # fmt: skip
+    assert chosen["dry_run_runs"] == 5 and 0 < report.confidence < 1
+    assert chosen["dry_run_confidence"] == report.confidence
+    assert (chosen["dry_run_ci_low"], chosen["dry_run_ci_high"]) == report.success_ci
+    schema = saved.schema
+    assert schema.field("reserve").metadata == {b"unit": b"m"}
+    assert schema.field("length").metadata == {b"unit": b"m"}
+    assert schema.field("cruise_airspeed").metadata == {b"unit": b"m/s"}
+    units = (tmp_path / "out" / UNITS_CSV).read_text().splitlines()
+    assert units[0] == "column,unit" and "turn_radius,m" in units and "plan_seconds,s" in units
+
+
+def test_example_spec_plans_every_scenario_with_the_reserve_it_states(tmp_path: Path) -> None:
+    spec = read_spec(EXAMPLE_SPEC)
+    cells = expand(spec)
+    # one file cell and one generated cell, without the dry run (the reserve is the plan's)
+    for cell in (cells[0], cells[6]):
+        rows = run_cell(replace(cell, dry_run_runs=0))
+        assert rows and all(r["status"] == "ok" and r["reserve"] == 200.0 for r in rows)

@@ -59,6 +59,7 @@ SCHEMA = pa.schema(
         ("dry_run_success_rate", pa.float64()),
         ("dry_run_ci_low", pa.float64()),
         ("dry_run_ci_high", pa.float64()),
+        ("dry_run_confidence", pa.float64()),  # the level of [ci_low, ci_high], e.g. 0.95
         # where and how long
         ("plan_seconds", pa.float64()),
         ("cell_seconds", pa.float64()),
@@ -66,7 +67,37 @@ SCHEMA = pa.schema(
         ("finished_at", pa.string()),
     ]
 )
+# The unit of each column that has one: in the Parquet file's schema (each field's "unit"
+# metadata, which pyarrow, polars and DuckDB show) and beside the CSV in results.units.csv.
+UNITS = {
+    # error units (docs/model.md: abstract, decimetres in the paper's Table 2)
+    **{k: "error units" for k in ("alpha1", "alpha2", "beta1", "beta2", "theta")},
+    "fail_residual": "error units",
+    "delta": "error units per m flown",
+    "turn_radius": "m",
+    "reserve": "m",
+    "p_success": "probability",
+    "max_climb_angle": "deg",
+    "max_descent_angle": "deg",
+    "cruise_airspeed": "m/s",
+    "max_bank_angle": "deg",
+    "length": "m",
+    "probability": "probability",
+    "gap": "fraction of the lower bound",
+    "lower_bound": "m",
+    "dry_run_success_rate": "fraction of runs",
+    "dry_run_ci_low": "fraction of runs",
+    "dry_run_ci_high": "fraction of runs",
+    "dry_run_confidence": "probability",
+    "plan_seconds": "s",
+    "cell_seconds": "s",
+    "finished_at": "ISO 8601, UTC",
+}
+SCHEMA = pa.schema(
+    [f.with_metadata({"unit": UNITS[f.name]}) if f.name in UNITS else f for f in SCHEMA]
+)
 COLUMNS = tuple(SCHEMA.names)
+UNITS_CSV = "results.units.csv"
 
 
 class ResultTable:
@@ -131,6 +162,9 @@ class ResultTable:
         text = io.BytesIO()
         pa_csv.write_csv(table, text)
         csv = write_atomic(self.out / CSV, text.getvalue())
+        if not (self.out / UNITS_CSV).exists():
+            lines = ["column,unit"] + [f"{c},{UNITS.get(c, '')}" for c in COLUMNS]
+            write_atomic(self.out / UNITS_CSV, ("\n".join(lines) + "\n").encode())
         return parquet, csv
 
 

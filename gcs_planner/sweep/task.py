@@ -17,23 +17,14 @@ from datetime import datetime, timezone
 
 from gcs_planner.errors import InfeasibleError
 from gcs_planner.scenario.model import Scenario
+from gcs_planner.scenario.readers import PARAMETER_KEYS
 from gcs_planner.sweep.cells import Cell
 from gcs_planner.sweep.spec import BASE_PARAMETERS, FileSource, GeneratedSource
 from gcs_planner.vehicle import turn_radius_from
 
-PARAMETER_FIELDS = (
-    "alpha1",
-    "alpha2",
-    "beta1",
-    "beta2",
-    "theta",
-    "delta",
-    "turn_radius",
-    "p_success",
-    "fail_residual",
-    "max_climb_angle",
-    "max_descent_angle",
-)
+# Every planning parameter of a scenario (the reserve included), swept alike on files and on
+# generated scenarios, each a column of the table.
+PARAMETER_FIELDS = PARAMETER_KEYS
 
 
 def load_cell_scenario(cell: Cell) -> Scenario:
@@ -150,6 +141,7 @@ def _replay(result, cell: Cell) -> dict:
         "dry_run_success_rate": report.success_rate,
         "dry_run_ci_low": low,
         "dry_run_ci_high": high,
+        "dry_run_confidence": report.confidence,
     }
 
 
@@ -171,6 +163,9 @@ def cell_inputs(cell: Cell) -> dict:
     for key, value in cell.values:
         row[key] = ",".join(value) if key == "objectives" else value  # type: ignore[arg-type]
     row["choice"] = cell.choice
+    # A failed or infeasible cell has no chosen route: False, never null, so that a boolean
+    # mask (pandas' df[df.chosen]) works on any table.
+    row["chosen"] = False
     return row
 
 
