@@ -471,11 +471,24 @@ def plan_assumptions(plan: Plan, wind: WindSpec | None = None) -> tuple[str, ...
     if v.turn_radius <= 0:
         out.append("the plan assumed turns on the spot (R = 0): so does this flight")
     flown = "" if wind is None or wind.still else f"; this flight: {wind.describe()}"
-    out.append(f"the plan assumed still air{flown}")
-    out.append(
-        f"the plan assumed {v.cruise_airspeed:g} m/s over the air; the aircraft holds it as "
-        "EAS and flies faster at altitude (ISA)"
-    )
+    env = plan.scenario.envelope
+    if env is not None and env.wind > 0:
+        out.append(
+            f"the plan's envelope holds in a design wind of {env.wind:g} m/s from any "
+            f"direction{flown}"
+        )
+    else:
+        out.append(f"the plan assumed still air{flown}")
+    if env is not None:
+        out.append(
+            f"the plan took {env.eas:g} m/s EAS as {env.tas:.1f} m/s TAS at "
+            f"{env.altitude:.0f} m (ISA, the highest point)"
+        )
+    else:
+        out.append(
+            f"the plan assumed {v.cruise_airspeed:g} m/s over the air; the aircraft holds it "
+            "as EAS and flies faster at altitude (ISA)"
+        )
     return tuple(out)
 
 

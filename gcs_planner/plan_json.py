@@ -15,6 +15,7 @@ from gcs_planner.core.route import Route
 from gcs_planner.errors import InputError
 from gcs_planner.geometry.trajectory import leg_to_dict, scenario_trajectory
 from gcs_planner.scenario.model import Kind, Scenario
+from gcs_planner.vehicle import TRACKING_ALLOWANCE_M, capture_check, capture_warning
 
 FORMAT = "gcs-planner-plan"
 VERSION = 1
@@ -64,6 +65,14 @@ def route_to_dict(
     }
 
 
+def capture_of(plan: Plan) -> dict[str, Any]:
+    """The capture check of the chosen route (:func:`gcs_planner.vehicle.capture_check`), with
+    its warning (None when every correction point fits its capture radius)."""
+    s = plan.scenario
+    check = capture_check(plan.route.stops, s.error_unit, s.capture_radius, TRACKING_ALLOWANCE_M)
+    return {**check, "warning": capture_warning(check)}
+
+
 def plan_to_dict(plan: Plan) -> dict[str, Any]:
     s = plan.scenario
     origin = (
@@ -101,6 +110,8 @@ def plan_to_dict(plan: Plan) -> dict[str, Any]:
             for r, lb, ok in zip(plan.routes, plan.lower_bounds, plan.proven())
         ],
         "chosen": plan.chosen,
+        # The chosen route's errors on arrival, in metres, against the capture radius.
+        "capture": capture_of(plan),
         "choice": plan.choice,
         "min_probability": plan.min_probability,
         "threshold_met": plan.threshold_met,

@@ -72,10 +72,17 @@ MAX_CHORD_ERROR_M = 2.0
 # * the ACCEPTANCE radius is the autopilot's: within it a waypoint counts as reached and the
 #   autopilot moves on to the next item (MAV_CMD_NAV_WAYPOINT param2).
 DEFAULT_CAPTURE_RADIUS_M = 5.0
+# One error unit is 0.1 m of position error (the paper's Table 2 gives the limits in decimetres;
+# sim/ins.py flies errors in the same unit).
+DEFAULT_ERROR_UNIT_M = 0.1
+# What the autopilot adds to the INS error at a correction point: it overflies the waypoint on
+# a straight run-in, counting it reached at the 1 m acceptance radius the builder writes (or
+# ArduPlane's finish line), plus the 1e-7 degree storage of the position (<= 2 cm per axis).
 # 1 m: a fixed wing then counts a waypoint reached when it crosses the line through it square to
 # its track (ArduPlane's finish line), so it overflies the landmark; a 50 m radius lets ArduPlane
 # turn for the next item early and pass a correction point by more than the capture radius.
 DEFAULT_ACCEPTANCE_RADIUS_M = 1.0
+TRACKING_ALLOWANCE_M = DEFAULT_ACCEPTANCE_RADIUS_M + 0.02
 
 # The flight reserve the airplane leg model plans with unless told (Parameters.reserve): the
 # metres an aircraft under its autopilot may fly beyond the plan between two resets of an error.
@@ -172,13 +179,10 @@ class VehicleProfile:
             if self.radius_source == "derived":
                 legs += " (derived: see the envelope lines)"
             elif self.radius_source != "turn_radius":
-                legs += (
-                    f" (from {self.cruise_airspeed:g} m/s at {self.bank_angle:.1f} deg bank)"
-                )
+                legs += f" (from {self.cruise_airspeed:g} m/s at {self.bank_angle:.1f} deg bank)"
         if self.climb_limited:
             climb = (
-                f"climb <= {self.max_climb_angle:g} deg, "
-                f"descent <= {self.max_descent_angle:g} deg"
+                f"climb <= {self.max_climb_angle:g} deg, descent <= {self.max_descent_angle:g} deg"
             )
         else:
             climb = "unlimited climb and descent (90 deg, the contest's model)"
@@ -318,7 +322,8 @@ class DerivedEnvelope:
                 else "  straight legs (no turning radius)"
             ),
             "  climb <= atan(" + _rate_text(self.climb_rate) + " / (TAS + W)) = "
-            f"{self.climb_angle:.2f} deg; descent <= atan(" + _rate_text(self.sink_rate)
+            f"{self.climb_angle:.2f} deg; descent <= atan("
+            + _rate_text(self.sink_rate)
             + f" / (TAS + W)) = {self.descent_angle:.2f} deg",
         ]
         if src:
@@ -374,3 +379,45 @@ def parse_wind(text: str) -> tuple[float, float | None]:
     if direction is not None and not math.isfinite(direction):
         raise ValueError(f"wind direction must be a number of degrees, got {text!r}")
     return speed, (None if direction is None else direction % 360.0)
+
+
+def capture_check(
+    stops: object, error_unit: float, capture_radius: float, allowance: float
+) -> dict[str, object]:
+    """Point by point along a route's ``stops`` (objects with ``id``, ``kind.name``,
+    ``v_arrival``, ``h_arrival`` in error units): the position error on arrival in metres,
+    sqrt(v^2 + h^2) * ``error_unit`` (vertical and horizontal errors are orthogonal), plus the
+    autopilot's tracking ``allowance`` must fit the landmark's ``capture_radius`` (3D), or the
+    true track may pass the landmark outside it and the correction is not made. Returns the
+    worst point, its need, and the first point that does not fit (None when all do)."""
+    first, worst, worst_need = None, None, -math.inf
+    for stop in stops:  # type: ignore[attr-defined]
+        if stop.kind.name not in ("V", "H"):
+            continue
+        need = math.hypot(stop.v_arrival, stop.h_arrival) * error_unit + allowance
+        if need > worst_need:
+            worst, worst_need = stop.id, need
+        if first is None and need > capture_radius:
+            first = {"point": stop.id, "need_m": need}
+    return {
+        "error_unit_m": error_unit,
+        "capture_radius_m": capture_radius,
+        "tracking_allowance_m": allowance,
+        "worst_point": worst,
+        "worst_need_m": None if worst is None else worst_need,
+        "first_not_captured": first,
+    }
+
+
+def capture_warning(check: dict) -> str | None:
+    """The plan's warning when a correction point's need exceeds its capture radius."""
+    first = check["first_not_captured"]
+    if first is None:
+        return None
+    return (
+        f"point {first['point']} is likely missed: its error on arrival plus the tracking "
+        f"allowance is {first['need_m']:.2f} m, beyond the capture radius "
+        f"{check['capture_radius_m']:g} m ({check['error_unit_m']:g} m per error unit, "
+        f"allowance {check['tracking_allowance_m']:g} m); the correction there, and those "
+        "after it, may not be made"
+    )

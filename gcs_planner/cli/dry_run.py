@@ -13,6 +13,7 @@ from gcs_planner.cli.common import (
     load_scenario_from_args,
     plan_from_args,
 )
+from gcs_planner.cli.vehicle_from import add_envelope_arguments, derive_envelope
 from gcs_planner.dry_run import (
     DEVIATION_STEP_M,
     DRY_RUN_ACCEPTANCE_RADIUS_M,
@@ -48,6 +49,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     )
     add_scenario_arguments(p)
     add_plan_arguments(p)
+    add_envelope_arguments(p, wind=False, firmware=False)
     g = p.add_argument_group("dry run")
     g.add_argument("--firmware", choices=FIRMWARES, default="ardupilot", help="vehicle flavour")
     g.add_argument(
@@ -62,7 +64,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         default="0",
         metavar="SPEED[@FROM_DEG]",
         help="steady wind flown, m/s, from FROM_DEG (clockwise from north; default: a "
-        "direction drawn per flight); the plan is still made for still air",
+        "direction drawn per flight); also the plan's design wind unless --design-wind",
+    )
+    g.add_argument(
+        "--design-wind",
+        metavar="SPEED[@FROM_DEG]",
+        help="the wind the plan's envelope must hold in (default: the wind flown; 0 flies a "
+        "still-air plan in --wind); --turn-radius and the angles given directly win",
     )
     g.add_argument("--gust", default="0", metavar="SPEED", help="gusts, m/s per axis (default 0)")
     g.add_argument(
@@ -156,6 +164,16 @@ def run(args: argparse.Namespace) -> int:
     if track_out is not None and not track_out.lower().endswith((".geojson", ".json", ".kml")):
         raise InputError("must end in .geojson, .json or .kml", field="--track-out")
     scenario = load_scenario_from_args(args)
+    design = args.design_wind if args.design_wind is not None else args.wind
+    scenario = derive_envelope(
+        args,
+        scenario,
+        wind_text=design,
+        wind_field="--design-wind" if args.design_wind is not None else "--wind",
+        # The flown autopilot's defaults fill only what a rate or bank flag leaves open: a dry
+        # run with none plans with the stated (or assumed) envelope, as before.
+        firmware_defaults=False,
+    )
     result = plan_from_args(args, scenario)
     # The vehicle's landmark database comes from the file again, not from the planner.
     landmarks = load_scenario_from_args(args)

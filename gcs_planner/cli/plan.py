@@ -76,6 +76,15 @@ def run(args: argparse.Namespace) -> int:
     warning = check_exportable(
         result.route.probability, result.chosen, result.min_probability, args.allow_risky
     )
+    capture = plan_dict["capture"]["warning"]
+    if capture and not args.allow_risky:
+        # A correction point the true track may pass outside its capture radius: the mission is
+        # likely lost there, so it is not handed out without being asked for.
+        from gcs_planner.policy import RiskyRouteError
+
+        raise RiskyRouteError(f"{capture}; not exported: pass --allow-risky to export it anyway")
+    if capture:
+        warning = f"{warning}; {capture}" if warning else capture
     written = write_outputs(result, plan_dict, text, args.out)
     if not args.json:
         print(f"\nwrote {', '.join(str(p) for p in written)}")
@@ -173,6 +182,21 @@ def reserve_line(reserve: float) -> str:
     return "flight reserve: none (the limits are planned to the metre: --reserve M keeps a margin)"
 
 
+def _capture_lines(result: Plan) -> list[str]:
+    from gcs_planner.plan_json import capture_of
+
+    c = capture_of(result)
+    if c["warning"]:
+        return [f"warning: {c['warning']}"]
+    if c["worst_point"] is None:
+        return []
+    return [
+        f"capture: every correction point fits its {c['capture_radius_m']:g} m capture radius "
+        f"(worst {c['worst_point']}: {c['worst_need_m']:.2f} m of error on arrival and tracking "
+        f"allowance, {c['error_unit_m']:g} m per error unit)"
+    ]
+
+
 def render(result: Plan) -> str:
     s = result.scenario
     p = s.params
@@ -190,6 +214,7 @@ def render(result: Plan) -> str:
         *(s.envelope.describe() if s.envelope is not None else ()),
         reserve_line(p.reserve),
         *(f"warning: {w}" for w in result.warnings),
+        *_capture_lines(result),
         f"optimality: {result.statement}",
         "",
         f"Pareto front ({len(result.routes)} route{'' if len(result.routes) == 1 else 's'}; "

@@ -132,12 +132,15 @@ def derive_envelope(
     wind_text: str | None = None,
     wind_field: str = "--wind",
     firmware: str | None = None,
+    firmware_defaults: bool = True,
 ) -> Scenario:
     """The scenario with its envelope derived from the autopilot's terms, when any is given
     (rates, bank, firmware or a design wind); else ``scenario`` unchanged (today's envelope).
 
     Direct statements on the command line (``--turn-radius``, ``--max-climb-angle``,
     ``--max-descent-angle``) win; a figure that nothing derives keeps the scenario's value.
+    ``firmware_defaults`` False: no autopilot's shipped defaults fill what flags leave open (the
+    dry run, whose --firmware names the flown autopilot and must not change its plan).
     Bad values are InputError naming the flag."""
     wind, wind_from = 0.0, None
     if wind_text is not None:
@@ -145,7 +148,10 @@ def derive_envelope(
             wind, wind_from = parse_wind(wind_text)
         except ValueError as exc:
             raise InputError(str(exc), field=wind_field) from None
-    firmware = firmware if firmware is not None else getattr(args, "firmware", None)
+    if firmware_defaults:
+        firmware = firmware if firmware is not None else getattr(args, "firmware", None)
+    else:
+        firmware = None
     climb = getattr(args, "max_climb_rate", None)
     sink = getattr(args, "max_sink_rate", None)
     flag_bank = getattr(args, "max_bank_angle", None)
@@ -220,7 +226,16 @@ def derive_envelope(
         changes["max_climb_angle"] = env.climb_angle
     if sink is not None and getattr(args, "max_descent_angle", None) is None:
         changes["max_descent_angle"] = env.descent_angle
-    out = scenario.with_params(**changes) if changes else scenario
+    if not changes:
+        # Everything stated directly: the plan is today's, and says nothing it did not use.
+        print(
+            "gcs-planner: note: the envelope is stated directly (--turn-radius, "
+            "--max-climb-angle, --max-descent-angle): the autopilot's terms and the design "
+            "wind do not change it",
+            file=sys.stderr,
+        )
+        return scenario
+    out = scenario.with_params(**changes)
     return out.with_vehicle(
         cruise_airspeed=float(eas),
         envelope=env,

@@ -13,7 +13,9 @@ from enum import IntEnum
 import numpy as np
 
 from gcs_planner.vehicle import (
+    DEFAULT_CAPTURE_RADIUS_M,
     DEFAULT_CRUISE_AIRSPEED,
+    DEFAULT_ERROR_UNIT_M,
     DEFAULT_LEG_MODEL,
     DerivedEnvelope,
     VehicleProfile,
@@ -167,6 +169,10 @@ class Scenario:
     # The envelope derived from the autopilot's terms and the design wind (None: the angles
     # and radius were stated directly, or assumed).
     envelope: DerivedEnvelope | None = None
+    # Metres of position error per error unit (Table 2's decimetres) and the landmarks'
+    # capture radius (3D, metres): the planner's capture check reads them.
+    error_unit: float = DEFAULT_ERROR_UNIT_M
+    capture_radius: float = DEFAULT_CAPTURE_RADIUS_M
     _index: dict[str, int] = field(default_factory=dict, repr=False)
 
     def __post_init__(self) -> None:
