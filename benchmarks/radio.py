@@ -242,7 +242,8 @@ def render(results: list[dict[str, object]]) -> str:
                 continue
             med = _median(done, "seconds")
             ok = sum(bool(d["verified"]) for d in done)
-            cells += [f"{med:.1f} s ({med / air:.1f}×)", f"{ok}/{len(done)}"]
+            own = ftp_air_time(n, rate) if who == "ftp" else air
+            cells += [f"{med:.1f} s ({med / own:.1f}×)", f"{ok}/{len(done)}"]
             falses[0] += sum(1 for d in done if d["holds"] and not d["verified"])
             falses[1] += sum(1 for d in done if d["verified"] and not d["holds"])
         cells.append(f"{falses[0]} / {falses[1]}")

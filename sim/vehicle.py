@@ -165,7 +165,9 @@ class MockVehicle:
         self.acks_sent = self.missions.acks_sent  # MAV_MISSION_RESULT of every MISSION_ACK
         self.last_report: replay_mod.ReplayReport | None = None
         self.flying = False  # HEARTBEAT says armed, mode AUTO while the flight plays
-        self.advertise_ftp = True  # AUTOPILOT_VERSION sets MAV_PROTOCOL_CAPABILITY_FTP
+        # MAVFTP served and advertised (MAV_PROTOCOL_CAPABILITY_FTP); off, it is an ArduPilot
+        # built without AP_MAVLINK_FTP_ENABLED, which ignores FILE_TRANSFER_PROTOCOL.
+        self.ftp_enabled = True
 
     # Lifecycle --------------------------------------------------------------------------------
     def start(self) -> MockVehicle:
@@ -337,7 +339,7 @@ class MockVehicle:
                 self._on_heartbeat(msg, peer)
             elif kind == "COMMAND_LONG":
                 self._on_command_long(msg, peer)
-            elif kind == "FILE_TRANSFER_PROTOCOL":
+            elif kind == "FILE_TRANSFER_PROTOCOL" and self.ftp_enabled:
                 self.ftp.handle(msg, peer)
             elif kind == "RADIO_STATUS" and self.flavour == "ardupilot":
                 # ArduPilot reads its own radio's reports (GCS_MAVLINK::handle_radio_status)
@@ -401,7 +403,7 @@ class MockVehicle:
         )
         if self.flavour == "px4":
             cap |= mavlink.MAV_PROTOCOL_CAPABILITY_MISSION_FLOAT
-        if not self.advertise_ftp:
+        if not self.ftp_enabled:
             cap &= ~mavlink.MAV_PROTOCOL_CAPABILITY_FTP
         self._send(
             self.mav.autopilot_version_encode(cap, 0, 0, 0, 0, [0] * 8, [0] * 8, [0] * 8, 0, 0, 0)

@@ -149,6 +149,45 @@ def test_a_5_s_fade_in_the_middle_of_a_burst_read_is_survived():
         assert client.retry_count > 0  # the ranges the fade took were asked again
 
 
+def test_a_read_whose_session_the_vehicle_closed_resumes_in_a_new_one():
+    items = _mission(200)
+    with _loopback(transfer="ftp", timeout=0.5) as (vehicle, client):
+        vehicle.missions.commit(items)
+        timers = vehicle.ftp.timers
+        closed = []
+
+        def closing(now: float) -> None:  # GCS_FTP push_reply: a reply that cannot go for 3 s
+            b = vehicle.ftp._burst
+            if b is not None and b.offset > 2000 and not closed:
+                vehicle.ftp.sessions.clear()
+                vehicle.ftp._burst = None
+                closed.append(b.offset)
+            timers(now)
+
+        vehicle.ftp.timers = closing  # type: ignore[method-assign]
+        got = client.download()
+        assert closed and client.transfer_used == "ftp"
+        assert [(it.x, it.y) for it in got[1:]] == [(it.x, it.y) for it in items[1:]]
+
+
+def test_an_upload_whose_open_ack_was_lost_resets_and_opens_again():
+    items = _mission(40)
+    with _loopback(transfer="ftp", timeout=0.5) as (vehicle, client):
+        send = vehicle.ftp._send_payload
+        dropped = []
+
+        def lose_first_open_ack(peer, payload):
+            p = ftp.unpack(payload)
+            if p.req_opcode == ftp.CREATE_FILE and p.opcode == ftp.ACK and not dropped:
+                dropped.append(p.session)
+                return
+            send(peer, payload)
+
+        vehicle.ftp._send_payload = lose_first_open_ack  # type: ignore[method-assign]
+        report = client.upload_verified(items)
+        assert dropped and report.transfer == "ftp" and _holds(vehicle, items)
+
+
 def test_the_read_back_by_ftp_tells_differs_from_could_not_read():
     items = _mission(20)
     with _loopback(transfer="ftp") as (vehicle, client):
@@ -183,7 +222,7 @@ def test_px4_falls_back_to_the_mission_protocol():
         assert report.transfer == "mission" and _holds(vehicle, items)
         assert vehicle.ftp.writes_stored == 0
     with _loopback("ardupilot", transfer="auto") as (vehicle, client):
-        vehicle.advertise_ftp = False  # an ArduPilot built without MAVFTP
+        vehicle.ftp_enabled = False  # an ArduPilot built without MAVFTP
         assert client.upload_verified(items).transfer == "mission" and _holds(vehicle, items)
     with _loopback("px4", transfer="ftp") as (vehicle, client):
         with pytest.raises(LinkError, match="file not found"):
@@ -234,6 +273,27 @@ def test_hostile_replies_are_clear_errors(monkeypatch):
         vehicle.missions.commit(_mission(30))
         with pytest.raises(LinkError, match="past its end"):
             client.download()
+
+
+def test_upload_and_download_commands_go_by_ftp_and_say_so(tmp_path, capsys):
+    from gcs_planner.mission.waypoints import dumps_items
+
+    items = [
+        MissionItem(i, 0, 16, param2=30.0, x=305_000_000 + 500 * i, y=1_235_000_000, z=120.0)
+        for i in range(12)
+    ]
+    wp = tmp_path / "m.waypoints"
+    wp.write_text(dumps_items(items, "ardupilot", (30.5, 123.5, 0.0)))
+    port = free_udp_port()
+    with MockVehicle(f"udpin:127.0.0.1:{port}") as vehicle:
+        conn = ["--connect", f"udpout:127.0.0.1:{port}", "--quiet"]
+        assert main(["upload", str(wp), *conn, "--keep-loiter-radius"]) == 0
+        assert "uploaded and verified 12 items" in (out := capsys.readouterr().out)
+        assert "by MAVFTP" in out and vehicle.ftp.writes_stored == 1
+        back = tmp_path / "back.json"
+        assert main(["download", *conn, "--out", str(back), "--transfer", "mission"]) == 0
+        assert "by MAVFTP" not in capsys.readouterr().out  # the flag chose the mission protocol
+        assert _holds(vehicle, items)
 
 
 def test_a_garbage_mission_file_is_a_one_line_error_from_download(monkeypatch, tmp_path, capsys):

@@ -4,7 +4,10 @@ flies it against the scenario's correction points with telemetry.
 
 With ``--radio sik[:AIR_RATE]`` the ground station reaches it through an emulated SiK radio pair
 (:mod:`sim.radio`): CONN is then the ground radio's side, and the vehicle sits behind the air
-radio on a free port of 127.0.0.1."""
+radio on a free port of 127.0.0.1.
+
+The ArduPilot flavour serves MAVLink FTP (:mod:`sim.ftp_server`, ``@MISSION/mission.dat``) and
+advertises it in AUTOPILOT_VERSION; ``--no-ftp`` is an ArduPilot built without it."""
 
 from __future__ import annotations
 
@@ -116,6 +119,7 @@ def run(args: argparse.Namespace) -> int:
         baud=args.baud,
         speedup=args.speedup or None,
     )
+    vehicle.ftp_enabled = not args.no_ftp
     if args.radio is not None:
         config = RadioConfig(
             air_rate=args.radio,
@@ -202,6 +206,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         metavar="N",
         help="a flight started by MISSION_START plays N times faster than real time "
         "(1: real time; 0: as fast as the link takes it; default 100)",
+    )
+    p.add_argument(
+        "--no-ftp",
+        action="store_true",
+        help="serve no MAVFTP (ArduPilot serves its mission as @MISSION/mission.dat by default)",
     )
     r = p.add_argument_group("radio (sim/radio.py; seeded by --seed)")
     r.add_argument(

@@ -48,6 +48,9 @@ FAIL_ERRNO, EOF, UNKNOWN_COMMAND, FILE_NOT_FOUND = 2, 6, 7, 10
 DATA_MAX = 239  # data bytes in one payload
 WRITE_WINDOW = 6  # WriteFile requests out at once, at most
 FIRST_WAIT_S = 0.5
+SESSION_REOPENS = 2
+OPEN_ATTEMPTS = 3
+SESSION_LOST = (1, 4, 10)  # Fail, InvalidSession, FileNotFound: the session is gone
 PAYLOAD_LEN = 251
 _HEAD = struct.Struct("<HBBBBBxI")
 
@@ -152,6 +155,7 @@ class FtpClient:
         self.session = 0
         self.retry_count = 0
         self.foreign_sessions: set[int] = set()  # sessions answered that are not ours
+        self.last_resent = False  # the last exchange needed a resend
 
     def resend_wait(self, attempts: int) -> float:
         """The round-trip timeout (FIRST_WAIT_S before a sample), doubled per resend in a row
@@ -201,6 +205,7 @@ class FtpClient:
                 if p.req_opcode == opcode and p.seq == (seq + 1) & 0xFFFF:
                     if attempt == 0:
                         self._rtt.sample(time.monotonic() - asked)
+                    self.last_resent = attempt > 0
                     return p
             if attempt < self.retries:
                 self.retry_count += 1
@@ -233,7 +238,16 @@ class FtpClient:
         self.session = 0
         self.foreign_sessions.clear()
         name = path.encode()
-        p = self._exchange(opcode, f"open {path}", data=name)
+        for _ in range(OPEN_ATTEMPTS):
+            p = self._exchange(opcode, f"open {path}", data=name)
+            if p.opcode == ACK or not self.last_resent or (p.data[:1] or b"\0")[0] != 1:
+                break
+            # Refused ("failed") after a resend: the first copy opened the file in a session
+            # whose ACK was lost, and the resend (session 0 again) found it busy (GCS_FTP
+            # gives each session-0 request a new session; AP_Filesystem_Mission allows one
+            # upload at a time). ResetSessions closes ours, and the open goes again.
+            self.retry_count += 1
+            self.reset()
         if p.opcode == NAK:
             raise self._refused(p, f"open {path}")
         self.session = p.session  # the vehicle allocates it (GCS_FTP::worker)
@@ -259,15 +273,22 @@ class FtpClient:
         a retried read resumes.
         """
         chunks = {} if chunks is None else chunks
-        self._open(OPEN_FILE_RO, path)
-        try:
-            data = self._read_all(path, length_of, chunks)
-        finally:
+        for attempt in range(SESSION_REOPENS + 1):
+            self._open(OPEN_FILE_RO, path)
             try:
-                self.terminate()
-            except FtpError:
-                pass  # ArduPilot closes an idle session after 20 s
-        return data
+                return self._read_all(path, length_of, chunks)
+            except FtpError as exc:
+                # ArduPilot closes a session whose reply could not go for 3 s (a radio whose
+                # buffer stayed full: a fade): the read goes on in a new session from what
+                # was read.
+                if exc.code not in SESSION_LOST or attempt == SESSION_REOPENS:
+                    raise
+            finally:
+                try:
+                    self.terminate()
+                except FtpError:
+                    pass  # ArduPilot closes an idle session after 20 s
+        raise AssertionError("unreachable")
 
     def _contiguous(self, chunks: dict[int, bytes]) -> bytes:
         out = bytearray()
@@ -283,6 +304,7 @@ class FtpClient:
         outstanding: dict[int, float] = {}  # offset -> when asked (ReadFile)
         by_seq: dict[int, int] = {}  # the reply's sequence number -> the offset asked
         bursting = False
+        bursts = 0
         stall_limit = (self.retries + 1) * self.timeout
         while True:
             head = self._contiguous(chunks)
@@ -300,6 +322,8 @@ class FtpClient:
                     # Nothing known missing below the highest byte read: a burst from there
                     # (from the first missing byte while the length is not known).
                     start = len(head) if end is None else tail
+                    self.retry_count += int(bool(chunks) or bursts > 0)
+                    bursts += 1
                     self._request(BURST_READ_FILE, start, size=DATA_MAX)
                     bursting = True
                 else:
@@ -310,8 +334,9 @@ class FtpClient:
                         if asked is not None and now - asked < self.resend_wait(0):
                             continue  # its answer can still come
                         if asked is not None:
-                            self.retry_count += 1
                             window.lost()
+                        # Every ReadFile asks again for what a burst lost: a resend.
+                        self.retry_count += 1
                         outstanding[offset] = now
                         seq = self._request(READ_FILE, offset, size=DATA_MAX)
                         by_seq[(seq + 1) & 0xFFFF] = offset
