@@ -436,3 +436,19 @@ def test_helices_become_loiters_at_the_turning_radius_where_the_plan_climbs(firm
     for pid, seq in m.point_seqs:
         x, y, z = frame.to_local(m.items[seq].lat, m.items[seq].lon, m.items[seq].z)
         assert np.allclose([x, y, z], s.xyz[s.index_of(pid)], atol=0.01)
+
+
+def test_loiter_turns_leave_on_the_tangent_in_the_exported_files():
+    """NAV_LOITER_TURNS param2 = 1 ("heading required", common.xml) survives into the
+    .waypoints rows and the QGroundControl .plan items the user flies."""
+    from gcs_planner.mission.qgc_plan import plan_document
+    from gcs_planner.mission.waypoints import dumps_waypoints, loads_waypoints
+
+    plan = make_plan(steep_scenario(), routes=([0, 1, 2, 3, 4, 6],), probability=False)
+    m = build_mission(plan, firmware="ardupilot")
+    back = loads_waypoints(dumps_waypoints(m)).items
+    turns = [it for it in back if it.command == 18]
+    assert turns and all(it.param2 == 1 for it in turns)
+    doc = plan_document(m)
+    items = [i for i in doc["mission"]["items"] if i.get("command") == 18]
+    assert items and all(i["params"][1] == 1 for i in items)
