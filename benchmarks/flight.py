@@ -8,7 +8,14 @@ timed in this process; and the same mission in a 5 m/s wind with 1.5 m/s gusts, 
 steering its INS estimate (sim/ins.py), against the still-air flight. Also the flown length
 against the planned one and the largest deviation from the planned path.
 
-    python -m benchmarks.flight [--runs N]
+Each flight is timed twice in the same run: compiled (the plain steps in sim/flight_kernel.py,
+the default) and in the Python navigators (``compiled=False``, the reference), with their ratio.
+``--dry-run-runs N`` also times the whole ``gcs-planner dry-run`` of dataset 2 (README's
+command) with ``--runs N`` per autopilot, compiled, against the Python flight when
+``--python-dry-run`` is given (PX4's takes minutes), else against the figures measured before
+the kernel (stated as such: ArduPlane 11.1 s, PX4 241.7 s for 200 runs, issue 26's session).
+
+    python -m benchmarks.flight [--runs N] [--dry-run-runs 200 [--python-dry-run]]
 """
 
 from __future__ import annotations
@@ -20,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from benchmarks.cases import load_case
+from benchmarks.cases import DATA, load_case
 from benchmarks.report import seconds, table
 from gcs_planner.core.planner import plan
 from gcs_planner.dry_run import DRY_RUN_ACCEPTANCE_RADIUS_M, max_deviation
@@ -52,6 +59,8 @@ class FlightRow:
     chord_s: float  # the chord replay
     arrived: bool
     wind_s: float = 0.0  # in WIND, on the INS estimate
+    python_s: float = 0.0  # the still-air flight in the Python navigators
+    python_wind_s: float = 0.0  # the WIND flight in the Python navigators
 
 
 def _chord_replay(items, scenario, home: bool) -> None:
@@ -78,20 +87,22 @@ def run_flight(specs: list[str], runs: int) -> list[FlightRow]:
             ap = AutopilotParams(
                 flavour, acceptance_radius=DRY_RUN_ACCEPTANCE_RADIUS_M, loiter_radius=TURN_RADIUS
             )
-            flight_t, chord_t, wind_t = [], [], []
+            flight_t, chord_t, wind_t, py_t, py_wind_t = [], [], [], [], []
             report = None
             for _ in range(runs):
-                t0 = time.perf_counter()
-                replay_mod.replay(
-                    mission.items, scenario, home_at_seq0=home, flavour=flavour, autopilot=ap,
-                    wind=WIND, navigate_on_estimate=True,
-                )  # fmt: skip
-                wind_t.append(time.perf_counter() - t0)
-                t0 = time.perf_counter()
-                report = replay_mod.replay(
-                    mission.items, scenario, home_at_seq0=home, flavour=flavour, autopilot=ap
-                )
-                flight_t.append(time.perf_counter() - t0)
+                for compiled, still, windy in ((True, flight_t, wind_t), (False, py_t, py_wind_t)):
+                    t0 = time.perf_counter()
+                    replay_mod.replay(
+                        mission.items, scenario, home_at_seq0=home, flavour=flavour,
+                        autopilot=ap, wind=WIND, navigate_on_estimate=True, compiled=compiled,
+                    )  # fmt: skip
+                    windy.append(time.perf_counter() - t0)
+                    t0 = time.perf_counter()
+                    report = replay_mod.replay(
+                        mission.items, scenario, home_at_seq0=home, flavour=flavour,
+                        autopilot=ap, compiled=compiled,
+                    )  # fmt: skip
+                    still.append(time.perf_counter() - t0)
                 t0 = time.perf_counter()
                 _chord_replay(mission.items, scenario, home)
                 chord_t.append(time.perf_counter() - t0)
@@ -108,6 +119,8 @@ def run_flight(specs: list[str], runs: int) -> list[FlightRow]:
                     statistics.median(chord_t),
                     report.arrived,
                     statistics.median(wind_t),
+                    statistics.median(py_t),
+                    statistics.median(py_wind_t),
                 )
             )
     return rows
@@ -115,8 +128,9 @@ def run_flight(specs: list[str], runs: int) -> list[FlightRow]:
 
 def render(rows: list[FlightRow]) -> str:
     head = ["scenario", "autopilot", "planned", "flown", "largest deviation", "items",
-            "flight + INS", "chord replay", "ratio", "arrived",
-            "wind 5 + gusts 1.5, on the estimate", "ratio to still air"]  # fmt: skip
+            "flight + INS", "Python flight", "compiled speed-up", "chord replay", "arrived",
+            "wind 5 + gusts 1.5, on the estimate", "Python", "speed-up",
+            "wind / still-air Python"]  # fmt: skip
     body = [
         [
             r.scenario,
@@ -126,14 +140,68 @@ def render(rows: list[FlightRow]) -> str:
             f"{r.deviation_m:.1f} m",
             str(r.items),
             seconds(r.flight_s),
+            seconds(r.python_s),
+            f"{r.python_s / r.flight_s:.1f}x",
             seconds(r.chord_s),
-            f"{r.flight_s / r.chord_s:.1f}x",
             "yes" if r.arrived else "no",
             seconds(r.wind_s),
-            f"{r.wind_s / r.flight_s:.1f}x",
+            seconds(r.python_wind_s),
+            f"{r.python_wind_s / r.wind_s:.1f}x",
+            f"{r.wind_s / r.python_s:.2f}x",
         ]
         for r in rows
     ]
+    return table(head, body)
+
+
+# README's dataset 2 dry run; --runs and --firmware are added.
+DRY_RUN_ARGS = ["dry-run", str(DATA / "dataset2.xlsx"), "--alpha1", "20", "--alpha2", "10",
+                "--beta1", "15", "--beta2", "20", "--theta", "20", "--delta", "0.001",
+                "--choose", "most-reliable"]  # fmt: skip
+# The whole dry run with --runs 200 before the compiled flight (issue 26's session, Python).
+BEFORE_KERNEL_S = {"ardupilot": 11.1, "px4": 241.7}
+
+
+def _time_dry_run(flavour: str, runs: int, compiled: bool) -> tuple[float, str]:
+    """(seconds, the success line) of the whole dry run in this process."""
+    import contextlib
+    import io
+    from functools import partial
+
+    from gcs_planner import dry_run as dry_run_mod
+    from gcs_planner.cli import main as cli_main
+
+    original = dry_run_mod.replay_mod.replay
+    out = io.StringIO()
+    try:
+        if not compiled:
+            dry_run_mod.replay_mod.replay = partial(original, compiled=False)
+        t0 = time.perf_counter()
+        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(io.StringIO()):
+            cli_main([*DRY_RUN_ARGS, "--firmware", flavour, "--runs", str(runs)])
+        elapsed = time.perf_counter() - t0
+    finally:
+        dry_run_mod.replay_mod.replay = original
+    line = next((x for x in out.getvalue().splitlines() if x.startswith("success rate")), "")
+    return elapsed, line
+
+
+def render_dry_runs(runs: int, python: bool) -> str:
+    body = []
+    for flavour in FLAVOURS:
+        fast, line = _time_dry_run(flavour, runs, True)
+        if python:
+            slow, slow_line = _time_dry_run(flavour, runs, False)
+            against = f"{seconds(slow)} (Python, this run)"
+            same = "yes" if slow_line == line else "NO"
+        else:
+            slow = BEFORE_KERNEL_S[flavour] * runs / 200
+            against = f"{seconds(slow)} (before the kernel, measured last session, scaled)"
+            same = "-"
+        body.append([flavour, str(runs), seconds(fast), against, f"{slow / fast:.1f}x", same,
+                     line.split(",")[0]])  # fmt: skip
+    head = ["autopilot", "runs", "dry run, compiled", "against", "speed-up", "same report",
+            "result"]  # fmt: skip
     return table(head, body)
 
 
@@ -141,8 +209,13 @@ def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(prog="python -m benchmarks.flight", description=__doc__)
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--scenarios", nargs="+", default=["dataset1", "dataset2"])
+    ap.add_argument("--dry-run-runs", type=int, default=0)
+    ap.add_argument("--python-dry-run", action="store_true")
     args = ap.parse_args(argv)
     print(render(run_flight(args.scenarios, args.runs)))
+    if args.dry_run_runs > 0:
+        print()
+        print(render_dry_runs(args.dry_run_runs, args.python_dry_run))
 
 
 if __name__ == "__main__":

@@ -26,6 +26,7 @@ import numpy as np
 from gcs_planner.mission.georef import LocalFrame
 from gcs_planner.mission.items import MissionItem
 from gcs_planner.vehicle import G, VehicleProfile
+from sim import flight_kernel
 from sim.aircraft import AircraftState
 from sim.navigators import NAVIGATORS
 from sim.navigators.base import (
@@ -128,6 +129,7 @@ def fly(
     time_limit: float | None = None,
     wind: WindModel | None = None,
     ins: object | None = None,
+    compiled: bool = True,
 ) -> Flight:
     """Fly the stored ``items`` in mode AUTO from ``start`` (local frame) at ``profile``'s cruise
     airspeed (EAS) under ``flavour``'s navigator with the autopilot ``params`` (by default its
@@ -139,6 +141,9 @@ def fly(
     ``course`` is the heading at the start (rad, counter-clockwise from east), by default
     towards the first item that is not a loiter. ``time_limit`` (s) stops an aircraft that never
     finishes, by default three times the time to fly the items' chords plus ten minutes.
+
+    ``compiled`` flies the plain steps (nothing reached, no landmark near, sim/flight_kernel.py)
+    in the numba kernel; False flies every step in the Python navigator, the reference.
     """
     ap = params or AutopilotParams(flavour=flavour, loiter_radius=profile.turn_radius)
     base_alt = float(start[2] + frame.origin.alt) if home_alt is None else home_alt
@@ -174,7 +179,10 @@ def fly(
     )
     pilot.record()
     going = pilot.advance()
+    cache: dict = {}
     while going:
+        if compiled:
+            flight_kernel.fly_plain_steps(pilot, time_limit, cache)
         if ins is not None and getattr(ins, "lost", False):
             # Lost on arrival at a correction landmark: nothing after it counts.
             pilot.ended = "lost"

@@ -96,13 +96,16 @@ class InsEstimate:
     # The truth ----------------------------------------------------------------------------
     def observe(self, before: AircraftState, after: AircraftState) -> None:
         """The true track flew ``before`` -> ``after``: count the metres, find the passes."""
-        p0 = np.array((before.x, before.y, before.z))
-        seg = np.array((after.x, after.y, after.z)) - p0
-        length = float(math.sqrt(seg @ seg))
+        # The metres flown summed in plain floats, in the order sim/flight_kernel.py sums them,
+        # so that the compiled flight's estimate is the same to the last bit.
+        dx, dy, dz = after.x - before.x, after.y - before.y, after.z - before.z
+        length = math.sqrt(dx * dx + dy * dy + dz * dz)
         d0 = self.distance
         self.distance += length
         if self.lost:
             return
+        p0 = np.array((before.x, before.y, before.z))
+        seg = np.array((dx, dy, dz))
         r = self.capture
         near: set[int] = set()
         for li in self._candidates(before, after):

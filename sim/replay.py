@@ -47,7 +47,7 @@ from gcs_planner.mission.georef import DEFAULT_ORIGIN, LocalFrame
 from gcs_planner.mission.items import MissionItem
 from gcs_planner.scenario.model import Kind, Parameters, Scenario
 from gcs_planner.vehicle import DEFAULT_CAPTURE_RADIUS_M, DEFAULT_CRUISE_AIRSPEED, VehicleProfile
-from sim import guidance
+from sim import flight_kernel, guidance
 from sim.ins import DEFAULT_ERROR_UNIT_M, InsEstimate
 from sim.wind import WindModel, WindSpec
 
@@ -335,12 +335,19 @@ def _first_pass(
     return float(cum[k] + t[j] * (cum[k + 1] - cum[k])), float(miss[j])
 
 
-def closest_approach(path: FlightPath, point: np.ndarray, radius: float) -> tuple[float, float]:
+def closest_approach(
+    path: FlightPath, point: np.ndarray, radius: float, *, compiled: bool = False
+) -> tuple[float, float]:
     """(distance flown, 3D miss) where the path first passes within ``radius`` of ``point``,
-    at the closest approach of that pass; else at its closest approach overall."""
+    at the closest approach of that pass; else at its closest approach overall. ``compiled``:
+    the same in sim/flight_kernel.py (a flown track has tens of thousands of segments)."""
     point = np.asarray(point, float)
     if len(path.points) < 2:
         return 0.0, float(np.linalg.norm(path.points[0] - point))
+    if compiled:
+        points = np.ascontiguousarray(path.points, dtype=float)
+        d, miss = flight_kernel.closest_approach(points, path.cumulative, point, float(radius))
+        return float(d), float(miss)
     segs = np.arange(len(path.points) - 1)
     hit = _first_pass(path, point, segs, radius)
     if hit is not None:
@@ -543,9 +550,12 @@ def find_missed(
     encounters: Sequence[Encounter],
     scenario: Scenario,
     capture_radius: float = DEFAULT_CAPTURE_RADIUS_M,
+    *,
+    compiled: bool = False,
 ) -> list[Missed]:
     """Correction landmarks the mission has a waypoint on (within ``capture_radius``) that the
-    flown track did not pass within ``capture_radius`` of, in mission order."""
+    flown track did not pass within ``capture_radius`` of, in mission order (``compiled``:
+    their closest approaches found by the kernel)."""
     mask = (scenario.kind == Kind.V) | (scenario.kind == Kind.H)
     idx = np.flatnonzero(mask)
     if idx.size == 0 or len(nominal.points) < 2:
@@ -560,7 +570,9 @@ def find_missed(
             if li in met or li in seen:
                 continue
             seen.add(li)
-            distance, miss = closest_approach(flown, scenario.xyz[li], capture_radius)
+            distance, miss = closest_approach(
+                flown, scenario.xyz[li], capture_radius, compiled=compiled
+            )
             kind = Kind(int(scenario.kind[li])).name
             out.append(Missed(li, scenario.ids[li], kind, int(seq), distance, miss))
     return out
@@ -568,7 +580,7 @@ def find_missed(
 
 def flown_path(flight: guidance.Flight) -> FlightPath:
     """The flown track as a path (one point per step of the flight model)."""
-    return FlightPath(flight.xyz, tuple(int(c) for c in flight.current), tuple(flight.airspeed))
+    return FlightPath(flight.xyz, tuple(flight.current.tolist()), tuple(flight.airspeed.tolist()))
 
 
 def _ins_run(
@@ -632,6 +644,7 @@ class FlightSetup:
     navigate_on_estimate: bool
     error_unit: float
     nominal: FlightPath
+    compiled: bool = True  # plain steps in sim/flight_kernel.py; False: the Python reference
 
     def fly_once(
         self, rng: np.random.Generator, wind: WindModel | None
@@ -648,9 +661,12 @@ class FlightSetup:
             self.items, self.frame, (float(a[0]), float(a[1]), float(a[2])), self.profile,
             flavour=self.flavour, params=self.autopilot, home_at_seq0=self.home_at_seq0,
             home_alt=self.home_alt, course=self.course, dt=self.dt, wind=wind, ins=ins,
+            compiled=self.compiled,
         )  # fmt: skip
         track = flown_path(flight)
-        b_distance, _ = closest_approach(track, sc.xyz[sc.end], self.capture_radius)
+        b_distance, _ = closest_approach(
+            track, sc.xyz[sc.end], self.capture_radius, compiled=self.compiled
+        )
         path = track.until(b_distance)
         if ins is not None:
             ins.finish()
@@ -658,7 +674,9 @@ class FlightSetup:
         else:
             encounters = find_encounters(path, sc, self.capture_radius)
             run = _fly(path, encounters, sc, self.params, rng, self.capture_radius)
-        missed = find_missed(self.nominal, path, encounters, sc, self.capture_radius)
+        missed = find_missed(
+            self.nominal, path, encounters, sc, self.capture_radius, compiled=self.compiled
+        )
         if flight.ended == "lost":
             # The flight ended where it was lost: a landmark whose mission item it had not
             # reached yet was not missed, just not reached.
@@ -709,6 +727,7 @@ def replay(
     wind: WindSpec | None = None,
     navigate_on_estimate: bool = False,
     error_unit: float = DEFAULT_ERROR_UNIT_M,
+    compiled: bool = True,
 ) -> ReplayReport:
     """Fly the stored ``items`` and replay the INS against the landmark database ``scenario``.
 
@@ -724,6 +743,9 @@ def replay(
     With ``runs`` > 0 a Monte Carlo of that many replays (seeded from ``seed`` too): when every
     flight is the same (still air, the truth flown) the outcomes at unreliable points are drawn
     over the one flight; otherwise each run is flown on its own with its own draws.
+
+    ``compiled`` flies the flight's plain steps in the numba kernel (sim/flight_kernel.py);
+    False flies all of them in the Python navigators, the reference the kernel is tested on.
     """
     # The aircraft is held to the true limits: the planner's reserve is its own margin.
     params = (params or scenario.params).flown()
@@ -751,7 +773,7 @@ def replay(
         tuple(items), scenario, params, profile, flavour,
         autopilot or guidance.AutopilotParams(flavour, loiter_radius=profile.turn_radius),
         frame, home_at_seq0, home_alt, course, capture_radius, dt, navigate_on_estimate,
-        error_unit, nominal,
+        error_unit, nominal, compiled,
     )  # fmt: skip
     rng = np.random.default_rng(seed)
     model = None if wind.still else wind.draw(np.random.default_rng([seed, 2**31]))

@@ -25,6 +25,8 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
+import numpy as np
+
 from sim import atmosphere
 from sim.aircraft import AircraftState, Envelope, step
 from sim.navigators.params import AutopilotParams
@@ -51,6 +53,7 @@ ALTITUDE_TIME_CONSTANT_S = 5.0
 # legs of a 170 km mission cost little, the turns and the gusts keep the fine step.
 DEFAULT_STEP_S = 0.5
 COARSE_STEPS = 8
+SAMPLE_FIELDS = 12
 
 
 @dataclass(frozen=True)
@@ -111,7 +114,10 @@ class Navigator:
         self.s = start
         if self.s.tas <= 0:
             self.s.tas = self.s.ground_speed = airspeed * self.eas2tas(start.z)
-        self.samples: list[tuple] = []
+        # The flown track, one row per step (see record), grown by doubling; the compiled
+        # flight (sim/flight_kernel.py) writes its steps into the same array.
+        self.track = np.empty((4096, SAMPLE_FIELDS))
+        self.n_samples = 0
         self.events: list[Event] = []
         self.notes: list[str] = []
         self.k = -1  # index of the active command
@@ -208,13 +214,29 @@ class Navigator:
     def record(self) -> None:
         s = self.s
         seq = self.cmds[self.k].seq if 0 <= self.k < len(self.cmds) else -1
-        self.samples.append(
-            (s.t, s.x, s.y, s.z, s.course, s.bank_deg, s.climb_rate, self.env.airspeed, seq,
-             s.heading, s.tas, s.ground_speed)
+        if self.n_samples >= len(self.track):
+            self.reserve(1)
+        self.track[self.n_samples] = (
+            s.t, s.x, s.y, s.z, s.course, s.bank_deg, s.climb_rate, self.env.airspeed, seq,
+            s.heading, s.tas, s.ground_speed,
         )  # fmt: skip
+        self.n_samples += 1
+
+    def reserve(self, rows: int) -> None:
+        """Room for ``rows`` more samples."""
+        need = self.n_samples + rows
+        if need > len(self.track):
+            grown = np.empty((max(need, 2 * len(self.track)), SAMPLE_FIELDS))
+            grown[: self.n_samples] = self.track[: self.n_samples]
+            self.track = grown
+
+    @property
+    def samples(self) -> np.ndarray:
+        """(t, x, y, z, course, bank, climb, EAS, seq, heading, TAS, ground speed) per step."""
+        return self.track[: self.n_samples]
 
     def event(self, seq: int, kind: str, text: str = "") -> None:
-        self.events.append(Event(self.s.t, len(self.samples) - 1, seq, kind, text))
+        self.events.append(Event(self.s.t, self.n_samples - 1, seq, kind, text))
 
     def flies(self, c: NavCommand) -> bool:
         if c.command == NAV_RETURN_TO_LAUNCH:
