@@ -196,7 +196,7 @@ def _rate(airspeed: float, angle_deg: float) -> float:
 
 
 # ---------------------------------------------------------------------------------------------
-# The envelope derived from the autopilot's terms (issue 32; MODEL.md "Flight in the real world")
+# The envelope derived from the autopilot's terms (issue 32; docs/model.md)
 
 # ISA troposphere (ICAO Doc 7488): sea-level temperature 288.15 K, lapse 0.0065 K/m, and the
 # density exponent g / (R L) - 1 = 4.2559 (R = 287.053 J/(kg K)).

@@ -171,3 +171,37 @@ def test_px4_vehicle_gives_its_mission_rates(line_csv, monkeypatch, capsys):
     env = got["vehicle"]["envelope"]
     assert env["sink_rate"] == pytest.approx(sink)
     assert env["sources"]["max_sink_rate"] == "the px4 vehicle"
+
+
+def test_the_scenario_toml_states_the_autopilot_terms_and_environment(line_csv, capsys):
+    toml = line_csv.parent / "s.toml"
+    toml.write_text(
+        'points = "line.csv"\n[parameters]\nalpha1 = 25\nalpha2 = 15\nbeta1 = 20\nbeta2 = 25\n'
+        'theta = 30\ndelta = 0.001\n[vehicle]\nfirmware = "px4"\nmax_climb_rate = 4\n'
+        '[environment]\nwind = "5@180"\ncapture_radius = 2\nerror_unit = 0.05\n'
+    )
+    got = plan_json([str(toml)], capsys)
+    env = got["vehicle"]["envelope"]
+    assert env["climb_rate"] == 4.0 and env["sources"]["max_climb_rate"] == str(toml)
+    assert env["sink_rate"] == 2.0  # PX4's FW_T_SINK_R_SP default fills what the file leaves
+    assert env["design_wind"] == 5.0 and env["design_wind_from_deg"] == 180.0
+    assert got["capture"]["capture_radius_m"] == 2.0 and got["capture"]["error_unit_m"] == 0.05
+    # a flag wins over the file
+    got = plan_json([str(toml), "--max-climb-rate", "3", "--wind", "0"], capsys)
+    assert got["vehicle"]["envelope"]["climb_rate"] == 3.0
+    assert got["vehicle"]["envelope"]["design_wind"] == 0.0
+
+
+@pytest.mark.parametrize(
+    "line, field",
+    [("[vehicle]\nmax_sink_rate = -1\n", "vehicle.max_sink_rate"),
+     ('[vehicle]\nfirmware = "inav"\n', "vehicle.firmware"),
+     ('[environment]\nwind = "fast"\n', "environment.wind"),
+     ("[environment]\ncapture_radius = 0\n", "environment.capture_radius")],
+)  # fmt: skip
+def test_bad_toml_terms_name_file_line_and_field(line_csv, capsys, line, field):
+    toml = line_csv.parent / "s.toml"
+    toml.write_text('points = "line.csv"\n' + line)
+    assert main(["plan", str(toml)]) == 2
+    err = capsys.readouterr().err
+    assert field in err and str(toml) in err and "row 3" in err and "Traceback" not in err

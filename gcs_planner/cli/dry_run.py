@@ -164,7 +164,11 @@ def run(args: argparse.Namespace) -> int:
     if track_out is not None and not track_out.lower().endswith((".geojson", ".json", ".kml")):
         raise InputError("must end in .geojson, .json or .kml", field="--track-out")
     scenario = load_scenario_from_args(args)
+    # The wind flown, unless --design-wind; a still flight (the default "0") leaves the
+    # scenario file's [environment] wind, if any, as the design wind.
     design = args.design_wind if args.design_wind is not None else args.wind
+    if args.design_wind is None and parse_wind(args.wind, "0").still:
+        design = None
     scenario = derive_envelope(
         args,
         scenario,

@@ -142,6 +142,17 @@ def derive_envelope(
     ``firmware_defaults`` False: no autopilot's shipped defaults fill what flags leave open (the
     dry run, whose --firmware names the flown autopilot and must not change its plan).
     Bad values are InputError naming the flag."""
+    terms, environment, toml = _toml_terms(scenario)
+    if "error_unit" in environment or "capture_radius" in environment:
+        scenario = scenario.with_vehicle(
+            error_unit=float(environment.get("error_unit", scenario.error_unit)),  # type: ignore[arg-type]
+            capture_radius=float(
+                environment.get("capture_radius", scenario.capture_radius)  # type: ignore[arg-type]
+            ),
+        )
+    if wind_text is None:
+        if "wind" in environment:
+            wind_text, wind_field = str(environment["wind"]), f"{toml}: environment.wind"
     wind, wind_from = 0.0, None
     if wind_text is not None:
         try:
@@ -152,8 +163,17 @@ def derive_envelope(
         firmware = firmware if firmware is not None else getattr(args, "firmware", None)
     else:
         firmware = None
+    if firmware is None and firmware_defaults and "firmware" in terms:
+        firmware = str(terms["firmware"])
     climb = getattr(args, "max_climb_rate", None)
     sink = getattr(args, "max_sink_rate", None)
+    file_terms = []
+    if climb is None and "max_climb_rate" in terms:
+        climb = float(terms["max_climb_rate"])  # type: ignore[arg-type]
+        file_terms.append("max_climb_rate")
+    if sink is None and "max_sink_rate" in terms:
+        sink = float(terms["max_sink_rate"])  # type: ignore[arg-type]
+        file_terms.append("max_sink_rate")
     flag_bank = getattr(args, "max_bank_angle", None)
     file_bank = (
         bank_angle_for(scenario.cruise_airspeed, scenario.params.turn_radius)
@@ -168,7 +188,7 @@ def derive_envelope(
 
     def pick(name: str, given: float | None, default: float | None) -> float | None:
         if given is not None:
-            sources.append((name, origin))
+            sources.append((name, toml if name in file_terms else origin))
             return float(given)
         if default is not None:
             sources.append((name, f"{firmware}'s shipped default"))
@@ -241,3 +261,18 @@ def derive_envelope(
         envelope=env,
         radius_source="derived" if "turn_radius" in changes else out.radius_source,
     )
+
+
+def _toml_terms(scenario: Scenario) -> tuple[dict[str, object], dict[str, object], str]:
+    """A scenario TOML's [vehicle] autopilot terms and [environment] values (empty for other
+    files), and the file's name; flags given on the command line win over them."""
+    if not scenario.source.lower().endswith(".toml"):
+        return {}, {}, ""
+    from pathlib import Path
+
+    from gcs_planner.scenario.toml_reader import read_scenario_toml
+
+    spec = read_scenario_toml(Path(scenario.source))
+    terms = {k: v for k, (v, _) in spec.autopilot_terms.items()}
+    environment = {k: v for k, (v, _) in spec.environment.items()}
+    return terms, environment, scenario.source

@@ -23,7 +23,21 @@ else:  # pragma: no cover - exercised only on Python 3.10
     import tomli as tomllib
 
 PARAMETER_KEYS = tuple(f.name for f in fields(Parameters))
-TOP_KEYS = ("name", "points", "heading_at_a", "parameters", "origin", "vehicle")
+TOP_KEYS = (
+    "name",
+    "points",
+    "heading_at_a",
+    "parameters",
+    "origin",
+    "vehicle",
+    "environment",
+)
+# [vehicle] in the autopilot's terms: the envelope is derived from these (cli/vehicle_from.py,
+# issue 32), so they are kept apart from the keys the scenario reader turns into parameters.
+AUTOPILOT_KEYS = ("max_climb_rate", "max_sink_rate", "firmware")
+# [environment]: the design wind ("SPEED[@FROM_DEG]" or a number of m/s), metres of position
+# error per error unit, and the landmarks' capture radius (metres, 3D).
+ENVIRONMENT_KEYS = ("wind", "error_unit", "capture_radius")
 # [vehicle]: the aircraft. The turning radius and the climb limits may stand here or under
 # [parameters]; cruise_airspeed with max_bank_angle gives the radius when it is not given.
 VEHICLE_KEYS = (
@@ -53,6 +67,9 @@ class ScenarioSpec:
     # [vehicle] values (numbers, and leg_model as a string) and their lines
     vehicle: dict[str, object] = field(default_factory=dict)
     vehicle_lines: dict[str, int | None] = field(default_factory=dict)
+    # [vehicle] rates and firmware, [environment] values: (value, line) each
+    autopilot_terms: dict[str, tuple[object, int | None]] = field(default_factory=dict)
+    environment: dict[str, tuple[object, int | None]] = field(default_factory=dict)
 
 
 def key_line(text: str, table: str, key: str) -> int | None:
@@ -215,9 +232,19 @@ def read_scenario_toml(path: Path) -> ScenarioSpec:
 
     vehicle: dict[str, object] = {}
     vehicle_lines: dict[str, int | None] = {}
+    terms: dict[str, tuple[object, int | None]] = {}
+    environment: dict[str, tuple[object, int | None]] = {}
+    if "environment" in doc:
+        raw_env = _table(doc, "environment", file, text)
+        _unknown(raw_env, ENVIRONMENT_KEYS, "environment", file, text)
+        for key, value in raw_env.items():
+            environment[key] = _term(value, key, "environment", file, text)
     if "vehicle" in doc:
-        raw = _table(doc, "vehicle", file, text)
-        _unknown(raw, VEHICLE_KEYS, "vehicle", file, text)
+        raw = dict(_table(doc, "vehicle", file, text))
+        _unknown(raw, VEHICLE_KEYS + AUTOPILOT_KEYS, "vehicle", file, text)
+        for key in AUTOPILOT_KEYS:
+            if key in raw:
+                terms[key] = _term(raw.pop(key), key, "vehicle", file, text)
         for key, value in raw.items():
             vehicle_lines[key] = key_line(text, "vehicle", key)
             if key == "leg_model":
@@ -277,4 +304,36 @@ def read_scenario_toml(path: Path) -> ScenarioSpec:
         heading_at_a=heading,
         vehicle=vehicle,
         vehicle_lines=vehicle_lines,
+        autopilot_terms=terms,
+        environment=environment,
     )
+
+
+def _term(value: object, key: str, table: str, file: str, text: str) -> tuple[object, int | None]:
+    """A [vehicle] autopilot term or an [environment] value, checked for its type and range:
+    (value, line). Rates, the error unit and the capture radius are numbers > 0; the wind a
+    number >= 0 or "SPEED[@FROM_DEG]"; the firmware "ardupilot" or "px4"."""
+    line = key_line(text, table, key)
+
+    def fail(why: str) -> InputError:
+        return InputError(why, file=file, row=line, field=f"{table}.{key}")
+
+    if key == "firmware":
+        if value not in ("ardupilot", "px4"):
+            raise fail(f'must be "ardupilot" or "px4" (got {value!r})')
+        return value, line
+    if key == "wind":
+        text_value = str(value) if _is_number(value) or isinstance(value, str) else None
+        if text_value is None:
+            raise fail(f'must be SPEED or "SPEED@FROM_DEG" (got {value!r})')
+        speed, _, direction = text_value.partition("@")
+        try:
+            ok = float(speed) >= 0 and (not direction or math.isfinite(float(direction)))
+        except ValueError:
+            ok = False
+        if not ok or not math.isfinite(float(speed)):
+            raise fail(f'must be SPEED >= 0 m/s or "SPEED@FROM_DEG" (got {value!r})')
+        return text_value, line
+    if not _is_number(value) or not (math.isfinite(float(value)) and float(value) > 0):  # type: ignore[arg-type]
+        raise fail(f"must be a number > 0 (got {value!r})")
+    return float(value), line  # type: ignore[arg-type]
