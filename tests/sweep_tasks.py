@@ -40,3 +40,11 @@ def with_dask_settings(cell: Cell, *, log: str) -> list[dict]:
     with open(log, "a", encoding="utf-8") as f:
         f.write(" ".join(str(dask.config.get(k)) for k in keys) + f" trim={trim}\n")
     return rows
+
+
+def failing_once(cell: Cell, *, victim: int, marker: str) -> list[dict]:
+    """Cell ``victim`` raises the first time it runs (the marker file says it has)."""
+    if cell.index == victim and not Path(marker).exists():
+        Path(marker).write_text("failed", encoding="utf-8")
+        raise RuntimeError("a transient failure")
+    return run_cell(cell)

@@ -186,17 +186,24 @@ def test_resume_runs_no_finished_cell_twice(tmp_path: Path, cluster) -> None:
     # ... without --resume a second sweep into the same folder is refused ...
     with pytest.raises(InputError, match="pass --resume"):
         run_sweep(small_spec(tmp_path), out, scheduler=cluster.scheduler_address, task=task)
-    # ... and with it only the other half runs.
+    # ... and with it (and --prune: the spec grew) only the other half runs.
     second = run_sweep(
-        small_spec(tmp_path), out, scheduler=cluster.scheduler_address, task=task, resume=True
+        small_spec(tmp_path),
+        out,
+        scheduler=cluster.scheduler_address,
+        task=task,
+        resume=True,
+        prune=True,
     )
     assert (second.cells, second.skipped, second.ran) == (8, 4, 4)
     ran = logged_keys(log)
     assert len(ran) == 8 and set(ran.values()) == {1}
     after = {(r["cell_key"], r["route"]): r for r in read_results(out)}
     assert {k[0] for k in after} == set(ran)
+    index = {c.key: c.index for c in expand(read_spec(small_spec(tmp_path)))}
     for key, row in before.items():
-        assert after[key] == row  # the earlier rows are kept as they were, not re-planned
+        # the earlier rows are kept as they were, not re-planned; numbered as the spec now
+        assert after[key] == {**row, "cell": index[key[0]]}
     # A third resume has nothing left to do and submits nothing.
     third = run_sweep(small_spec(tmp_path), out, task=task, resume=True)
     assert (third.skipped, third.ran) == (8, 0)
@@ -451,3 +458,84 @@ def test_cli_bad_scheduler_address_is_one_line(tmp_path: Path) -> None:
     )
     assert done.returncode == 2
     assert done.stderr.count("\n") == 1 and "field '--scheduler'" in done.stderr
+
+
+def test_resume_refuses_a_changed_spec_unless_pruned_and_renumbers(tmp_path: Path, cluster) -> None:
+    out = tmp_path / "out"
+    address = cluster.scheduler_address
+    spec_path = small_spec(tmp_path, seeds=1, deltas="[0.001, 0.0011]")  # 2 scenarios x 2
+    run_sweep(spec_path, out, scheduler=address)
+    assert (out / "spec.toml").read_text() == spec_path.read_text()
+    import json
+
+    from gcs_planner import __version__
+
+    record = json.loads((out / "sweep.json").read_text())
+    assert record["planner_version"] == __version__ and len(record["cells"]) == 4
+    before = by_cell(read_results(out))
+
+    # 0.0011 replaced by 0.0012: 2 cells gone, 2 new
+    small_spec(tmp_path, seeds=1, deltas="[0.001, 0.0012]")
+    with pytest.raises(InputError) as refused:
+        run_sweep(spec_path, out, scheduler=address, resume=True)
+    message = str(refused.value)
+    assert "spec changed" in message and "2 cells no longer in it, 2 new" in message
+    assert "delta = [0.001, 0.0012]" in message and "--prune" in message
+    assert by_cell(read_results(out)).keys() == before.keys()  # nothing touched
+
+    done = run_sweep(spec_path, out, scheduler=address, resume=True, prune=True)
+    assert (done.skipped, done.ran) == (2, 2)
+    rows = read_results(out)
+    cells = expand(read_spec(spec_path))
+    assert by_cell(rows).keys() == {c.key for c in cells}
+    # one number, one cell: the numbers are those of the spec given now
+    index = {c.key: c.index for c in cells}
+    assert all(r["cell"] == index[r["cell_key"]] for r in rows)
+    assert len({(r["cell"], r["cell_key"]) for r in rows}) == len({r["cell"] for r in rows}) == 4
+    # the same spec again, a comment added: not a change
+    spec_path.write_text("# a comment\n" + spec_path.read_text())
+    again = run_sweep(spec_path, out, scheduler=address, resume=True)
+    assert (again.skipped, again.ran) == (4, 0)
+
+
+def test_cli_changed_spec_on_resume_is_one_line(tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    spec_path = small_spec(tmp_path, seeds=1)
+    cells = expand(read_spec(spec_path))
+    table = ResultTable(out)
+    out.mkdir()
+    from gcs_planner.sweep.manifest import write_manifest
+
+    write_manifest(out, read_spec(spec_path), cells)
+    table.add(sweep_tasks.run_cell(cells[0]))
+    table.save()
+    small_spec(tmp_path, seeds=2)
+    done = subprocess.run(
+        cli(str(spec_path), "--out", str(out), "--resume"),
+        capture_output=True,
+        text=True,
+        timeout=DEADLINE_S,
+    )
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.count("\n") == 1 and str(spec_path) in done.stderr
+    assert "0 cells no longer in it, 2 new" in done.stderr and "seeds" in done.stderr
+
+
+def test_retry_failed_runs_the_failed_cells_again(tmp_path: Path, cluster) -> None:
+    out = tmp_path / "out"
+    spec_path = small_spec(tmp_path, seeds=1)
+    task = functools.partial(
+        sweep_tasks.failing_once, victim=2, marker=str(tmp_path / "failed-once")
+    )
+    first = run_sweep(spec_path, out, scheduler=cluster.scheduler_address, task=task)
+    assert first.failed == 1
+    (failed,) = [r for r in read_results(out) if r["status"] == "error"]
+    assert failed["cell"] == 2 and "a transient failure" in failed["error"]
+    plain = run_sweep(spec_path, out, scheduler=cluster.scheduler_address, resume=True)
+    assert plain.ran == 0  # a resume alone keeps the failure
+    retried = run_sweep(
+        spec_path, out, scheduler=cluster.scheduler_address, resume=True, retry_failed=True
+    )
+    assert (retried.skipped, retried.ran, retried.failed) == (3, 1, 0)
+    rows = read_results(out)
+    assert all(r["status"] == "ok" for r in rows) and len(by_cell(rows)) == 4

@@ -36,6 +36,16 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "--resume", action="store_true", help="keep the finished cells in DIR, run the others"
     )
     p.add_argument(
+        "--prune",
+        action="store_true",
+        help="with --resume: accept a changed spec, dropping the rows of cells no longer in it",
+    )
+    p.add_argument(
+        "--retry-failed",
+        action="store_true",
+        help="with --resume: run the cells whose task failed (status error) again",
+    )
+    p.add_argument(
         "--no-workers-timeout",
         type=float,
         default=60.0,
@@ -63,6 +73,9 @@ def run(args: argparse.Namespace) -> int:
     if args.scheduler is not None and not args.scheduler.strip():
         raise InputError("is empty: give the scheduler's address", field="--scheduler")
 
+    for flag in ("prune", "retry_failed"):
+        if getattr(args, flag) and not args.resume:
+            raise InputError("needs --resume", field="--" + flag.replace("_", "-"))
     if not args.no_workers_timeout > 0:
         raise InputError(
             f"must be > 0 (got {args.no_workers_timeout:g})", field="--no-workers-timeout"
@@ -84,6 +97,8 @@ def run(args: argparse.Namespace) -> int:
             stream=sys.stdout,
             quiet=args.quiet,
             no_workers_timeout=args.no_workers_timeout,
+            prune=args.prune,
+            retry_failed=args.retry_failed,
         )
     except SweepInterrupted as exc:
         # the table is saved: say how much, and how to go on

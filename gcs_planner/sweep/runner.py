@@ -121,15 +121,19 @@ def run_sweep(
     quiet: bool = False,
     progress_stream: TextIO | None = None,
     no_workers_timeout: float = NO_WORKERS_TIMEOUT_S,
+    prune: bool = False,
+    retry_failed: bool = False,
 ) -> SweepResult:
     """Run the sweep ``spec`` (a SweepSpec or the path of its TOML) into the folder ``out``.
 
     ``scheduler``: the address of an existing Dask scheduler (``tcp://host:8786``); without it a
     LocalCluster of ``workers`` processes is started and closed. ``resume``: keep the finished
-    cells of an earlier run in ``out`` and run only the others. ``stream``: where its messages
-    go (None: nowhere). ``task`` runs one cell on a worker; it must be importable there. The
-    cells done, failed and the time left are one line on ``progress_stream`` (default stderr)
-    when it is a terminal and ``quiet`` is False.
+    cells of an earlier run in ``out`` and run only the others; it refuses a spec whose cells
+    changed since (:mod:`.manifest`) unless ``prune``, which drops the rows of the cells no
+    longer in it. ``retry_failed``: run the cells whose task failed again. ``stream``: where
+    its messages go (None: nowhere). ``task`` runs one cell on a worker; it must be importable
+    there. The cells done, failed and the time left are one line on ``progress_stream``
+    (default stderr) when it is a terminal and ``quiet`` is False.
 
     Ctrl-C (SIGINT) saves the table and raises :class:`SweepInterrupted`; a scheduler without
     any worker for ``no_workers_timeout`` seconds saves it and raises :class:`NoWorkersError`.
@@ -142,11 +146,21 @@ def run_sweep(
     if workers < 1 or threads_per_worker < 1:
         raise InputError("workers and threads per worker must be >= 1", field="--workers")
     out = Path(out)
+    from gcs_planner.sweep.manifest import check_resume, write_manifest
+
+    say = (lambda text: print(text, file=stream, flush=True)) if stream else (lambda text: None)
     table = ResultTable.open(out, resume)
     cells = expand(spec)
+    if resume:
+        for note in check_resume(out, spec, cells, table, prune):
+            say(note)
+    if retry_failed:
+        retried = table.drop(table.failed())
+        if retried:
+            say(f"running the {retried} failed cells again")
+    write_manifest(out, spec, cells)
     todo = [c for c in cells if c.key not in table.done]
     skipped = len(cells) - len(todo)
-    say = (lambda text: print(text, file=stream, flush=True)) if stream else (lambda text: None)
     say(f"sweep {spec.name}: {len(cells)} cells" + (f", {skipped} already done" if skipped else ""))
 
     started = time.perf_counter()

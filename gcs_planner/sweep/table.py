@@ -150,6 +150,18 @@ class ResultTable:
         self.done |= keys
         return True
 
+    def drop(self, keys: set[str]) -> int:
+        """Remove the rows of the cells ``keys``; returns how many of those cells were in."""
+        gone = keys & self.done
+        if gone:
+            self.rows = [r for r in self.rows if r["cell_key"] not in gone]
+            self.done -= gone
+        return len(gone)
+
+    def failed(self) -> set[str]:
+        """The keys of the cells whose task failed (status "error")."""
+        return {r["cell_key"] for r in self.rows if r.get("status") == "error"}
+
     def to_arrow(self) -> pa.Table:
         rows = sorted(self.rows, key=lambda r: (r.get("cell", 0), r.get("route") or 0))
         return pa.Table.from_pylist([{c: r.get(c) for c in COLUMNS} for r in rows], schema=SCHEMA)
