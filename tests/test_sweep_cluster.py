@@ -394,7 +394,7 @@ def test_a_scheduler_without_workers_stops_the_sweep_with_a_message(tmp_path: Pa
     finally:
         scheduler.terminate()
         scheduler.wait(timeout=60)
-    assert done.returncode == 5, done.stderr
+    assert done.returncode == 4, done.stderr
     assert done.stderr.count("\n") == 1, done.stderr
     assert "no Dask worker for 3 s" in done.stderr
     assert "0 cells saved" in done.stderr and "--resume" in done.stderr

@@ -88,9 +88,10 @@ class SweepInterrupted(KeyboardInterrupt):
 
 
 class NoWorkersError(GcsPlannerError):
-    """The scheduler had no worker for too long; the table is saved."""
+    """The scheduler had no worker for too long; the table is saved. Exit 4, as a link that
+    failed (5 is a dry run lost by its replay)."""
 
-    exit_code = 5
+    exit_code = 4
 
 
 @dataclass(frozen=True)
