@@ -37,6 +37,7 @@ import numpy as np
 from gcs_planner.core.budget import DEFAULT_MAX_LABELS, Budget
 from gcs_planner.core.cost_to_go import cost_to_go
 from gcs_planner.core.failure_bounds import FailureBounds, failure_bounds
+from gcs_planner.core.kernel_records import NO_PAIRS, Legs, Seeds
 from gcs_planner.core.pair_bounds import PairBounds, pair_bounds
 from gcs_planner.core.prefilter import FanBound, covered_fan
 from gcs_planner.core.probability import propagate, success_probability
@@ -1083,36 +1084,36 @@ def _compiled_search(
     for b, point in enumerate(sorted(critical)):
         bits[point] = b
     pairs = ctx.pair_floor
-    i0, f0 = np.empty(0, np.int64), np.empty(0)
     heading_a = scenario.heading_at_a
     airplane = isinstance(model, AirplaneLegs)
-    seed_ptr = np.cumsum([0, *(len(f.points) for f in inc.found)]).astype(np.int64)
+    legs = Legs(
+        legs_mode,
+        np.ascontiguousarray(scenario.xyz, float),
+        float(model.radius) if airplane or isinstance(model, CS3DLegs) else 0.0,
+        slope_tan(model.max_climb_angle) if airplane else math.inf,
+        slope_tan(model.max_descent_angle) if airplane else math.inf,
+        heading_a is not None,
+        np.zeros(3) if heading_a is None else np.asarray(heading_a, float),
+    )
+    seeded = Seeds(
+        np.array([f.length for f in inc.found], float),
+        np.array([f.corrections for f in inc.found], np.int64),
+        np.array([f.probability for f in inc.found], float),
+        np.cumsum([0, *(len(f.points) for f in inc.found)]).astype(np.int64),
+        np.array([p for f in inc.found for p in f.points], np.int64),
+    )
     limit = -1 if budget.max_labels is None else max(0, budget.max_labels - budget.spent)
     sk._BUDGETS.append(budget)
     try:
         out = sk.search(
-            graph.indptr.astype(np.int64), graph.target, graph.length, graph.lim_v,
-            graph.lim_h, int(graph.start), int(graph.end), float(graph.to_end[graph.start]),
-            np.asarray(scenario.kind, np.int64), np.asarray(ctx.unreliable, bool),
-            float(ctx.params.p_success), float(ctx.params.residual_m), int(ctx.kmax), bits,
-            ctx.G.indptr.astype(np.int64), ctx.G.e_max, ctx.G.table, legs_mode,
-            i0 if pairs is None else pairs.node_of_arc.astype(np.int64),
-            i0 if pairs is None else pairs.pair_ptr.astype(np.int64),
-            f0 if pairs is None else pairs.pair_length,
-            i0 if pairs is None else pairs.G.indptr.astype(np.int64),
-            f0 if pairs is None else pairs.G.e_max,
-            np.empty((0, 1)) if pairs is None else pairs.G.table,
-            np.ascontiguousarray(scenario.xyz, float),
-            float(model.radius) if airplane or isinstance(model, CS3DLegs) else 0.0,
-            slope_tan(model.max_climb_angle) if airplane else math.inf,
-            slope_tan(model.max_descent_angle) if airplane else math.inf,
-            heading_a is not None,
-            np.zeros(3) if heading_a is None else np.asarray(heading_a, float),
-            np.array([f.length for f in inc.found], float),
-            np.array([f.corrections for f in inc.found], np.int64),
-            np.array([f.probability for f in inc.found], float),
-            seed_ptr,
-            np.array([p for f in inc.found for p in f.points], np.int64),
+            graph.record(
+                scenario, ctx.unreliable, ctx.params.p_success, ctx.params.residual_m, ctx.kmax,
+                bits,
+            ),
+            ctx.G.record(),
+            NO_PAIRS if pairs is None else pairs.record(),
+            legs,
+            seeded,
             limit,
         )  # fmt: skip
     finally:

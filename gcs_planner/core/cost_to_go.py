@@ -33,6 +33,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from gcs_planner.core.kernel_records import ToGo
 from gcs_planner.core.reach import ReachGraph, use_compiled
 from gcs_planner.core.search import _summarise, not_dominated, staircase
 from gcs_planner.scenario.model import Kind, Scenario
@@ -59,6 +60,10 @@ class CostToGo:
     _keys: dict[int, tuple[int, list[float]]] = field(
         default_factory=dict, init=False, repr=False, compare=False
     )
+
+    def record(self) -> ToGo:
+        """The table as the compiled kernels take it."""
+        return ToGo(self.indptr.astype(np.int64), self.e_max, self.table)
 
     @property
     def layers(self) -> int:

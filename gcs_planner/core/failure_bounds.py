@@ -37,6 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from gcs_planner.core.cost_to_go import CostToGo, cost_to_go
+from gcs_planner.core.kernel_records import Failures
 from gcs_planner.core.reach import ReachGraph
 from gcs_planner.scenario.model import Kind, Scenario
 
@@ -57,6 +58,17 @@ class FailureBounds:
     failures: int  # copies 0 .. failures
     q_fail: float  # 1 - p
     is_v: np.ndarray  # per node: its point is a V point
+
+    def record(self) -> Failures:
+        """The bounds as the compiled probes take them."""
+        return Failures(
+            True,
+            self.G.record(),
+            int(self.n),
+            int(self.failures),
+            float(self.q_fail),
+            np.asarray(self.is_v, bool),
+        )
 
     def _node(self, j: int, q: int) -> int:
         return q * self.n + j

@@ -32,6 +32,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from gcs_planner.core.cost_to_go import CostToGo, cost_to_go
+from gcs_planner.core.kernel_records import Pairs
 from gcs_planner.core.reach import ReachGraph
 from gcs_planner.geometry.airplane import STEEP_SLACK_M, needed_horizontal
 from gcs_planner.geometry.legs import AirplaneLegs, LegModel
@@ -56,6 +57,16 @@ class PairBounds:
     graph: ReachGraph  # the pair graph itself, and the point of each of its nodes
     point: np.ndarray
     _margins: dict[tuple[int, int], float] = field(default_factory=dict, repr=False, compare=False)
+
+    def record(self) -> Pairs:
+        """The relaxation as the compiled kernels take it."""
+        return Pairs(
+            True,
+            self.node_of_arc.astype(np.int64),
+            self.pair_ptr.astype(np.int64),
+            self.pair_length,
+            self.G.record(),
+        )
 
     def legs(self, arc: int) -> np.ndarray:
         """lb(i, j, t) for every arc j -> t of the reach graph, in its order, after ``arc`` =

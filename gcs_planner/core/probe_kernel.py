@@ -28,6 +28,19 @@ import numpy as np
 from numba import njit, types
 from numba.typed import Dict
 
+from gcs_planner.core.kernel_records import (
+    NO_FAILURES,
+    NO_PAIRS,
+    Failures,
+    Graph,
+    Incumbents,
+    Nogoods,
+    Pairs,
+    Partial,
+    ToGo,
+    empty_nogoods,
+)
+
 PROB_EPS = 1e-12  # as proof.PROB_EPS (asserted equal in the tests)
 MASS_SLACK = 1e-13  # as failure_bounds._MASS_SLACK
 MAX_UNIONS = 256  # as bnb.MAX_UNIONS
@@ -660,79 +673,40 @@ def _keep(
 
 @njit(cache=True)
 def probe(
-    # the reach graph and the model
-    indptr: np.ndarray,
-    target: np.ndarray,
-    glen: np.ndarray,
-    lim_v: np.ndarray,
-    lim_h: np.ndarray,
-    end: int,
-    kind: np.ndarray,
-    unreliable: np.ndarray,
-    p_success: float,
-    residual_m: float,
-    kmax: int,
-    crit_bit: np.ndarray,
-    # the heading-free cost-to-go
-    g_ptr: np.ndarray,
-    g_emax: np.ndarray,
-    g_table: np.ndarray,
-    # the pair relaxation (has_pairs False: heading-free legs)
-    has_pairs: bool,
-    node_of_arc: np.ndarray,
-    pair_ptr: np.ndarray,
-    pair_length: np.ndarray,
-    p_ptr: np.ndarray,
-    p_emax: np.ndarray,
-    p_table: np.ndarray,
-    # the bounds per probability level and the ceiling
-    has_fail: bool,
-    f_ptr: np.ndarray,
-    f_emax: np.ndarray,
-    f_table: np.ndarray,
-    f_n: int,
-    f_failures: int,
-    f_qfail: float,
-    f_isv: np.ndarray,
-    has_ceil: bool,
-    ceil_rows: np.ndarray,
-    # the routes found
-    inc_len: np.ndarray,
-    inc_k: np.ndarray,
-    inc_p: np.ndarray,
-    probs_sorted: np.ndarray,
-    order: np.ndarray,
-    levels: np.ndarray,
-    # the partial route probed
-    o_L: float,
-    o_node: int,
-    o_k: int,
-    o_sv: np.ndarray,
-    o_sh: np.ndarray,
-    o_sm: np.ndarray,
-    o_arc: int,
-    o_mask_before: int,
-    o_mask: int,
-    o_to_go: np.ndarray,
-    # the nogoods so far
-    ng_head: Dict,
-    ng_next: np.ndarray,
-    ng_L: np.ndarray,
-    ng_k: np.ndarray,
-    ng_mass: np.ndarray,
-    ng_arc: np.ndarray,
-    ng_vmin: np.ndarray,
-    ng_hmin: np.ndarray,
-    ng_ss: np.ndarray,
-    ng_sn: np.ndarray,
-    ng_sv: np.ndarray,
-    ng_sh: np.ndarray,
-    ng_sm: np.ndarray,
+    graph: Graph,
+    to_go_table: ToGo,
+    pairs: Pairs,
+    failures: Failures,
+    found: Incumbents,
+    route: Partial,
+    nogood_head: Dict,
+    nogoods: Nogoods,
     max_labels: int,
 ):  # noqa: ANN201  (a tuple of many arrays; see the Python side, ``CompiledProbes``)
-    """One probe: (covered, labels, the escaping completion's points after the partial route,
-    and, when covered, the partial routes it expanded: their keys, scalars and states, to
-    join the nogoods)."""
+    """One probe of ``route`` in the relaxation (``graph``'s legs, or ``pairs``' when present,
+    bounded by ``to_go_table``, ``failures`` and the ceiling of ``found``): (covered, labels,
+    the escaping completion's points after the partial route, and, when covered, the partial
+    routes it expanded: their keys, scalars and states, to join the ``nogoods``)."""
+    indptr, target, glen, lim_v, lim_h = (
+        graph.indptr, graph.target, graph.length, graph.lim_v, graph.lim_h
+    )  # fmt: skip
+    end, kind, unreliable, crit_bit = graph.end, graph.kind, graph.unreliable, graph.crit_bit
+    p_success, residual_m, kmax = graph.p_success, graph.residual_m, graph.kmax
+    g_ptr, g_emax, g_table = to_go_table
+    has_pairs, node_of_arc, pair_ptr, pair_length = (
+        pairs.present, pairs.node_of_arc, pairs.pair_ptr, pairs.length
+    )  # fmt: skip
+    p_ptr, p_emax, p_table = pairs.to_go
+    has_fail, f_n, f_failures, f_qfail, f_isv = (
+        failures.present, failures.n, failures.failures, failures.q_fail, failures.is_v
+    )  # fmt: skip
+    f_ptr, f_emax, f_table = failures.to_go
+    has_ceil, ceil_rows, inc_len, inc_k, inc_p = (
+        found.has_ceiling, found.ceiling_rows, found.length, found.k, found.p
+    )  # fmt: skip
+    probs_sorted, order, levels = found.probs_sorted, found.order, found.levels
+    o_L, o_node, o_k, o_sv, o_sh, o_sm = route.L, route.node, route.k, route.sv, route.sh, route.sm
+    o_arc, o_mask_before, o_mask, o_to_go = route.arc, route.mask_before, route.mask, route.to_go
     best_rows = _best_rows(inc_len, inc_k, order, kmax)
     level_best, next_bad = _level_tables(levels, probs_sorted, best_rows, has_ceil, ceil_rows, kmax)
     # Labels: the partial route probed is label 0.
@@ -777,10 +751,10 @@ def probe(
     # The partial route itself may be covered by a nogood already. (Each call is asked only
     # where something is kept: a call with arrays costs an atomic reference count per array,
     # which numba does not prune from a function with loops and early returns.)
-    first_ng = _first(ng_head, (o_node, o_mask_before))
+    first_ng = _first(nogood_head, (o_node, o_mask_before))
     if first_ng >= 0 and _kept_dominates(
-        first_ng, ng_next, ng_L, ng_k, ng_mass, ng_arc,
-        ng_vmin, ng_hmin, ng_ss, ng_sn, ng_sv, ng_sh, ng_sm,
+        first_ng, nogoods.next, nogoods.L, nogoods.k, nogoods.mass, nogoods.arc,
+        nogoods.vmin, nogoods.hmin, nogoods.ss, nogoods.sn, nogoods.sv, nogoods.sh, nogoods.sm,
         o_L, o_k, mass0, o_arc, v0, h0, sv, sh, sm, 0, n0,
         has_pairs, node_of_arc, pair_ptr, pair_length,
     ):  # fmt: skip
@@ -876,16 +850,16 @@ def probe(
                 nh = min(nh, new_h[c])
             key = (j, mask)
             head = _first(archive, key)
-            first_ng = _first(ng_head, key)
+            first_ng = _first(nogood_head, key)
             if (head >= 0 and _kept_dominates(
                 head, archive_next, lab_L, lab_k, lab_mass, lab_arc, lab_vmin, lab_hmin,
                 lab_ss, lab_sn, sv, sh, sm,
                 nL, k + 1, new_mass, arc_in, nv, nh, new_v, new_h, new_m, 0, count,
                 has_pairs, node_of_arc, pair_ptr, pair_length,
             )) or (first_ng >= 0 and _kept_dominates(
-                first_ng, ng_next, ng_L, ng_k, ng_mass, ng_arc, ng_vmin, ng_hmin,
-                ng_ss, ng_sn, ng_sv, ng_sh, ng_sm,
-                nL, k + 1, new_mass, arc_in, nv, nh, new_v, new_h, new_m, 0, count,
+                first_ng, nogoods.next, nogoods.L, nogoods.k, nogoods.mass, nogoods.arc,
+                nogoods.vmin, nogoods.hmin, nogoods.ss, nogoods.sn, nogoods.sv, nogoods.sh,
+                nogoods.sm, nL, k + 1, new_mass, arc_in, nv, nh, new_v, new_h, new_m, 0, count,
                 has_pairs, node_of_arc, pair_ptr, pair_length,
             )):  # fmt: skip
                 continue
@@ -978,62 +952,32 @@ class CompiledProbes:
         for b, point in enumerate(sorted(critical)):
             self.crit_bit[point] = b
         pairs = ctx.pair_floor
-        f0 = np.empty(0)
-        i0 = np.empty(0, np.int64)
-        t0 = np.empty((0, 1))
-        self.static = (
-            graph.indptr.astype(np.int64),
-            graph.target,
-            graph.length,
-            graph.lim_v,
-            graph.lim_h,
-            int(graph.end),
-            np.asarray(scenario.kind, np.int64),
-            np.asarray(ctx.unreliable, bool),
-            float(ctx.params.p_success),
-            float(ctx.params.residual_m),
-            int(ctx.kmax),
+        self.graph = graph.record(
+            scenario, ctx.unreliable, ctx.params.p_success, ctx.params.residual_m, ctx.kmax,
             self.crit_bit,
-            ctx.G.indptr.astype(np.int64),
-            ctx.G.e_max,
-            ctx.G.table,
-            pairs is not None,
-            i0 if pairs is None else pairs.node_of_arc.astype(np.int64),
-            i0 if pairs is None else pairs.pair_ptr.astype(np.int64),
-            f0 if pairs is None else pairs.pair_length,
-            i0 if pairs is None else pairs.G.indptr.astype(np.int64),
-            f0 if pairs is None else pairs.G.e_max,
-            t0 if pairs is None else pairs.G.table,
-        )
-        self._failures: tuple | None = None
+        )  # fmt: skip
+        self.to_go = ctx.G.record()
+        self.pairs = NO_PAIRS if pairs is None else pairs.record()
+        self._failures: Failures = NO_FAILURES
         self._bounds: object = None  # the FailureBounds they were made of (None: none yet)
         self._found: object = None
-        self._incumbents: tuple = ()
+        self._incumbents: Incumbents | None = None
         # The nogood store: (point, mask) -> last entry, entries linked back.
         self.head = new_key_dict()
         self.entries = 0
         self.states = 0
-        self.store = _empty_store(256, 1024)
+        self.store = empty_nogoods(256, 1024)
 
-    def _failure_args(self) -> tuple:
-        """The failure bounds' arrays, asked again until the bounds are made (``bnb._Context
+    def _failure_bounds(self) -> Failures:
+        """The failure bounds' record, asked again until the bounds are made (``bnb._Context
         .failures``: once the probes have spent enough labels)."""
         fb = self.ctx.failures(0)  # (the prober's: it counts the probes' labels itself)
-        if self._failures is None or fb is not self._bounds:
+        if fb is not self._bounds:
             self._bounds = fb
-            if fb is None:
-                self._failures = (
-                    False, np.zeros(1, np.int64), np.empty(0), np.empty((0, 1)), 0, 0, 0.0,
-                    np.zeros(1, bool),
-                )  # fmt: skip
-            else:
-                self._failures = (
-                    True, fb.G.indptr.astype(np.int64), fb.G.e_max, fb.G.table, int(fb.n),
-                    int(fb.failures), float(fb.q_fail), np.asarray(fb.is_v, bool),
-                )  # fmt: skip
+            self._failures = NO_FAILURES if fb is None else fb.record()
         return self._failures
 
-    def _incumbent_args(self, inc) -> tuple:  # noqa: ANN001 (bnb._Incumbents)
+    def _incumbent_record(self, inc) -> Incumbents:  # noqa: ANN001 (bnb._Incumbents)
         """The found routes' arrays and the ceiling per level, made again when they change
         (``_Incumbents.add`` makes a new list)."""
         if inc.found is not self._found:
@@ -1050,7 +994,7 @@ class CompiledProbes:
                     [ceiling.least_above(float(lo)) for lo in levels]
                     + [ceiling.least_above(-np.inf)]
                 )
-            self._incumbents = (
+            self._incumbents = Incumbents(
                 ceiling is not None, ceil_rows, length, k, p, np.sort(p),
                 np.argsort(p, kind="stable").astype(np.int64), levels,
             )  # fmt: skip
@@ -1078,14 +1022,13 @@ class CompiledProbes:
         sv = np.array([s[0] for s in states], float)
         sh = np.array([s[1] for s in states], float)
         sm = np.array(list(states.values()), float)
-        out = probe(
-            *self.static,
-            *self._failure_args(),
-            *self._incumbent_args(inc),
+        route = Partial(
             float(L), int(node), int(k), sv, sh, sm, int(arc), before, mask,
             np.asarray(to_go, float),
-            self.head, *self.store,
-            int(max_labels),
+        )  # fmt: skip
+        out = probe(
+            self.graph, self.to_go, self.pairs, self._failure_bounds(),
+            self._incumbent_record(inc), route, self.head, self.store, int(max_labels),
         )  # fmt: skip
         covered, labels, escape = bool(out[0]), int(out[1]), out[2]
         if covered and labels:
@@ -1095,9 +1038,9 @@ class CompiledProbes:
     def _add(self, node, mask, L, k, mass, arc, vmin, hmin, ss, sn, sv, sh, sm) -> None:  # noqa: ANN001
         """Join the expanded partial routes of a covered probe to the nogoods."""
         n, s = len(node), len(sv)
-        cap_e, cap_s = len(self.store[1]), len(self.store[10])
+        cap_e, cap_s = len(self.store.L), len(self.store.sv)
         if self.entries + n > cap_e or self.states + s > cap_s:
-            grown = _empty_store(max(2 * cap_e, self.entries + n), max(2 * cap_s, self.states + s))
+            grown = empty_nogoods(max(2 * cap_e, self.entries + n), max(2 * cap_s, self.states + s))
             for old, new in zip(self.store, grown):
                 new[: len(old)] = old
             self.store = grown
@@ -1109,20 +1052,3 @@ class CompiledProbes:
         link(self.head, nxt, node, mask, e0)
         self.entries, self.states = e1, s1
 
-
-def _empty_store(entries: int, states: int) -> tuple[np.ndarray, ...]:
-    """(next, L, k, mass, arc, vmin, hmin, state start, state count, v, h, mass of states)."""
-    return (
-        np.full(entries, -1, np.int64),
-        np.empty(entries),
-        np.empty(entries, np.int64),
-        np.empty(entries),
-        np.empty(entries, np.int64),
-        np.empty(entries),
-        np.empty(entries),
-        np.empty(entries, np.int64),
-        np.empty(entries, np.int64),
-        np.empty(states),
-        np.empty(states),
-        np.empty(states),
-    )

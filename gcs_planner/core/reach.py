@@ -14,6 +14,7 @@ from functools import cached_property
 import numpy as np
 from scipy.spatial import cKDTree
 
+from gcs_planner.core.kernel_records import Graph
 from gcs_planner.geometry.airplane import lower_bounds as climb_bounds
 from gcs_planner.geometry.legs import AirplaneLegs, CS3DLegs, StraightLegs, scenario_leg_model
 from gcs_planner.scenario.model import Kind, Scenario
@@ -64,6 +65,34 @@ class ReachGraph:
 
     def degree(self) -> np.ndarray:
         return np.diff(self.indptr)
+
+    def record(
+        self,
+        scenario: Scenario,
+        unreliable: np.ndarray,
+        p_success: float,
+        residual_m: float,
+        kmax: int,
+        crit_bit: np.ndarray,
+    ) -> Graph:
+        """The graph as the compiled search and probes take it, with the scenario's numbers a
+        step along it needs and each critical point's bit (-1: not critical)."""
+        return Graph(
+            self.indptr.astype(np.int64),
+            self.target,
+            self.length,
+            self.lim_v,
+            self.lim_h,
+            int(self.start),
+            int(self.end),
+            float(self.to_end[self.start]),
+            np.asarray(scenario.kind, np.int64),
+            np.asarray(unreliable, bool),
+            float(p_success),
+            float(residual_m),
+            int(kmax),
+            np.asarray(crit_bit, np.int64),
+        )
 
     def expanded(
         self,

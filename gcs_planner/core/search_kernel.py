@@ -22,6 +22,7 @@ import numpy as np
 from numba import njit, objmode, types
 from numba.typed import Dict
 
+from gcs_planner.core.kernel_records import Graph, Legs, Pairs, Seeds, ToGo
 from gcs_planner.core.probe_kernel import (
     _KEY,
     PROB_EPS,
@@ -106,46 +107,32 @@ def _incumbent_tables(
 
 @njit(cache=True)
 def search(
-    indptr: np.ndarray,
-    target: np.ndarray,
-    glen: np.ndarray,
-    lim_v: np.ndarray,
-    lim_h: np.ndarray,
-    start: int,
-    end: int,
-    to_end_start: float,
-    kind: np.ndarray,
-    unreliable: np.ndarray,
-    p_success: float,
-    residual_m: float,
-    kmax: int,
-    crit_bit: np.ndarray,
-    g_ptr: np.ndarray,
-    g_emax: np.ndarray,
-    g_table: np.ndarray,
-    legs_mode: int,
-    node_of_arc: np.ndarray,
-    pair_ptr: np.ndarray,
-    pair_length: np.ndarray,
-    p_ptr: np.ndarray,
-    p_emax: np.ndarray,
-    p_table: np.ndarray,
-    xyz: np.ndarray,
-    radius: float,
-    tan_climb: float,
-    tan_descent: float,
-    has_heading_a: bool,
-    heading_a: np.ndarray,
-    seed_len: np.ndarray,
-    seed_k: np.ndarray,
-    seed_p: np.ndarray,
-    seed_ptr: np.ndarray,
-    seed_points: np.ndarray,
+    graph: Graph,
+    to_go_table: ToGo,
+    pairs: Pairs,
+    legs: Legs,
+    seeds: Seeds,
     max_labels: int,
 ):  # noqa: ANN201  (see ``bnb._compiled_search``)
-    """One search from A: (labels, stopped: 0 exhausted, 1 by labels, 2 by time, the found
-    routes (lengths, corrections, probabilities, points as CSR) and the partial routes still
-    queued (f, L, k, mass, bounds to go as CSR))."""
+    """One search from A over ``graph`` (legs flown as ``legs`` says, ``pairs``' when
+    ``legs.mode`` is ``LEGS_PAIRS``), bounded by ``to_go_table``, starting with the ``seeds``
+    found: (labels, stopped: 0 exhausted, 1 by labels, 2 by time, the found routes (lengths,
+    corrections, probabilities, points as CSR) and the partial routes still queued (f, L, k,
+    mass, bounds to go as CSR))."""
+    indptr, target, glen, lim_v, lim_h = (
+        graph.indptr, graph.target, graph.length, graph.lim_v, graph.lim_h
+    )  # fmt: skip
+    start, end, to_end_start = graph.start, graph.end, graph.to_end_start
+    kind, unreliable, crit_bit = graph.kind, graph.unreliable, graph.crit_bit
+    p_success, residual_m, kmax = graph.p_success, graph.residual_m, graph.kmax
+    g_ptr, g_emax, g_table = to_go_table
+    node_of_arc, pair_ptr, pair_length = pairs.node_of_arc, pairs.pair_ptr, pairs.length
+    p_ptr, p_emax, p_table = pairs.to_go
+    legs_mode, xyz, radius, tan_climb, tan_descent = (
+        legs.mode, legs.xyz, legs.radius, legs.tan_climb, legs.tan_descent
+    )  # fmt: skip
+    has_heading_a, heading_a = legs.has_heading_a, legs.heading_a
+    seed_len, seed_k, seed_p, seed_ptr, seed_points = seeds
     has_pairs = legs_mode == LEGS_PAIRS
     # The routes found: the seeds first.
     inc_len = [0.0]
