@@ -93,11 +93,11 @@ def uncached_seconds() -> float:
 
 
 def notice_text(seconds: float) -> str:
-    return f"gcs-planner: compiling the search kernels once, about {seconds:.0f} s"
+    return f"gcs-planner: compiling its kernels once (numba), about {seconds:.0f} s"
 
 
 class _Notice:
-    """Writes the notice once, at numba's first compile of one of this package's kernels."""
+    """Writes the notice once, at numba's first compile of one of this project's kernels."""
 
     def __init__(self, stream: TextIO, seconds: float) -> None:
         self.stream = stream
@@ -107,7 +107,8 @@ class _Notice:
     def on_compile(self, event: Any) -> None:
         dispatcher = (event.data or {}).get("dispatcher")
         module = getattr(getattr(dispatcher, "py_func", None), "__module__", "") or ""
-        if self.done or not module.startswith("gcs_planner."):
+        # The dry run's flight kernels live in sim/, beside the package, and compile as long.
+        if self.done or not module.startswith(("gcs_planner.", "sim.")):
             return
         self.done = True
         self.stream.write(notice_text(self.seconds) + "\n")

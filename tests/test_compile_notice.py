@@ -22,7 +22,7 @@ PARAMS = [
     "--alpha1", "25", "--alpha2", "15", "--beta1", "20", "--beta2", "25", "--theta", "30",
     "--delta", "0.001", "--turn-radius", "200", "--time-limit", "none",
 ]  # fmt: skip
-NOTICE = "compiling the search kernels once, about"
+NOTICE = "compiling its kernels once (numba), about"
 
 
 def small_scenario(path: Path) -> Path:
@@ -127,6 +127,10 @@ def test_the_check_reads_numba_files_without_loading_numba(
     notice.on_compile(Event("gcs_planner.core.probe_kernel"))
     notice.on_compile(Event("gcs_planner.core.search_kernel"))
     assert stream.text == f"gcs-planner: {NOTICE} 30 s\n"
+    # The dry run's flight kernels (sim/) announce it too.
+    flight = compile_notice._Notice(_Terminal(), 14.0)
+    flight.on_compile(Event("sim.flight_kernel"))
+    assert flight.stream.text == f"gcs-planner: {NOTICE} 14 s\n"
 
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "cached"))
     _fake_cache(tmp_path / "cached", version)
