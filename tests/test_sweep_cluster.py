@@ -11,6 +11,7 @@ from __future__ import annotations
 import functools
 import os
 import signal
+import socket
 import subprocess
 import sys
 import time
@@ -384,12 +385,14 @@ def start_scheduler(tmp_path: Path) -> tuple[subprocess.Popen, str]:
 def test_a_scheduler_without_workers_stops_the_sweep_with_a_message(tmp_path: Path) -> None:
     scheduler, address = start_scheduler(tmp_path)
     try:
+        # The address as a cluster's job script exports it, for Dask and for the sweep.
         done = subprocess.run(
             cli(str(small_spec(tmp_path)), "--out", str(tmp_path / "out"),
-                "--scheduler", address, "--no-workers-timeout", "3"),
+                "--no-workers-timeout", "3"),
             capture_output=True,
             text=True,
             timeout=DEADLINE_S,
+            env={**os.environ, "DASK_SCHEDULER_ADDRESS": address},
         )  # fmt: skip
     finally:
         scheduler.terminate()
@@ -424,11 +427,13 @@ def test_cli_on_a_separately_started_scheduler_and_workers(tmp_path: Path) -> No
             )
         )  # fmt: skip
         done = subprocess.run(
-            cli(str(small_spec(tmp_path)), "--out", str(tmp_path / "out"), "--scheduler", address),
+            # the file the scheduler wrote, as batch jobs on a shared file system find it
+            cli(str(small_spec(tmp_path)), "--out", str(tmp_path / "out"),
+                "--scheduler-file", str(scheduler_file)),
             capture_output=True,
             text=True,
             timeout=DEADLINE_S,
-        )
+        )  # fmt: skip
         assert done.returncode == 0, done.stderr
         assert f"running on {address}" in done.stdout
         assert "8 cells run (0 failed, 0 infeasible)" in done.stdout
@@ -447,6 +452,46 @@ def test_cli_on_a_separately_started_scheduler_and_workers(tmp_path: Path) -> No
                 p.wait(timeout=60)
             except subprocess.TimeoutExpired:
                 p.kill()
+
+
+@pytest.mark.parametrize(
+    "content, says",
+    [
+        (None, "cannot read it: No such file or directory"),
+        ("{not json", "is not a Dask scheduler file (not JSON"),
+        ('{"type": "Scheduler"}', "field 'address': names no scheduler address"),
+        ('{"address": ""}', "field 'address': names no scheduler address"),
+    ],
+)
+def test_cli_bad_scheduler_file_names_the_file(tmp_path: Path, content, says) -> None:
+    path = tmp_path / "scheduler.json"
+    if content is not None:
+        path.write_text(content)
+    done = subprocess.run(
+        cli(str(small_spec(tmp_path)), "--out", str(tmp_path / "out"),
+            "--scheduler-file", str(path)),
+        capture_output=True, text=True, timeout=DEADLINE_S,
+    )  # fmt: skip
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.count("\n") == 1 and f"{path}" in done.stderr and says in done.stderr
+    assert not (tmp_path / "out").exists()
+
+
+def test_cli_unreachable_scheduler_from_the_environment_says_where_it_came_from(
+    tmp_path: Path,
+) -> None:
+    # A port nothing listens on: refused at once, or timed out after the one second asked.
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    done = subprocess.run(
+        cli(str(small_spec(tmp_path)), "--out", str(tmp_path / "out"), "--connect-timeout", "1"),
+        capture_output=True, text=True, timeout=DEADLINE_S,
+        env={**os.environ, "DASK_SCHEDULER_ADDRESS": f"tcp://127.0.0.1:{port}"},
+    )  # fmt: skip
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.count("\n") == 1
+    assert "field 'DASK_SCHEDULER_ADDRESS'" in done.stderr and "within 1 s" in done.stderr
 
 
 def test_cli_bad_scheduler_address_is_one_line(tmp_path: Path) -> None:

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import argparse
+import json
+import os
 import sys
 from pathlib import Path
 
@@ -20,11 +22,26 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("spec", help="sweep spec (.toml); see missions/sweep-example.toml")
     p.add_argument("--out", type=Path, required=True, help="folder for the results")
-    p.add_argument(
+    where = p.add_mutually_exclusive_group()
+    where.add_argument(
         "--scheduler",
         metavar="ADDRESS",
         help="submit to this running Dask scheduler (tcp://HOST:8786) instead of starting a "
-        "local cluster; the scenario files must be readable by its workers at the same paths",
+        "local cluster; the scenario files must be readable by its workers at the same paths "
+        "(default: $DASK_SCHEDULER_ADDRESS when set)",
+    )
+    where.add_argument(
+        "--scheduler-file",
+        metavar="PATH",
+        type=Path,
+        help="the JSON file a scheduler wrote (dask scheduler --scheduler-file PATH, as batch "
+        "jobs on a shared file system do): submit to the address it names",
+    )
+    p.add_argument(
+        "--connect-timeout",
+        type=float,
+        metavar="SECONDS",
+        help="how long to try reaching the scheduler (default 20, runner.CONNECT_TIMEOUT_S)",
     )
     p.add_argument(
         "--workers",
@@ -62,6 +79,37 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
+def scheduler_address(
+    given: str | None, scheduler_file: Path | None
+) -> tuple[str | None, str]:
+    """The scheduler to submit to and where it came from: ``--scheduler``, the address in
+    ``--scheduler-file``, or Dask's own DASK_SCHEDULER_ADDRESS (which a cluster's job scripts
+    export); None: a local cluster."""
+    if given is not None:
+        return given, "--scheduler"
+    if scheduler_file is not None:
+        try:
+            data = json.loads(scheduler_file.read_text(encoding="utf-8"))
+        except OSError as exc:
+            raise InputError(
+                f"cannot read it: {exc.strerror or exc}", file=str(scheduler_file)
+            ) from None
+        except (ValueError, UnicodeDecodeError) as exc:
+            raise InputError(
+                f"is not a Dask scheduler file (not JSON: {exc})", file=str(scheduler_file)
+            ) from None
+        address = data.get("address") if isinstance(data, dict) else None
+        if not isinstance(address, str) or not address.strip():
+            raise InputError(
+                "names no scheduler address (a scheduler writes one when it has started)",
+                file=str(scheduler_file),
+                field="address",
+            )
+        return address, f"--scheduler-file {scheduler_file}"
+    env = os.environ.get("DASK_SCHEDULER_ADDRESS", "").strip()
+    return env or None, "DASK_SCHEDULER_ADDRESS"
+
+
 def run(args: argparse.Namespace) -> int:
     from gcs_planner.sweep import INSTALL_HINT, missing_dependencies
 
@@ -72,6 +120,9 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"must be >= 1 (got {args.workers})", field="--workers")
     if args.scheduler is not None and not args.scheduler.strip():
         raise InputError("is empty: give the scheduler's address", field="--scheduler")
+    if args.connect_timeout is not None and not args.connect_timeout > 0:
+        raise InputError(f"must be > 0 (got {args.connect_timeout:g})", field="--connect-timeout")
+    scheduler, scheduler_from = scheduler_address(args.scheduler, args.scheduler_file)
 
     for flag in ("prune", "retry_failed"):
         if getattr(args, flag) and not args.resume:
@@ -90,7 +141,8 @@ def run(args: argparse.Namespace) -> int:
         result = run_sweep(
             spec,
             args.out,
-            scheduler=args.scheduler,
+            scheduler=scheduler,
+            scheduler_from=scheduler_from,
             workers=args.workers,
             resume=args.resume,
             dashboard_address=args.dashboard_address,
@@ -99,6 +151,7 @@ def run(args: argparse.Namespace) -> int:
             no_workers_timeout=args.no_workers_timeout,
             prune=args.prune,
             retry_failed=args.retry_failed,
+            **({} if args.connect_timeout is None else {"connect_timeout": args.connect_timeout}),
         )
     except SweepInterrupted as exc:
         # the table is saved: say how much, and how to go on

@@ -73,6 +73,9 @@ POLL_S = 0.25
 WORKER_CHECK_S = 2.0
 # A sweep with no worker at all for this long stops with a message, its table saved.
 NO_WORKERS_TIMEOUT_S = 60.0
+# Connecting to a scheduler across a cluster's network (or while it starts) takes seconds;
+# an address that answers nothing for this long is a wrong one.
+CONNECT_TIMEOUT_S = 20.0
 # What the user's environment said before any Dask nanny of this process wrote Dask's value
 # into it (a nanny sets its pre-spawn variables in its own process, for good).
 _USER_MALLOC_TRIM = os.environ.get("MALLOC_TRIM_THRESHOLD_")
@@ -124,11 +127,15 @@ def run_sweep(
     no_workers_timeout: float = NO_WORKERS_TIMEOUT_S,
     prune: bool = False,
     retry_failed: bool = False,
+    connect_timeout: float = CONNECT_TIMEOUT_S,
+    scheduler_from: str = "--scheduler",
 ) -> SweepResult:
     """Run the sweep ``spec`` (a SweepSpec or the path of its TOML) into the folder ``out``.
 
-    ``scheduler``: the address of an existing Dask scheduler (``tcp://host:8786``); without it a
-    LocalCluster of ``workers`` processes is started and closed. ``resume``: keep the finished
+    ``scheduler``: the address of an existing Dask scheduler (``tcp://host:8786``), reached
+    within ``connect_timeout`` seconds; without it a LocalCluster of ``workers`` processes is
+    started and closed; ``scheduler_from`` is where the address came from, for the message when
+    it cannot be reached. ``resume``: keep the finished
     cells of an earlier run in ``out`` and run only the others; it refuses a spec whose cells
     changed since (:mod:`.manifest`) unless ``prune``, which drops the rows of the cells no
     longer in it. ``retry_failed``: run the cells whose task failed again. ``stream``: where
@@ -168,7 +175,10 @@ def run_sweep(
     ran, failed, infeasible, dashboard = 0, 0, 0, ""
     closing = None
     if todo:
-        client, cluster = _connect(scheduler, workers, threads_per_worker, dashboard_address)
+        client, cluster = _connect(
+            scheduler, workers, threads_per_worker, dashboard_address, connect_timeout,
+            scheduler_from,
+        )  # fmt: skip
         try:
             dashboard = client.dashboard_link or ""
             where = scheduler or f"a local cluster of {workers} worker processes"
@@ -236,7 +246,14 @@ def _malloc_trim(value: str | None) -> Iterator[None]:
             os.environ["MALLOC_TRIM_THRESHOLD_"] = before
 
 
-def _connect(scheduler: str | None, workers: int, threads: int, dashboard_address: str):
+def _connect(
+    scheduler: str | None,
+    workers: int,
+    threads: int,
+    dashboard_address: str,
+    connect_timeout: float = CONNECT_TIMEOUT_S,
+    scheduler_from: str = "--scheduler",
+):
     import dask
     from distributed import Client, LocalCluster
 
@@ -258,10 +275,11 @@ def _connect(scheduler: str | None, workers: int, threads: int, dashboard_addres
             )
         return Client(cluster), cluster
     try:
-        return Client(scheduler, timeout="20s"), None
+        return Client(scheduler, timeout=f"{connect_timeout}s"), None
     except (OSError, ValueError, TypeError) as exc:
         raise InputError(
-            f"cannot reach the Dask scheduler {scheduler!r}: {exc}", field="--scheduler"
+            f"cannot reach the Dask scheduler {scheduler!r} within {connect_timeout:g} s: {exc}",
+            field=scheduler_from,
         ) from None
 
 
