@@ -3,14 +3,11 @@ and PX4's own names) becomes the planner's cruise airspeed, bank limit and climb
 
 from __future__ import annotations
 
-import math
-
 import pytest
 
 import gcs_planner.cli.plan as plan_cli
 from gcs_planner.autopilot import effective
 from gcs_planner.cli import main
-from gcs_planner.link.envelope import envelope_from_parameters
 from gcs_planner.vehicle import ENVELOPE_PARAMS
 from sim.param_server import parameter_table
 from sim.vehicle import MockVehicle, free_udp_port
@@ -19,15 +16,6 @@ ROWS = [("P0", 0, 0, "A", 0), ("P1", 12_000, 300, "V", 0), ("P2", 24_000, 0, "H"
         ("P3", 36_000, 300, "V", 0), ("P4", 48_000, 0, "B", 0)]  # fmt: skip
 FLAGS = ["--alpha1", "25", "--alpha2", "15", "--beta1", "20", "--beta2", "25", "--theta", "30",
          "--delta", "0.001"]  # fmt: skip
-
-
-def test_rates_become_flight_path_angles_at_cruise_airspeed():
-    got = envelope_from_parameters(
-        {"cruise_airspeed": 25.0, "bank_limit": 45.0, "climb_rate": 5.0, "sink_rate": 2.5}
-    )
-    assert got["cruise_airspeed"] == 25.0 and got["max_bank_angle"] == 45.0
-    assert got["max_climb_angle"] == pytest.approx(math.degrees(math.asin(0.2)))
-    assert got["max_descent_angle"] == pytest.approx(math.degrees(math.asin(0.1)))
 
 
 @pytest.mark.parametrize("flavour", ["ardupilot", "px4"])
