@@ -13,6 +13,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
+from gcs_planner.core.probability import PROB_EPS
 from gcs_planner.errors import GcsPlannerError
 
 if TYPE_CHECKING:
@@ -21,8 +22,6 @@ if TYPE_CHECKING:
 
 # Routes less likely than this to arrive are not chosen by default, nor exported unasked.
 DEFAULT_MIN_PROBABILITY = 0.99
-# Probabilities are products computed in different orders: equal ones differ in the last bits.
-PROB_EPS = 1e-12
 
 
 class RiskyRouteError(GcsPlannerError):

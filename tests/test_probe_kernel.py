@@ -14,7 +14,7 @@ import pytest
 from test_focus_turns import sparse_scenario
 from test_probes import probed_scenario
 
-from gcs_planner.core import bnb, failure_bounds, probe_kernel, proof
+from gcs_planner.core import bnb, failure_bounds, probe_kernel
 from gcs_planner.core.reach import build_reach_graph
 from gcs_planner.scenario.generate import DATASET2
 from gcs_planner.scenario.readers import load_scenario
@@ -83,7 +83,6 @@ def test_compiled_probes_on_sparse_maps_with_contest_limits(asked, monkeypatch) 
 
 
 def test_the_kernel_shares_the_models_constants() -> None:
-    assert probe_kernel.PROB_EPS == proof.PROB_EPS
     assert probe_kernel.MASS_SLACK == failure_bounds._MASS_SLACK
     assert probe_kernel.MAX_UNIONS == bnb.MAX_UNIONS
 

@@ -54,6 +54,11 @@ from gcs_planner.scenario.model import Kind, Parameters, Scenario
 
 State = tuple[float, float]
 
+# Probabilities reached along different routes are products taken in different orders: equal
+# values may differ in the last bits, and must still compare equal. The one tolerance every
+# comparison of probabilities uses (the search, its proofs, its compiled probes, the choice).
+PROB_EPS = 1e-12
+
 BRUTE_FORCE_MAX_UNRELIABLE = 20
 
 

@@ -40,8 +40,8 @@ from gcs_planner.core.kernel_records import (
     ToGo,
     empty_nogoods,
 )
+from gcs_planner.core.probability import PROB_EPS
 
-PROB_EPS = 1e-12  # as proof.PROB_EPS (asserted equal in the tests)
 MASS_SLACK = 1e-13  # as failure_bounds._MASS_SLACK
 MAX_UNIONS = 256  # as bnb.MAX_UNIONS
 KIND_V, KIND_H = 2, 3

@@ -21,9 +21,7 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-# Probabilities reached along different routes are products taken in different orders: equal
-# values may differ in the last bits, and must still compare equal.
-PROB_EPS = 1e-12
+from gcs_planner.core.probability import PROB_EPS
 
 
 def _padded(live: Sequence[tuple[float, int, np.ndarray, float]]) -> np.ndarray:
