@@ -48,6 +48,7 @@ from gcs_planner.link.params import set_parameter
 from gcs_planner.link.protocol import DEFAULT_RETRIES, DEFAULT_TIMEOUT_S
 from gcs_planner.mission.builder import build_mission
 from gcs_planner.mission.geo_exports import trajectory_local
+from gcs_planner.mission.items import HELIX_COMMANDS
 from gcs_planner.plan_json import plan_to_dict
 from gcs_planner.scenario.model import Scenario
 from sim import replay as replay_mod
@@ -70,9 +71,6 @@ PX4_ACCEPTANCE_PARAM = "NAV_ACC_RAD"
 INT16_PARAMS = frozenset({"WP_RADIUS", "WP_LOITER_RAD"})
 # The planned path's sampling for the deviation (the figure is within half of it).
 DEVIATION_STEP_M = 2.0
-# Loiters the exporter writes for the planner's helices (LOITER_TURNS, LOITER_TO_ALT); the last
-# item (the end action) is not one of them.
-LOITER_COMMANDS = frozenset({18, 31})
 
 
 @dataclass(frozen=True)
@@ -433,7 +431,8 @@ def dry_run(
         acceptance_radius=float(acceptance_radius),
         capture_radius=capture_radius,
         flight_notes=replayed.flight.notes if replayed.flight is not None else (),
-        helices=sum(it.command in LOITER_COMMANDS for it in mission.items[:-1]),
+        # the helices' loiters; the last item (the end action) is not one of them
+        helices=sum(it.command in HELIX_COMMANDS for it in mission.items[:-1]),
         reserve=plan.scenario.params.reserve,
         max_overrun=stretch_overrun(
             route, rows, replayed.flown.length if replayed.arrived and replayed.flown else None

@@ -50,8 +50,7 @@ from typing import Any
 from gcs_planner.autopilot import autopilot_for
 from gcs_planner.link.connection import mavlink
 from gcs_planner.link.protocol import GLOBAL_FLOAT_FRAMES, GLOBAL_INT_FRAMES, item_to_message
-from gcs_planner.mission.items import MAV_MISSION_TYPE_MISSION, MissionItem
-from sim import replay as replay_mod
+from gcs_planner.mission.items import MAV_MISSION_TYPE_MISSION, POSITION_COMMANDS, MissionItem
 
 SUPPORTED_FRAMES = frozenset({0, 2, 3, 5, 6})
 MAV_FRAME_MISSION = 2
@@ -78,7 +77,6 @@ PX4_MISSION_FRAME_COMMANDS = frozenset(
     {20, 80, 93, 112, 114, 177, 178, 179, 187, 189, 196, 197, 200, 201, 203, 204, 205, 206, 211,
      212, 214, 260, 400, 530, 531, 534, 1000, 1001, 2000, 2001, 2003, 2500, 2501, 3000, 42600}
 )  # fmt: skip
-POSITION_COMMANDS = replay_mod.NAV_POSITION_COMMANDS
 ALT_RANGE_M = (-1000.0, 100_000.0)
 INT32 = (-(2**31), 2**31 - 1)
 FLOAT32_MAX = 3.4028234663852886e38

@@ -44,15 +44,13 @@ from scipy.spatial import cKDTree
 
 from gcs_planner.confidence import wilson_interval
 from gcs_planner.mission.georef import DEFAULT_ORIGIN, LocalFrame
-from gcs_planner.mission.items import MissionItem
+from gcs_planner.mission.items import POSITION_COMMANDS, MissionItem
 from gcs_planner.scenario.model import Kind, Parameters, Scenario
 from gcs_planner.vehicle import DEFAULT_CAPTURE_RADIUS_M, DEFAULT_CRUISE_AIRSPEED, VehicleProfile
 from sim import flight_kernel, guidance
 from sim.ins import DEFAULT_ERROR_UNIT_M, InsEstimate
 from sim.wind import WindModel, WindSpec
 
-# MAV_CMD values whose x/y/z are a position the vehicle flies to.
-NAV_POSITION_COMMANDS = frozenset({16, 17, 18, 19, 21, 22, 31})
 MAV_CMD_DO_CHANGE_SPEED = 178
 GLOBAL_AMSL_FRAMES = frozenset({0, 5})
 GLOBAL_RELATIVE_FRAMES = frozenset({3, 6})
@@ -284,7 +282,7 @@ def decode_path(
         if item.command == MAV_CMD_DO_CHANGE_SPEED and item.param2 > 0:
             speed = float(item.param2)
             continue
-        if item.command not in NAV_POSITION_COMMANDS:
+        if item.command not in POSITION_COMMANDS:
             continue
         if item.frame in GLOBAL_AMSL_FRAMES:
             alt = item.z

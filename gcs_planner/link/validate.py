@@ -19,7 +19,7 @@ import math
 from dataclasses import dataclass
 
 from gcs_planner.link.connection import mavlink
-from gcs_planner.mission.items import MissionItem
+from gcs_planner.mission.items import POSITION_COMMANDS, MissionItem
 
 INT32_MIN, INT32_MAX = -(2**31), 2**31 - 1
 FLOAT32_MAX = 3.4028234663852886e38
@@ -28,8 +28,6 @@ FLOAT32_MAX = 3.4028234663852886e38
 # non-position items.
 MISSION_FRAMES = frozenset({0, 2, 3, 5, 6})
 GLOBAL_FRAMES = frozenset({0, 3, 5, 6})
-# MAV_CMD_NAV_* commands whose x/y/z are where to fly (waypoint, loiters, land, takeoff).
-POSITION_COMMANDS = frozenset({16, 17, 18, 19, 21, 22, 31})
 # Below the shore of the Dead Sea is below any runway; above 100 km is space.
 ALTITUDE_RANGE_M = (-1000.0, 100_000.0)
 KNOWN_COMMANDS = frozenset(

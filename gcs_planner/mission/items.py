@@ -24,6 +24,23 @@ MAV_CMD_NAV_LOITER_TO_ALT = 31
 MAV_CMD_NAV_RETURN_TO_LAUNCH = 20
 MAV_CMD_NAV_LAND = 21
 MAV_CMD_DO_CHANGE_SPEED = 178
+MAV_CMD_NAV_LOITER_TIME = 19
+MAV_CMD_NAV_TAKEOFF = 22
+# The MAV_CMD_NAV_* commands whose x/y/z are a position the vehicle flies to (waypoint, the
+# loiters, land, takeoff): what the files, the link's checks and the mock vehicle treat as places.
+POSITION_COMMANDS = frozenset(
+    {
+        MAV_CMD_NAV_WAYPOINT,
+        MAV_CMD_NAV_LOITER_UNLIM,
+        MAV_CMD_NAV_LOITER_TURNS,
+        MAV_CMD_NAV_LOITER_TIME,
+        MAV_CMD_NAV_LAND,
+        MAV_CMD_NAV_TAKEOFF,
+        MAV_CMD_NAV_LOITER_TO_ALT,
+    }
+)
+# The loiters the exporter writes for the planner's helices.
+HELIX_COMMANDS = frozenset({MAV_CMD_NAV_LOITER_TURNS, MAV_CMD_NAV_LOITER_TO_ALT})
 
 # MAV_MISSION_TYPE
 MAV_MISSION_TYPE_MISSION = 0
