@@ -24,7 +24,7 @@ from functools import cached_property
 import numpy as np
 
 from gcs_planner.mission.georef import LocalFrame
-from gcs_planner.mission.items import MissionItem
+from gcs_planner.mission.items import GLOBAL_AMSL_FRAMES, GLOBAL_RELATIVE_FRAMES, MissionItem
 from gcs_planner.vehicle import G, VehicleProfile
 from sim import flight_kernel
 from sim.aircraft import AircraftState
@@ -49,9 +49,6 @@ from sim.navigators.base import (
 )
 from sim.navigators.params import AutopilotParams
 from sim.wind import WindField, WindModel
-
-GLOBAL_AMSL_FRAMES = frozenset({0, 5})
-GLOBAL_RELATIVE_FRAMES = frozenset({3, 6})
 
 __all__ = [
     "COARSE_STEPS", "DEFAULT_STEP_S", "DO_CHANGE_SPEED", "L1_DAMPING", "L1_PERIOD_S", "LOITERS",

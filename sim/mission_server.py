@@ -50,9 +50,13 @@ from typing import Any
 from gcs_planner.autopilot import autopilot_for
 from gcs_planner.link.connection import mavlink
 from gcs_planner.link.protocol import GLOBAL_FLOAT_FRAMES, GLOBAL_INT_FRAMES, item_to_message
-from gcs_planner.mission.items import MAV_MISSION_TYPE_MISSION, POSITION_COMMANDS, MissionItem
+from gcs_planner.mission.items import (
+    MAV_MISSION_TYPE_MISSION,
+    MISSION_FRAMES,
+    POSITION_COMMANDS,
+    MissionItem,
+)
 
-SUPPORTED_FRAMES = frozenset({0, 2, 3, 5, 6})
 MAV_FRAME_MISSION = 2
 # ArduPilot: the commands this mock's ArduPlane stores, in any supported frame.
 SUPPORTED_COMMANDS = frozenset(
@@ -120,7 +124,7 @@ def supports(item: MissionItem, flavour: str = "ardupilot") -> bool:
 
 def check_item(item: MissionItem, flavour: str = "ardupilot") -> int:
     """The MAV_MISSION_RESULT ``flavour`` gives ``item``: ACCEPTED, or why not."""
-    if item.frame not in SUPPORTED_FRAMES:
+    if item.frame not in MISSION_FRAMES:
         return mavlink.MAV_MISSION_UNSUPPORTED_FRAME
     if not supports(item, flavour):
         return mavlink.MAV_MISSION_UNSUPPORTED

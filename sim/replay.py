@@ -44,7 +44,12 @@ from scipy.spatial import cKDTree
 
 from gcs_planner.confidence import wilson_interval
 from gcs_planner.mission.georef import DEFAULT_ORIGIN, LocalFrame
-from gcs_planner.mission.items import POSITION_COMMANDS, MissionItem
+from gcs_planner.mission.items import (
+    GLOBAL_AMSL_FRAMES,
+    GLOBAL_RELATIVE_FRAMES,
+    POSITION_COMMANDS,
+    MissionItem,
+)
 from gcs_planner.scenario.model import Kind, Parameters, Scenario
 from gcs_planner.vehicle import DEFAULT_CAPTURE_RADIUS_M, DEFAULT_CRUISE_AIRSPEED, VehicleProfile
 from sim import flight_kernel, guidance
@@ -52,8 +57,6 @@ from sim.ins import DEFAULT_ERROR_UNIT_M, InsEstimate
 from sim.wind import WindModel, WindSpec
 
 MAV_CMD_DO_CHANGE_SPEED = 178
-GLOBAL_AMSL_FRAMES = frozenset({0, 5})
-GLOBAL_RELATIVE_FRAMES = frozenset({3, 6})
 
 DEFAULT_CRUISE_SPEED = DEFAULT_CRUISE_AIRSPEED  # m/s
 DENSIFY_MAX_DEG = 16.0

@@ -10,8 +10,7 @@ from pathlib import Path
 from gcs_planner.atomic import check_output_file, write_atomic
 from gcs_planner.cli.upload import add_link_arguments, connect_client
 from gcs_planner.errors import InputError, LinkError
-from gcs_planner.link.validate import GLOBAL_FRAMES, POSITION_COMMANDS
-from gcs_planner.mission.items import MissionItem
+from gcs_planner.mission.items import GLOBAL_FRAMES, POSITION_COMMANDS, MissionItem
 from gcs_planner.mission.waypoints import PX4_REFUSED, dumps_items
 
 

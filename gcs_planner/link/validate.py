@@ -19,15 +19,15 @@ import math
 from dataclasses import dataclass
 
 from gcs_planner.link.connection import mavlink
-from gcs_planner.mission.items import POSITION_COMMANDS, MissionItem
+from gcs_planner.mission.items import (
+    GLOBAL_FRAMES,
+    MISSION_FRAMES,
+    POSITION_COMMANDS,
+    MissionItem,
+)
 
 INT32_MIN, INT32_MAX = -(2**31), 2**31 - 1
 FLOAT32_MAX = 3.4028234663852886e38
-# Frames the files we write and read can carry: the global frames whose x/y .waypoints and .plan
-# scale as degrees (terrain frames are not among them) and MAV_FRAME_MISSION for
-# non-position items.
-MISSION_FRAMES = frozenset({0, 2, 3, 5, 6})
-GLOBAL_FRAMES = frozenset({0, 3, 5, 6})
 # Below the shore of the Dead Sea is below any runway; above 100 km is space.
 ALTITUDE_RANGE_M = (-1000.0, 100_000.0)
 KNOWN_COMMANDS = frozenset(

@@ -15,6 +15,17 @@ MAV_FRAME_MISSION = 2
 MAV_FRAME_GLOBAL_RELATIVE_ALT = 3
 MAV_FRAME_GLOBAL_INT = 5
 MAV_FRAME_GLOBAL_RELATIVE_ALT_INT = 6
+# Altitude above mean sea level / above home; both spellings (float degrees, _INT degE7).
+GLOBAL_AMSL_FRAMES = frozenset({MAV_FRAME_GLOBAL, MAV_FRAME_GLOBAL_INT})
+GLOBAL_RELATIVE_FRAMES = frozenset(
+    {MAV_FRAME_GLOBAL_RELATIVE_ALT, MAV_FRAME_GLOBAL_RELATIVE_ALT_INT}
+)
+# The global frames whose x/y the files and the link scale as latitude/longitude (terrain
+# frames are not among them).
+GLOBAL_FRAMES = GLOBAL_AMSL_FRAMES | GLOBAL_RELATIVE_FRAMES
+# What the files we write and read can carry: the global frames and MAV_FRAME_MISSION for
+# non-position items.
+MISSION_FRAMES = GLOBAL_FRAMES | {MAV_FRAME_MISSION}
 
 # MAV_CMD
 MAV_CMD_NAV_WAYPOINT = 16

@@ -23,9 +23,9 @@ from gcs_planner.atomic import write_atomic
 from gcs_planner.errors import InputError
 from gcs_planner.mission.builder import HOVER_SPEED, Mission
 from gcs_planner.mission.items import (
+    GLOBAL_FRAMES,
     MAV_CMD_NAV_WAYPOINT,
     MAV_FRAME_GLOBAL,
-    MAV_FRAME_GLOBAL_INT,
     MAV_FRAME_GLOBAL_RELATIVE_ALT,
     MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
     MissionFile,
@@ -38,12 +38,6 @@ MAV_TYPE_FIXED_WING = 1
 # QGroundControl's AltMode enum (QGroundControlQmlGlobal.h).
 QGC_ALT_MODE_RELATIVE = 1
 QGC_ALT_MODE_ABSOLUTE = 2
-GLOBAL_FRAMES = (
-    MAV_FRAME_GLOBAL,
-    MAV_FRAME_GLOBAL_RELATIVE_ALT,
-    MAV_FRAME_GLOBAL_INT,
-    MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
-)
 GROUND_STATION = "gcs-planner"
 
 

@@ -30,22 +30,14 @@ from gcs_planner.atomic import write_atomic
 from gcs_planner.errors import InputError
 from gcs_planner.mission.builder import FIRMWARES, Mission
 from gcs_planner.mission.items import (
+    GLOBAL_FRAMES,
     MAV_CMD_NAV_WAYPOINT,
     MAV_FRAME_GLOBAL,
-    MAV_FRAME_GLOBAL_INT,
-    MAV_FRAME_GLOBAL_RELATIVE_ALT,
-    MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
     MissionFile,
     MissionItem,
 )
 
 HEADER = "QGC WPL 110"
-GLOBAL_FRAMES = (
-    MAV_FRAME_GLOBAL,
-    MAV_FRAME_GLOBAL_RELATIVE_ALT,
-    MAV_FRAME_GLOBAL_INT,
-    MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
-)
 FIELDS = (
     "index",
     "current",
