@@ -199,11 +199,12 @@ def test_from_route_probability_is_the_routes(radius: float) -> None:
         assert val.corrections == route.corrections
 
 
-def test_replan_never_worse() -> None:
+@pytest.mark.parametrize("radius", [0.0, 300.0])
+def test_replan_never_worse(radius: float) -> None:
     rng = np.random.default_rng(5)
     better = 0
     for seed in range(60):
-        sc = _scenario(seed, n_max=6)
+        sc = _scenario(seed, radius, n_max=6)
         corr = [j for j in range(sc.n) if int(sc.kind[j]) in (Kind.V, Kind.H)]
         k = int(rng.integers(0, len(corr) + 1))
         points = (sc.start, *[int(j) for j in rng.permutation(corr)[:k]], sc.end)
@@ -212,7 +213,8 @@ def test_replan_never_worse() -> None:
         replanned = evaluate(sc, replan_on_failure(sc, route))
         assert replanned.probability >= base.probability - 1e-12
         better += replanned.probability > base.probability + 1e-9
-    assert better >= 1
+    if radius == 0.0:
+        assert better >= 1  # (seen: 4 of 60 straight-leg cases improve)
 
 
 def _line_scenario() -> Scenario:
@@ -257,3 +259,9 @@ def test_revisiting_policy_raises() -> None:
         evaluate(sc, Policy((0, 1, 2), Policy((2, 4))))
     with pytest.raises(GcsPlannerError, match="neither B nor an unreliable"):
         evaluate(sc, Policy((0, 1)))
+
+
+def test_replan_refuses_large_scenarios() -> None:
+    sc = random_scenario(13, 1)
+    with pytest.raises(GcsPlannerError, match="stops at 12 correction points"):
+        replan_on_failure(sc, (sc.start, sc.end))
