@@ -13,6 +13,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
+from gcs_planner.core.choose import choose
 from gcs_planner.core.probability import PROB_EPS
 from gcs_planner.errors import GcsPlannerError
 
@@ -68,8 +69,6 @@ def choose_index(
     the answer and the flag is False. ``use_probability`` says whether probability is one of
     the objectives the compromise weighs.
     """
-    from gcs_planner.core.choose import choose
-
     if not 0.0 <= min_probability <= 1.0:
         raise ValueError(f"min_probability must be within [0, 1], not {min_probability}")
     if not routes:

@@ -23,8 +23,8 @@ from functools import cached_property
 
 import numpy as np
 
-from gcs_planner.mission.georef import LocalFrame
 from gcs_planner.mission.items import GLOBAL_AMSL_FRAMES, GLOBAL_RELATIVE_FRAMES, MissionItem
+from gcs_planner.scenario.georef import LocalFrame
 from gcs_planner.vehicle import G, VehicleProfile
 from sim import flight_kernel
 from sim.aircraft import AircraftState

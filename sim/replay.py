@@ -43,13 +43,13 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from gcs_planner.confidence import wilson_interval
-from gcs_planner.mission.georef import DEFAULT_ORIGIN, LocalFrame
 from gcs_planner.mission.items import (
     GLOBAL_AMSL_FRAMES,
     GLOBAL_RELATIVE_FRAMES,
     POSITION_COMMANDS,
     MissionItem,
 )
+from gcs_planner.scenario.georef import DEFAULT_ORIGIN, LocalFrame
 from gcs_planner.scenario.model import Kind, Parameters, Scenario
 from gcs_planner.vehicle import DEFAULT_CAPTURE_RADIUS_M, DEFAULT_CRUISE_AIRSPEED, VehicleProfile
 from sim import flight_kernel, guidance

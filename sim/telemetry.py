@@ -27,7 +27,7 @@ from gcs_planner.autopilot import (
     PX4_SUB_MODE_AUTO_MISSION,
     autopilot_for,
 )
-from gcs_planner.mission.georef import LocalFrame
+from gcs_planner.scenario.georef import LocalFrame
 
 # MAVLink enum values (common.xml / ardupilotmega.xml / PX4's px4_custom_mode.h).
 MAV_TYPE_FIXED_WING = 1

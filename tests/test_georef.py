@@ -11,7 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from gcs_planner.errors import InputError
-from gcs_planner.mission.georef import DEFAULT_ORIGIN, LocalFrame, parse_origin
+from gcs_planner.scenario.georef import DEFAULT_ORIGIN, LocalFrame, parse_origin
 from gcs_planner.scenario.model import Origin
 
 GEOD = pyproj.Geod(ellps="WGS84")

@@ -9,8 +9,8 @@ import math
 import numpy as np
 import pytest
 
-from gcs_planner.mission.georef import LocalFrame
 from gcs_planner.mission.items import MissionItem
+from gcs_planner.scenario.georef import LocalFrame
 from gcs_planner.scenario.model import Origin
 from gcs_planner.vehicle import VehicleProfile
 from sim.atmosphere import eas2tas

@@ -146,9 +146,9 @@ def test_mock_vehicle_flies_with_telemetry_after_upload():
     from gcs_planner.link.connection import open_link
     from gcs_planner.link.mission_client import MissionClient
     from gcs_planner.link.params import set_parameter
-    from gcs_planner.mission.georef import LocalFrame
     from gcs_planner.mission.items import MissionItem
     from gcs_planner.scenario.generate import DATASET1
+    from gcs_planner.scenario.georef import LocalFrame
     from gcs_planner.scenario.model import Kind, Scenario
 
     xyz = np.array([[i * 12_000.0, 0.0, 5000.0] for i in range(5)])

@@ -12,9 +12,9 @@ from mavsdk.plugins.mission_raw import MissionItem as RawItem
 from mavsdk.plugins.mission_raw import MissionRaw
 from mavsdk.plugins.telemetry import Telemetry
 
-from gcs_planner.mission.georef import LocalFrame
 from gcs_planner.mission.items import MissionItem
 from gcs_planner.scenario.generate import DATASET1
+from gcs_planner.scenario.georef import LocalFrame
 from gcs_planner.scenario.model import Kind, Origin, Scenario
 from sim.vehicle import MockVehicle, free_udp_port
 

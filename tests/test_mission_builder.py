@@ -27,7 +27,6 @@ from gcs_planner.mission.builder import (
     arc_waypoints,
     build_mission,
 )
-from gcs_planner.mission.georef import DEFAULT_ORIGIN, LocalFrame
 from gcs_planner.mission.items import (
     MAV_CMD_DO_CHANGE_SPEED,
     MAV_CMD_NAV_LAND,
@@ -38,6 +37,7 @@ from gcs_planner.mission.items import (
     MAV_FRAME_GLOBAL_RELATIVE_ALT,
 )
 from gcs_planner.scenario.generate import DATASET1
+from gcs_planner.scenario.georef import DEFAULT_ORIGIN, LocalFrame
 from gcs_planner.scenario.model import Kind, Origin, Scenario
 
 GEOD = pyproj.Geod(ellps="WGS84")

@@ -18,9 +18,9 @@ import pytest
 from gcs_planner.autopilot import AUTOPILOTS, effective
 from gcs_planner.link.connection import Link, mavlink, open_link
 from gcs_planner.link.mission_client import MissionClient
-from gcs_planner.mission.georef import LocalFrame
 from gcs_planner.mission.items import MissionItem
 from gcs_planner.scenario.generate import DATASET1
+from gcs_planner.scenario.georef import LocalFrame
 from gcs_planner.scenario.model import Kind, Origin, Scenario
 from sim.vehicle import MockVehicle, free_udp_port
 

@@ -13,9 +13,9 @@ from gcs_planner.core.probability import success_probability
 from gcs_planner.core.route import Leg, evaluate_route
 from gcs_planner.geometry.dubins import cs_leg
 from gcs_planner.mission.builder import arc_waypoints
-from gcs_planner.mission.georef import LocalFrame
 from gcs_planner.mission.items import MissionItem
 from gcs_planner.scenario.generate import DATASET1, random_scenario
+from gcs_planner.scenario.georef import LocalFrame
 from gcs_planner.scenario.model import Kind, Origin, Scenario
 from sim.guidance import AutopilotParams
 from sim.replay import CHORD_SHORTFALL, QUANTISATION_M

@@ -296,7 +296,7 @@ def flight_scenario():
 
 
 def flight_items(flavour: str) -> list[MissionItem]:
-    from gcs_planner.mission.georef import LocalFrame
+    from gcs_planner.scenario.georef import LocalFrame
 
     sc = flight_scenario()
     frame = LocalFrame(sc.origin)

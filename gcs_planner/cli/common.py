@@ -79,7 +79,7 @@ def _vector(text: str) -> tuple[float, float, float]:
 
 
 def load_scenario_from_args(args: argparse.Namespace, path: str | None = None) -> Scenario:
-    from gcs_planner.mission.georef import parse_origin
+    from gcs_planner.scenario.georef import parse_origin
     from gcs_planner.scenario.readers import load_scenario
 
     overrides: dict = {

@@ -15,8 +15,8 @@ from gcs_planner.mission.builder import (
     FIRMWARES,
 )
 from gcs_planner.mission.export import FORMATS, export
-from gcs_planner.mission.georef import DEFAULT_ORIGIN_WARNING, parse_home, parse_origin
 from gcs_planner.policy import DEFAULT_MIN_PROBABILITY
+from gcs_planner.scenario.georef import DEFAULT_ORIGIN_WARNING, parse_home, parse_origin
 
 
 def add_mission_arguments(p: argparse.ArgumentParser) -> None:

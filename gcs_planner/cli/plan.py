@@ -91,7 +91,7 @@ def run(args: argparse.Namespace) -> int:
     if warning:
         print(f"gcs-planner: warning: {warning}", file=sys.stderr)
     if scenario.origin is None:
-        from gcs_planner.mission.georef import DEFAULT_ORIGIN_WARNING
+        from gcs_planner.scenario.georef import DEFAULT_ORIGIN_WARNING
 
         print(f"gcs-planner: warning: {DEFAULT_ORIGIN_WARNING}", file=sys.stderr)
     return 0

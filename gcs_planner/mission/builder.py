@@ -61,7 +61,6 @@ from gcs_planner.errors import InputError
 from gcs_planner.geometry.airplane import AirplaneLeg
 from gcs_planner.geometry.legs import FlownLeg
 from gcs_planner.geometry.trajectory import leg_from_dict
-from gcs_planner.mission.georef import DEFAULT_ORIGIN, LocalFrame, validate_origin
 from gcs_planner.mission.items import (
     MAV_CMD_DO_CHANGE_SPEED,
     MAV_CMD_NAV_LAND,
@@ -75,6 +74,7 @@ from gcs_planner.mission.items import (
     MAV_FRAME_MISSION,
     MissionItem,
 )
+from gcs_planner.scenario.georef import DEFAULT_ORIGIN, LocalFrame, validate_origin
 from gcs_planner.scenario.model import Origin
 from gcs_planner.vehicle import (
     DEFAULT_ACCEPTANCE_RADIUS_M,

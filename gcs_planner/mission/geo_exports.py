@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from gcs_planner.mission.builder import Mission, point_table, route_entry, route_legs, route_xyz
-from gcs_planner.mission.georef import LocalFrame
+from gcs_planner.scenario.georef import LocalFrame
 
 # Spacing of the trajectory's samples: fine enough that a 200 m turn looks round on a map.
 TRAJECTORY_STEP_M = 20.0

@@ -2,7 +2,7 @@
 
 A geographic points file gives each point's WGS84 latitude and longitude (degrees) and its
 altitude above mean sea level (metres). The planner works in the local frame of
-:class:`~gcs_planner.mission.georef.LocalFrame` — the same azimuthal equidistant projection the
+:class:`~gcs_planner.scenario.georef.LocalFrame` — the same azimuthal equidistant projection the
 exporter inverts to write the mission — so a landmark goes in and comes back out of the same
 formula, and a correction waypoint lands on its landmark.
 
@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from gcs_planner.errors import InputError
+from gcs_planner.scenario.georef import LocalFrame
 from gcs_planner.scenario.model import Origin
 
 # (header line, [(line, {column: cell})], {column: label in messages}), as the format readers give
@@ -79,8 +80,6 @@ def to_local(
     """The table with x, y, z (metres, local frame) in place of lat, lon, alt, and the origin
     of that frame: ``origin``, else A's position at mean sea level (``is_start`` tells A's
     kind cell). Error messages keep naming the file's own columns."""
-    from gcs_planner.mission.georef import LocalFrame
-
     header, rows, labels = table
     if not rows:
         raise InputError("no points after the header (header only)", file=str(path), row=header)

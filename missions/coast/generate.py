@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from gcs_planner.mission.georef import LocalFrame
+from gcs_planner.scenario.georef import LocalFrame
 from gcs_planner.scenario.model import Origin
 
 SEED = 21
