@@ -160,3 +160,44 @@ def test_compiled_lengths_equal_numpys(name: str, seed: int) -> None:
         np.testing.assert_allclose(
             np.asarray(got_heading)[finite], want_heading[finite], rtol=0, atol=1e-9
         )
+
+
+@pytest.mark.parametrize("name", MODELS)
+def test_the_model_says_what_its_bounds_are(name: str) -> None:
+    """``chord_bounds`` is true exactly when the lower bounds are the chords; ``turns_in_bounds``
+    only where legs turn; the relaxation answers for itself the same way."""
+    model = MODELS[name]
+    start, _, ends = _legs(11)
+    chords = np.linalg.norm(ends - start, axis=1)
+    for m in (model, model.relaxation()):
+        same = np.allclose(m.lower_bounds(start, ends), chords, rtol=REL, atol=0.0)
+        assert m.chord_bounds == same, (name, m.name)
+        assert not m.turns_in_bounds or (m.carries_heading and m.radius > 0)
+
+
+@pytest.mark.parametrize("name", MODELS)
+def test_the_kernel_legs_fly_what_the_model_flies(name: str) -> None:
+    """The numbers the compiled search flies a model with give the model's own lengths."""
+    model = MODELS[name]
+    kernel = model.kernel_legs()
+    if not model.carries_heading:
+        # heading-free legs come from the reach graph; a climb-limited R = 0 model still states
+        # its limits, which the compiled search's first leg uses
+        assert kernel is None or kernel.radius == 0.0
+        return
+    assert kernel is not None and kernel.radius == model.radius
+    from gcs_planner.geometry.airplane_kernel import airplane_lengths
+    from gcs_planner.geometry.dubins_kernel import cs_lengths
+
+    start, heading, ends = _legs(12)
+    want, _ = model.lengths(start, heading, ends)
+    if kernel.kind == "airplane":
+        got, _ = airplane_lengths(
+            start, heading, ends, kernel.radius, kernel.tan_climb, kernel.tan_descent
+        )
+    else:
+        assert kernel.kind == "cs3d" and math.isinf(kernel.tan_climb)
+        got, _ = cs_lengths(start, heading, ends, kernel.radius)
+    finite = np.isfinite(want)
+    assert np.array_equal(finite, np.isfinite(got))
+    assert np.allclose(got[finite], want[finite], rtol=1e-9, atol=1e-6)

@@ -44,11 +44,9 @@ from gcs_planner.core.probability import propagate, success_probability
 from gcs_planner.core.proof import PROB_EPS, lower_bounds, settled
 from gcs_planner.core.reach import ReachGraph, build_reach_graph
 from gcs_planner.core.route import Leg, Route, evaluate_route
-from gcs_planner.geometry.airplane import slope_tan
 from gcs_planner.geometry.legs import (
-    AirplaneLegs,
-    CS3DLegs,
     FlownLeg,
+    KernelLegs,
     LegModel,
     path_angle_deg,
     scenario_leg_model,
@@ -1040,6 +1038,11 @@ def _ending(
     )
 
 
+# The compiled search's leg modes by the model's kernel kind (``search_kernel.LEGS_*``; that
+# module is imported only when a search compiles).
+_LEGS_MODE = {"airplane": 2, "cs3d": 3}
+
+
 def _legs_mode(ctx: _Context, critical: frozenset[int] | None) -> int | None:
     """How ``search_kernel`` flies the legs of a search over walks (None: it cannot, the
     search stays in Python): 0 heading-free legs, 1 the pair relaxation's, 2 airplane or 3
@@ -1052,9 +1055,8 @@ def _legs_mode(ctx: _Context, critical: frozenset[int] | None) -> int | None:
         return 1
     if not ctx.model.carries_heading:
         return 0
-    if isinstance(ctx.model, AirplaneLegs):
-        return 2
-    return 3 if isinstance(ctx.model, CS3DLegs) else None
+    kernel = ctx.model.kernel_legs()
+    return None if kernel is None else _LEGS_MODE[kernel.kind]
 
 
 def _compiled_search(
@@ -1085,13 +1087,13 @@ def _compiled_search(
         bits[point] = b
     pairs = ctx.pair_floor
     heading_a = scenario.heading_at_a
-    airplane = isinstance(model, AirplaneLegs)
+    kernel = model.kernel_legs() or KernelLegs("none", 0.0, math.inf, math.inf)
     legs = Legs(
         legs_mode,
         np.ascontiguousarray(scenario.xyz, float),
-        float(model.radius) if airplane or isinstance(model, CS3DLegs) else 0.0,
-        slope_tan(model.max_climb_angle) if airplane else math.inf,
-        slope_tan(model.max_descent_angle) if airplane else math.inf,
+        kernel.radius,
+        kernel.tan_climb,
+        kernel.tan_descent,
         heading_a is not None,
         np.zeros(3) if heading_a is None else np.asarray(heading_a, float),
     )

@@ -175,7 +175,7 @@ def pair_bounds(
 ) -> PairBounds | None:
     """G2 of ``scenario`` over ``graph`` for airplane legs with turns (None for other models,
     or when the pairs are too many to pay off). ``stop``: see ``cost_to_go``."""
-    if not isinstance(model, AirplaneLegs) or model.radius <= 0:
+    if not model.turns_in_bounds:
         return None
     n, end, start = graph.n, graph.end, graph.start
     deg = graph.degree()

@@ -16,7 +16,7 @@ from scipy.spatial import cKDTree
 
 from gcs_planner.core.kernel_records import Graph
 from gcs_planner.geometry.airplane import lower_bounds as climb_bounds
-from gcs_planner.geometry.legs import AirplaneLegs, CS3DLegs, StraightLegs, scenario_leg_model
+from gcs_planner.geometry.legs import AirplaneLegs, scenario_leg_model
 from gcs_planner.scenario.model import Kind, Scenario
 
 # From this many points on, the compiled kernels (numba) build the graph and run the search: below
@@ -154,10 +154,7 @@ def build_reach_graph(scenario: Scenario, compiled: bool | None = None) -> Reach
 def bounds_are_chords(scenario: Scenario) -> bool:
     """Whether the scenario's legs' heading-free lower bounds are their chords: straight and
     cs3d legs, and airplane legs with unlimited climb (no altitude change needs more path)."""
-    model = scenario_leg_model(scenario)
-    if isinstance(model, (StraightLegs, CS3DLegs)):
-        return True
-    return model.max_climb_angle >= 90.0 and model.max_descent_angle >= 90.0
+    return scenario_leg_model(scenario).chord_bounds
 
 
 def _bounded(graph: ReachGraph, xyz: np.ndarray, model: AirplaneLegs) -> ReachGraph:

@@ -11,7 +11,10 @@ Each model answers, for one start point and heading and many targets:
 
 ``carries_heading`` says whether a leg depends on the heading it starts with; when it does not,
 partial routes at one point are comparable whatever their past, and the lower bound is the flown
-length itself (``exact_bounds``).
+length itself (``exact_bounds``). The search asks three more things, so that it never looks at
+which model it has: ``kernel_legs()`` (the numbers the compiled search flies the legs with, or
+None where it needs none), ``chord_bounds`` (whether the lower bounds are the chords) and
+``turns_in_bounds`` (whether a pair relaxation over the turn into each leg can raise them).
 """
 
 from __future__ import annotations
@@ -34,10 +37,24 @@ from gcs_planner.geometry.dubins import CSLeg, cs_leg, cs_lengths, straight_leg
 FlownLeg = CSLeg | AirplaneLeg
 
 
+@dataclass(frozen=True)
+class KernelLegs:
+    """How the compiled search flies a model's legs from a heading (``search_kernel``)."""
+
+    kind: str  # "airplane" or "cs3d"
+    radius: float
+    tan_climb: float  # math.inf: no climb limit
+    tan_descent: float
+
+
 class LegModel(Protocol):
     name: str
     radius: float
     carries_heading: bool
+    chord_bounds: bool
+    turns_in_bounds: bool
+
+    def kernel_legs(self) -> KernelLegs | None: ...
 
     def lengths(
         self, start: np.ndarray, heading: np.ndarray | None, ends: np.ndarray
@@ -62,6 +79,11 @@ class StraightLegs:
     name: str = "straight"
     radius: float = 0.0
     carries_heading: bool = False
+    chord_bounds: bool = True
+    turns_in_bounds: bool = False
+
+    def kernel_legs(self) -> KernelLegs | None:
+        return None  # heading-free: the search takes the legs from the reach graph
 
     def lengths(self, start, heading, ends):
         return _chords(start, ends), None
@@ -86,6 +108,11 @@ class CS3DLegs:
     radius: float
     name: str = "cs3d"
     carries_heading: bool = True
+    chord_bounds: bool = True
+    turns_in_bounds: bool = False
+
+    def kernel_legs(self) -> KernelLegs | None:
+        return KernelLegs("cs3d", float(self.radius), math.inf, math.inf)
 
     def lengths(self, start, heading, ends):
         if heading is None:  # free heading at A: the chord
@@ -127,6 +154,21 @@ class AirplaneLegs:
     def carries_heading(self) -> bool:
         return self.radius > 0
 
+    @property
+    def chord_bounds(self) -> bool:
+        # with unlimited climb no altitude change needs more path than the chord
+        return self.max_climb_angle >= 90.0 and self.max_descent_angle >= 90.0
+
+    @property
+    def turns_in_bounds(self) -> bool:
+        return self.radius > 0
+
+    def kernel_legs(self) -> KernelLegs | None:
+        return KernelLegs(
+            "airplane", float(self.radius), slope_tan(self.max_climb_angle),
+            slope_tan(self.max_descent_angle),
+        )  # fmt: skip
+
     def lengths(self, start, heading, ends):
         legs = airplane_legs(
             start, heading, ends, self.radius, self.max_climb_angle, self.max_descent_angle
@@ -167,6 +209,14 @@ class BoundLegs:
     name: str = "bound"
     radius: float = 0.0
     carries_heading: bool = False
+    turns_in_bounds: bool = False
+
+    @property
+    def chord_bounds(self) -> bool:
+        return self.model.chord_bounds
+
+    def kernel_legs(self) -> KernelLegs | None:
+        return None  # heading-free
 
     def lengths(self, start, heading, ends):
         return self.model.lower_bounds(start, ends), None
