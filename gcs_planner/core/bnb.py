@@ -30,7 +30,7 @@ import sys
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
@@ -573,7 +573,7 @@ class _Prober:
         points = tuple(points)
         self.hopeful.update(points[:n] for n in range(after + 1, len(points)))
 
-    def __call__(self, entry: tuple, inc: _Incumbents, budget: Budget) -> tuple[bool, int]:
+    def __call__(self, entry: _Open, inc: _Incumbents, budget: Budget) -> tuple[bool, int]:
         """(covered, labels spent) for the heap ``entry`` of the search whose routes are
         ``inc``."""
         f, _, L, node, k, states, _heading, path, to_go, arc = entry
@@ -602,7 +602,7 @@ class _Prober:
             return True, 0
         # The pair relaxation's heading is the arc flown last.
         first = arc if self.ctx.pair_floor is not None else None
-        origin = (f, 0, L, node, k, states, first, path, to_go, arc)
+        origin = _Open(f, 0, L, node, k, states, first, path, to_go, arc)
         res = _search(
             self.ctx,
             self.critical,
@@ -673,6 +673,22 @@ def _shifted(states: dict, shift: float) -> dict:
     return {(v + shift, h + shift): m for (v, h), m in states.items()}
 
 
+class _Open(NamedTuple):
+    """A partial route on the search's heap, ordered by ``f`` (then by when it was queued:
+    ``tiebreak`` is unique, so the states are never compared)."""
+
+    f: float  # the least length of any route it can become
+    tiebreak: int
+    length: float  # flown so far
+    node: int
+    corrections: int
+    states: dict  # {(v, h): probability}, the error states it arrives in
+    heading: np.ndarray | int | None  # the arc flown last under the pair relaxation
+    path: tuple[int, ...]
+    to_go: np.ndarray  # the bound to go per number of corrections more
+    arc: int  # the arc flown last (-1 at A)
+
+
 def _larger(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """The pointwise larger of two bounds per m (each carried on with its last entry)."""
     if len(a) == len(b):
@@ -734,7 +750,7 @@ def _search(
     budget: Budget,
     seeds: Sequence[Sequence[int]],
     *,
-    origin: tuple | None = None,
+    origin: _Open | None = None,
     incumbents: _Incumbents | None = None,
     nogoods: dict | None = None,
     compiled: bool = True,
@@ -841,11 +857,11 @@ def _search(
         for route in inc.found:
             prober.hope(route.points)
     counter = itertools.count()
-    # Entry: (f, tiebreak, L, node, k, states, heading, path, to_go, last arc). A carries no
-    # error and makes no correction: |A - B| bounds every route, whatever its corrections.
-    heap: list = [
+    # A carries no error and makes no correction: |A - B| bounds every route, whatever its
+    # corrections.
+    heap: list[_Open] = [
         origin
-        or (
+        or _Open(
             float(graph.to_end[start]),
             next(counter),
             0.0,
@@ -871,7 +887,7 @@ def _search(
             if least == math.inf:
                 continue
             if least > f:  # queued before routes that now cover its shortest continuations
-                heapq.heappush(heap, (least, *entry[1:]))
+                heapq.heappush(heap, entry._replace(f=least))
                 continue
         elif inc.covers(L, k, to_go, mass) or by_level(L, k, node, states, mass, to_go):
             continue
@@ -965,7 +981,7 @@ def _search(
             new_heading = None if headings is None else headings[idx]
             heapq.heappush(
                 heap,
-                (
+                _Open(
                     least if by_open else nL + float(g[-1]),
                     next(counter),
                     nL,
@@ -994,8 +1010,8 @@ def _search(
     # "optimal" marks only weaker for it, never wrong.
     stop_at = None if budget.deadline is None else budget.deadline + ENDING_GRACE
 
-    def still_open(e: tuple) -> tuple:  # (f, L, k, bounds to go, mass), as ``_ending`` takes
-        return (e[0], e[2], e[4], e[8], sum(e[5].values()))
+    def still_open(e: _Open) -> tuple:  # (f, L, k, bounds to go, mass), as ``_ending`` takes
+        return (e.f, e.length, e.corrections, e.to_go, sum(e.states.values()))
 
     for at, e in enumerate(heap):
         if stop_at is not None and at % 1024 == 0 and time.monotonic() > stop_at:
@@ -1003,7 +1019,9 @@ def _search(
             break
         row = still_open(e)
         _, L, k, to_go, mass = row
-        if not inc.covers(L, k, to_go, mass) and not by_level(L, k, e[3], e[5], mass, to_go):
+        if not inc.covers(L, k, to_go, mass) and not by_level(
+            L, k, e.node, e.states, mass, to_go
+        ):
             live.append(row)
     return _ending(ctx, inc, live, labels, t0, exhausted, probe_labels)
 
