@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gcs_planner.core.probability import PROB_EPS, propagate
+from gcs_planner.core.probability import PROB_EPS, outcomes, propagate
 from gcs_planner.core.route import Route
 from gcs_planner.errors import GcsPlannerError
 from gcs_planner.geometry.legs import LegModel, scenario_leg_model
@@ -239,11 +239,9 @@ class _Evaluator:
             result = (1.0, flown, flown)
         if result is None:
             p = params.p_success
-            r = params.residual_m
-            if Kind(int(sc.kind[node.points[-1]])) == Kind.V:
-                ok_state, fail_state = (0.0, h), (min(v, r), h)
-            else:
-                ok_state, fail_state = (v, 0.0), (v, min(h, r))
+            ok_state, fail_state = outcomes(
+                v, h, Kind(int(sc.kind[node.points[-1]])), params.residual_m
+            )
             prob = e_arr = e_flown = 0.0
             # Zero-mass branches are skipped: their value does not matter and may be undefined.
             for mass, child, state in (
@@ -380,11 +378,9 @@ def replan_on_failure(
                     v = 0.0
                 elif kind == Kind.H:
                     h = 0.0
-        r = params.residual_m
-        if Kind(int(scenario.kind[node.points[-1]])) == Kind.V:
-            ok_state, fail_state = (0.0, h), (min(v, r), h)
-        else:
-            ok_state, fail_state = (v, 0.0), (v, min(h, r))
+        ok_state, fail_state = outcomes(
+            v, h, Kind(int(scenario.kind[node.points[-1]])), params.residual_m
+        )
         on_success = build(node.on_success, *ok_state, out, visited)
         own = build(node.on_failure, *fail_state, out, visited)
         found, _, _ = _best_continuation(

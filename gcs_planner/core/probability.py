@@ -84,6 +84,16 @@ class MonteCarloResult:
     confidence: float
 
 
+def outcomes(v: float, h: float, kind: Kind, residual_m: float) -> tuple[State, State]:
+    """The errors (v, h) after a correction at a point of ``kind`` that succeeds and that fails
+    (the corrected component reset to 0, or clipped to the residual); B and A correct nothing."""
+    if kind == Kind.V:
+        return (0.0, h), (min(v, residual_m), h)
+    if kind == Kind.H:
+        return (v, 0.0), (v, min(h, residual_m))
+    return (v, h), (v, h)
+
+
 def propagate(
     states: dict[State, float],
     leg: float,
@@ -112,12 +122,7 @@ def propagate(
         if not (v <= v_lim and h <= h_lim):
             continue
         arrived += mass
-        if kind == Kind.V:
-            succeeded, failed = (0.0, h), (min(v, residual_m), h)
-        elif kind == Kind.H:
-            succeeded, failed = (v, 0.0), (v, min(h, residual_m))
-        else:
-            succeeded, failed = (v, h), (v, h)
+        succeeded, failed = outcomes(v, h, kind, residual_m)
         # Zero-mass branches (p = 0 or 1) are skipped so they cannot inflate the state count.
         if p > 0.0:
             out[succeeded] = out.get(succeeded, 0.0) + mass * p
