@@ -327,12 +327,20 @@ class FtpClient:
                     self._request(BURST_READ_FILE, start, size=DATA_MAX)
                     bursting = True
                 else:
+                    # Requests a burst has answered since hold no slot of the window.
+                    for offset in [o for o in outstanding if o in chunks]:
+                        del outstanding[offset]
                     for offset, _ in self._gaps(chunks, end, len(head)):
-                        if len(outstanding) >= window.size or self.congested():
+                        if self.congested():
                             break
                         asked = outstanding.get(offset)
                         if asked is not None and now - asked < self.resend_wait(0):
                             continue  # its answer can still come
+                        if asked is None and len(outstanding) >= window.size:
+                            # No room for a new request; but one whose answer was lost is
+                            # asked again below even with the window full (else a window of
+                            # lost requests waits for ever: a burst loss stalled the read).
+                            continue
                         if asked is not None:
                             window.lost()
                         # Every ReadFile asks again for what a burst lost: a resend.
