@@ -277,6 +277,24 @@ class EffectiveParameters:
         t = self.npfg_period * self.npfg_damping
         return max(ground_speed, 0.0) * t * self.npfg_switch_multiplier
 
+    def settle_distance(self, ground_speed: float) -> float:
+        """The straight line (m) the autopilot's path follower needs to settle on a track after a
+        turn, at ``ground_speed`` m/s: its lateral time constant times the ground speed.
+
+        ArduPlane: the L1 distance NAVL1_PERIOD * NAVL1_DAMPING * V / pi
+        (``AP_L1_Control::update_waypoint``, ``_L1_dist``): the L1 point runs that far ahead on
+        the track, so the aircraft closes onto it over about that distance. PX4: npfg's track
+        error bound NPFG_PERIOD * NPFG_DAMPING * V (``npfg.cpp`` ``trackErrorBound``), the
+        distance off track within which it steers along the path rather than towards it; its
+        switch distance is NPFG_SW_DST_MLT (0.32) of it, so a run-out this long also keeps the
+        next turn beyond the landmark."""
+        v = max(ground_speed, 0.0)
+        if self.l1_period is not None and self.l1_damping is not None:
+            return self.l1_period * self.l1_damping * v / math.pi
+        if self.npfg_period is not None and self.npfg_damping is not None:
+            return self.npfg_period * self.npfg_damping * v
+        return 0.0
+
     def waypoint_acceptance(self, ground_speed: float, item_radius: float = 0.0) -> float:
         """The horizontal distance at which the autopilot counts a waypoint reached.
 

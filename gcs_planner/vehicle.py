@@ -127,6 +127,18 @@ class VehicleProfile:
     cruise_airspeed: float = DEFAULT_CRUISE_AIRSPEED
     leg_model: str = DEFAULT_LEG_MODEL
     radius_source: str = "turn_radius"
+    # Straight run-in and run-out at every landmark (m; airplane legs with turns only).
+    approach: float = 0.0
+    departure: float = 0.0
+
+    @property
+    def runs(self) -> bool:
+        """Whether the legs carry a straight run-in or run-out (airplane legs with turns)."""
+        return (
+            self.turn_radius > 0
+            and self.leg_model == "airplane"
+            and (self.approach > 0 or self.departure > 0)
+        )
 
     @property
     def bank_angle(self) -> float:
@@ -186,6 +198,11 @@ class VehicleProfile:
             )
         else:
             climb = "unlimited climb and descent (90 deg, the contest's model)"
+        if self.runs:
+            legs += (
+                f", straight at every landmark (run-in >= {self.approach:.0f} m, run-out "
+                f"{self.departure:.0f} m)"
+            )
         return f"{legs}; {climb}; cruise {self.cruise_airspeed:g} m/s"
 
 
@@ -249,6 +266,12 @@ class DerivedEnvelope:
     altitude: float
     autopilot: str | None
     sources: tuple[tuple[str, str], ...] = ()
+    # The straight run-in and run-out at every landmark (m): the autopilot's settle distance at
+    # the largest ground speed (autopilot.EffectiveParameters.settle_distance); 0 when no
+    # autopilot is named or the user stated them.
+    approach: float = 0.0
+    departure: float = 0.0
+    runs_source: str = ""
 
     @property
     def tas(self) -> float:
@@ -326,6 +349,11 @@ class DerivedEnvelope:
             + _rate_text(self.sink_rate)
             + f" / (TAS + W)) = {self.descent_angle:.2f} deg",
         ]
+        if self.approach > 0 or self.departure > 0:
+            lines.append(
+                f"  straight at every landmark: run-in >= {self.approach:.0f} m, run-out "
+                f"{self.departure:.0f} m ({self.runs_source})"
+            )
         if src:
             lines.append(f"  inputs: {src}")
         return lines
@@ -349,6 +377,9 @@ class DerivedEnvelope:
             "turn_radius": self.turn_radius,
             "max_climb_angle": self.climb_angle,
             "max_descent_angle": self.descent_angle,
+            "approach_m": self.approach,
+            "departure_m": self.departure,
+            "runs_source": self.runs_source,
             "derivation": "TAS from EAS through ISA at the scenario's highest altitude; "
             "angle = atan(rate / (TAS + W)); R = (TAS + W)^2 / (g tan(bank))",
             "sources": dict(self.sources),

@@ -35,6 +35,10 @@ PARAMETER_FLAGS = {
     "max_descent_angle": "largest descent angle in degrees (90: unlimited)",
     "reserve": "flight reserve in metres: keep every error within its limit even when the "
     "aircraft flies this much more than planned between two resets",
+    "approach": "straight run-in in metres: every leg with turns arrives on a tangent at least "
+    "this long (default 0, or derived from the autopilot with --firmware/--vehicle-from)",
+    "departure": "straight run-out in metres: every leg with turns leaves its point this far "
+    "straight on before it turns (departure waypoint; default 0, or derived like --approach)",
 }
 # The aircraft beyond the planning parameters.
 VEHICLE_FLAGS = {

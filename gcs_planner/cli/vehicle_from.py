@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+from dataclasses import replace
 
 from gcs_planner.autopilot import autopilot_for, effective
 from gcs_planner.errors import InputError
@@ -234,6 +235,7 @@ def derive_envelope(
         autopilot=firmware,
         sources=tuple(sources),
     )
+    env = _with_runs(env, args, scenario, shipped)
     for field, why in env.refusals():
         if field == "max_bank_angle" and bank is None:
             continue  # straight legs: no bank to derive a radius from
@@ -246,6 +248,8 @@ def derive_envelope(
         changes["max_climb_angle"] = env.climb_angle
     if sink is not None and getattr(args, "max_descent_angle", None) is None:
         changes["max_descent_angle"] = env.descent_angle
+    if env.runs_source.startswith("derived") and changes:
+        changes["approach"], changes["departure"] = env.approach, env.departure
     if not changes:
         # Everything stated directly: the plan is today's, and says nothing it did not use.
         print(
@@ -261,6 +265,35 @@ def derive_envelope(
         envelope=env,
         radius_source="derived" if "turn_radius" in changes else out.radius_source,
     )
+
+
+def _with_runs(
+    env: DerivedEnvelope, args: argparse.Namespace, scenario: Scenario, shipped: object
+) -> DerivedEnvelope:
+    """The envelope with its straight run-in and run-out at every landmark: as stated (flags or
+    the scenario), else the autopilot's settle distance at the largest ground speed (docs/
+    model.md, "Straight at every landmark"), else none (no autopilot named)."""
+    p = scenario.params
+    stated = (
+        getattr(args, "approach", None) is not None
+        or getattr(args, "departure", None) is not None
+        or p.approach > 0
+        or p.departure > 0
+    )
+    if stated:
+        return replace(env, approach=p.approach, departure=p.departure, runs_source="stated")
+    if shipped is None or env.bank_deg <= 0:
+        return env
+    d = shipped.settle_distance(env.ground_speed_max)  # type: ignore[attr-defined]
+    why = (
+        f"derived: {env.autopilot}'s settle distance at {env.ground_speed_max:.1f} m/s ground "
+        + (
+            "speed, the L1 distance NAVL1_PERIOD * NAVL1_DAMPING * V / pi"
+            if env.autopilot == "ardupilot"
+            else "speed, npfg's track error bound NPFG_PERIOD * NPFG_DAMPING * V"
+        )
+    )
+    return replace(env, approach=d, departure=d, runs_source=why)
 
 
 def _toml_terms(scenario: Scenario) -> tuple[dict[str, object], dict[str, object], str]:

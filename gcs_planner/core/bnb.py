@@ -1114,6 +1114,8 @@ def _compiled_search(
         kernel.tan_descent,
         heading_a is not None,
         np.zeros(3) if heading_a is None else np.asarray(heading_a, float),
+        kernel.run_in,
+        kernel.run_out,
     )
     seeded = Seeds(
         np.array([f.length for f in inc.found], float),

@@ -146,6 +146,8 @@ class Legs(NamedTuple):
     tan_descent: float
     has_heading_a: bool
     heading_a: np.ndarray  # (3,)
+    run_in: float  # airplane legs: least tangent into a point, m (0: none)
+    run_out: float  # airplane legs: straight on from a point before turning, m
 
 
 class Seeds(NamedTuple):

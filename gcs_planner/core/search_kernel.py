@@ -132,6 +132,7 @@ def search(
         legs.mode, legs.xyz, legs.radius, legs.tan_climb, legs.tan_descent
     )  # fmt: skip
     has_heading_a, heading_a = legs.has_heading_a, legs.heading_a
+    run_in, run_out = legs.run_in, legs.run_out
     seed_len, seed_k, seed_p, seed_ptr, seed_points = seeds
     has_pairs = legs_mode == LEGS_PAIRS
     # The routes found: the seeds first.
@@ -226,11 +227,12 @@ def search(
         if legs_mode == LEGS_AIRPLANE:
             if lab_has_head[lab]:
                 flown, heads = airplane_lengths(
-                    xyz[node], lab_head[lab], ends, radius, tan_climb, tan_descent
-                )
+                    xyz[node], lab_head[lab], ends, radius, tan_climb, tan_descent,
+                    run_in, run_out,
+                )  # fmt: skip
             else:
                 flown, heads = free_airplane_lengths(
-                    xyz[node], ends, radius, tan_climb, tan_descent
+                    xyz[node], ends, radius, tan_climb, tan_descent, run_in
                 )
         elif legs_mode == LEGS_CS3D:
             if lab_has_head[lab]:

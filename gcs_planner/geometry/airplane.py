@@ -18,6 +18,14 @@ walk bound the straight distance-like cost-to-go from below as the chord did.
 
 The leg is flown in this order: the helix (starting and ending at Pi's horizontal position, with
 Pi's heading), then the arc, then the tangent; the altitude changes at the same rate throughout.
+
+Straight at every landmark (docs/model.md, "Straight at every landmark"): with a run-out s_out > 0
+the leg first flies s_out metres straight on, along the heading it arrived with at Pi (the
+departure waypoint), and its helix and arc start there; with a run-in s_in > 0 its tangent into
+Pj must be at least s_in metres long, so that the aircraft is settled on the line before it
+overflies the landmark. A leg whose tangent is shorter is not flown (like a target inside the
+turning circle). The first leg from a free heading at A is straight: it has no run-out and needs
+h >= s_in. Both are horizontal metres, part of H and so of the flown length and the errors.
 """
 
 from __future__ import annotations
@@ -90,7 +98,14 @@ class _Horizontal:
     straight: np.ndarray
 
 
-def _horizontal(start: np.ndarray, heading: np.ndarray | None, ends: np.ndarray, radius: float):
+def _horizontal(
+    start: np.ndarray,
+    heading: np.ndarray | None,
+    ends: np.ndarray,
+    radius: float,
+    run_in: float = 0.0,
+    run_out: float = 0.0,
+):
     flat_start = np.array([start[0], start[1], 0.0])
     flat_ends = np.column_stack([ends[:, 0], ends[:, 1], np.zeros(len(ends))])
     if heading is None:
@@ -99,16 +114,35 @@ def _horizontal(start: np.ndarray, heading: np.ndarray | None, ends: np.ndarray,
         apart = h > COINCIDENT_M
         dirs = np.where(apart[:, None], w / np.where(apart, h, 1.0)[:, None], [1.0, 0.0, 0.0])
         ones = np.ones(len(ends), dtype=bool)
-        return _Horizontal(h, np.zeros(len(ends)), _left_of(dirs), dirs, ones, ones)
+        return _Horizontal(h, np.zeros(len(ends)), _left_of(dirs), dirs, h >= run_in, ones)
     u = np.array([heading[0], heading[1], 0.0])
     u /= math.hypot(u[0], u[1])
-    core = _core(flat_start, u, flat_ends, radius)
+    turn_start = flat_start + run_out * u
+    core = _core(turn_start, u, flat_ends, radius)
     # A straight-ahead leg holds its helix on the left (either side gives the same length).
     left = _left_of(np.broadcast_to(u, (len(ends), 3)))
     normal = np.where(core.straight[:, None], left, core.normal)
+    reachable = core.reachable
+    if run_in > 0.0:
+        reachable = reachable & (tangent_lengths(turn_start, u, flat_ends, radius) >= run_in)
     return _Horizontal(
-        core.length, core.phi, normal, core.heading_out, core.reachable, core.straight
+        run_out + core.length, core.phi, normal, core.heading_out, reachable, core.straight
     )
+
+
+def tangent_lengths(
+    start: np.ndarray, u: np.ndarray, ends: np.ndarray, radius: float
+) -> np.ndarray:
+    """Horizontal length of the straight part (the tangent) of the CS paths from ``start`` with
+    horizontal unit heading ``u`` to each row of ``ends``: sqrt(a^2 + b (b - 2R)), a and b the
+    target's offset along and across u (the chord when the target lies straight ahead, 0 when
+    it lies on the start; NaN never: inside the circle gives 0). ``airplane_kernel`` computes it
+    with the same operations, so that both agree on which legs have their run-in."""
+    wx = ends[:, 0] - start[0]
+    wy = ends[:, 1] - start[1]
+    a = wx * u[0] + wy * u[1]
+    b = np.abs(u[0] * wy - u[1] * wx)
+    return np.sqrt(np.maximum(a * a + b * (b - 2.0 * radius), 0.0))
 
 
 def _left_of(dirs: np.ndarray) -> np.ndarray:
@@ -122,7 +156,7 @@ class AirplaneLegs:
 
     length: np.ndarray  # inf where not flyable
     heading: np.ndarray  # (m, 3) horizontal heading at each target; NaN where not flyable
-    horizontal: np.ndarray  # H + 2 pi R k
+    horizontal: np.ndarray  # H + 2 pi R k (H with the run-out)
     helix_turns: np.ndarray  # k
     arc_angle: np.ndarray  # phi
     normal: np.ndarray  # (m, 3) horizontal normal towards the turn (and the helix)
@@ -136,12 +170,17 @@ def airplane_legs(
     radius: float,
     climb_deg: float,
     descent_deg: float,
+    run_in: float = 0.0,
+    run_out: float = 0.0,
 ) -> AirplaneLegs:
     """Airplane legs from ``start`` (horizontal ``heading``, None = free: straight legs) to each
-    row of ``ends``."""
+    row of ``ends``, with a run-out of ``run_out`` and a tangent of at least ``run_in`` metres
+    (horizontal; both 0 with R = 0: straight legs carry no heading to run out on)."""
     start = np.asarray(start, dtype=float)
     ends = np.asarray(ends, dtype=float)
-    hz = _horizontal(start, heading if radius > 0 else None, ends, radius)
+    if radius <= 0:
+        run_in = run_out = 0.0
+    hz = _horizontal(start, heading if radius > 0 else None, ends, radius, run_in, run_out)
     dz = ends[:, 2] - start[2]
     need = needed_horizontal(dz, climb_deg, descent_deg)
     k, ok = helix_turns(hz.length, need, radius)
@@ -172,6 +211,9 @@ class AirplaneLeg:
     reachable: bool
     climb_limit_deg: float = 90.0
     descent_limit_deg: float = 90.0
+    # Horizontal metres flown straight on along ``heading_in`` before the helix and the arc (the
+    # run-out to the departure waypoint; docs/model.md, "Straight at every landmark").
+    run_out: float = 0.0
 
     # -- lengths (horizontal first, then along the climbing path) --
 
@@ -188,9 +230,20 @@ class AirplaneLeg:
         return self.radius * self.arc_angle if self.normal is not None else 0.0
 
     @property
+    def _turn_start_flat(self) -> np.ndarray:
+        """Horizontal position where the run-out ends and the helix and the arc start."""
+        return self.start[:2] + self.run_out * self.heading_in[:2]
+
+    @property
+    def departure_point(self) -> np.ndarray | None:
+        """Where the run-out ends (the departure waypoint), at the plan's altitude there; None
+        without a run-out."""
+        return self.point_at_horizontal(self.run_out) if self.run_out > 0 else None
+
+    @property
     def _tangent_flat(self) -> np.ndarray:
         """Horizontal position where the arc ends."""
-        p = self.start[:2]
+        p = self._turn_start_flat
         if self.normal is None or self.arc_angle == 0.0:
             return p.copy()
         u, n, r, a = self.heading_in[:2], self.normal[:2], self.radius, self.arc_angle
@@ -202,7 +255,9 @@ class AirplaneLeg:
 
     @property
     def horizontal_length(self) -> float:
-        return self.helix_horizontal + self.arc_horizontal + self.straight_horizontal
+        return (
+            self.run_out + self.helix_horizontal + self.arc_horizontal + self.straight_horizontal
+        )
 
     @property
     def _scale(self) -> float:
@@ -239,11 +294,14 @@ class AirplaneLeg:
         """Centre of the turning circle (horizontal), at the start's altitude."""
         if self.normal is None:
             return None
-        return self.start + self.radius * self.normal
+        turn_start = np.array([*self._turn_start_flat, self.start[2]])
+        return turn_start + self.radius * self.normal
 
     @property
     def tangent_point(self) -> np.ndarray:
-        return self.point_at_horizontal(self.helix_horizontal + self.arc_horizontal)
+        return self.point_at_horizontal(
+            self.run_out + self.helix_horizontal + self.arc_horizontal
+        )
 
     @property
     def sense(self) -> int:
@@ -270,21 +328,24 @@ class AirplaneLeg:
         s_h = np.clip(np.asarray(s_h, dtype=float), 0.0, self.horizontal_length)
         h = self.horizontal_length
         z = self.start[2] + (self.dz * s_h / h if h > 0 else np.full(len(s_h), self.dz))
-        turning = self.helix_horizontal + self.arc_horizontal
+        ro = self.run_out
+        turning = ro + self.helix_horizontal + self.arc_horizontal
         xy = np.empty((len(s_h), 2))
-        on_circle = s_h < turning
+        running_out = s_h < ro
+        xy[running_out] = self.start[:2] + s_h[running_out, None] * self.heading_in[:2]
+        on_circle = (s_h < turning) & ~running_out
         if self.normal is not None and self.radius > 0 and on_circle.any():
             # the angle turned; the helix is whole turns, so the position repeats every 2 pi
-            a = s_h[on_circle] / self.radius
+            a = (s_h[on_circle] - ro) / self.radius
             u, n, r = self.heading_in[:2], self.normal[:2], self.radius
             xy[on_circle] = (
-                self.start[:2]
+                self._turn_start_flat
                 + r * np.sin(a)[:, None] * u
                 + r * (1.0 - np.cos(a))[:, None] * n
             )
         else:
             on_circle[:] = False
-        rest = ~on_circle
+        rest = ~on_circle & ~running_out
         if rest.any():
             flat0 = self._tangent_flat
             span = self.end[:2] - flat0
@@ -299,8 +360,10 @@ class AirplaneLeg:
 
     def heading_at(self, s: float) -> np.ndarray:
         """Horizontal unit heading after flying ``s`` metres."""
-        s_h = float(s) / self._scale
+        s_h = float(s) / self._scale - self.run_out
         turning = self.helix_horizontal + self.arc_horizontal
+        if s_h < 0.0:
+            return self.heading_in.copy()
         if s_h < turning and self.normal is not None and self.radius > 0:
             a = s_h / self.radius
             return math.cos(a) * self.heading_in + math.sin(a) * self.normal
@@ -314,13 +377,14 @@ class AirplaneLeg:
         if not (max_step > 0.0 and math.isfinite(max_step)):
             raise ValueError(f"max_step must be a positive number, got {max_step!r}")
         marks = [0.0]
-        turning = self.helix_horizontal + self.arc_horizontal
-        for lo, hi in ((0.0, turning), (turning, self.horizontal_length)):
+        ro = self.run_out
+        turning = ro + self.helix_horizontal + self.arc_horizontal
+        for lo, hi in ((0.0, ro), (ro, turning), (turning, self.horizontal_length)):
             if hi > lo:
                 k = max(1, math.ceil((hi - lo) / max_step))
                 marks.extend(np.linspace(lo, hi, k + 1)[1:].tolist())
         if self.helix_horizontal > 0:
-            marks.append(self.helix_horizontal)
+            marks.append(ro + self.helix_horizontal)
         marks = sorted(set(marks))
         out = self.points_at_horizontal(np.array(marks))
         if len(out) == 1:
@@ -336,11 +400,17 @@ def airplane_leg(
     radius: float,
     climb_deg: float,
     descent_deg: float,
+    run_in: float = 0.0,
+    run_out: float = 0.0,
 ) -> AirplaneLeg:
-    """The airplane leg from ``start`` (horizontal ``heading``; None = free) to ``end``."""
+    """The airplane leg from ``start`` (horizontal ``heading``; None = free) to ``end``, with
+    its run-out and run-in (``airplane_legs``)."""
     p = np.asarray(start, dtype=float).reshape(3)
     q = np.asarray(end, dtype=float).reshape(3)
-    legs = airplane_legs(p, heading, q[None, :], radius, climb_deg, descent_deg)
+    legs = airplane_legs(
+        p, heading, q[None, :], radius, climb_deg, descent_deg, run_in, run_out
+    )
+    runs_out = heading is not None and radius > 0
     reachable = bool(np.isfinite(legs.length[0]))
     if heading is None or radius <= 0:
         w = q[:2] - p[:2]
@@ -369,6 +439,7 @@ def airplane_leg(
         reachable=reachable,
         climb_limit_deg=climb_deg,
         descent_limit_deg=descent_deg,
+        run_out=float(run_out) if runs_out else 0.0,
     )
 
 

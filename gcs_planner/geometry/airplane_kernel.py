@@ -28,38 +28,56 @@ def airplane_lengths(
     radius: float,
     tan_climb: float,
     tan_descent: float,
+    run_in: float = 0.0,
+    run_out: float = 0.0,
 ) -> tuple[np.ndarray, np.ndarray]:
     """(flown lengths, horizontal headings at the targets (m, 3)) of the airplane legs from
     ``start`` with horizontal ``heading`` to each row of ``ends``; inf and NaN where a target
-    lies inside the turning circle; tangents inf for limits of 90 degrees. ``radius`` 0 flies
+    lies inside the turning circle or its tangent is shorter than ``run_in``; tangents inf for
+    limits of 90 degrees. The leg first runs ``run_out`` metres straight on. ``radius`` 0 flies
     the chord whatever the heading, and a leg too steep for it is inf (no helix), as numpy's."""
     if radius <= 0.0:
-        return free_airplane_lengths(start, ends, radius, tan_climb, tan_descent)
+        return free_airplane_lengths(start, ends, radius, tan_climb, tan_descent, 0.0)
     m = ends.shape[0]
     length = np.empty(m)
     head = np.empty((m, 3))
     norm = math.hypot(heading[0], heading[1])
     ux = heading[0] / norm
     uy = heading[1] / norm
+    sx = start[0] + run_out * ux
+    sy = start[1] + run_out * uy
     for i in range(m):
-        wx = ends[i, 0] - start[0]
-        wy = ends[i, 1] - start[1]
+        wx = ends[i, 0] - sx
+        wy = ends[i, 1] - sy
         reachable, horizontal, hx, hy, hz = cs_core(ux, uy, 0.0, wx, wy, 0.0, radius)
+        if reachable and run_in > 0.0:
+            # the tangent's length as airplane.tangent_lengths computes it
+            a = wx * ux + wy * uy
+            b = abs(ux * wy - uy * wx)
+            reachable = math.sqrt(max(a * a + b * (b - 2.0 * radius), 0.0)) >= run_in
         if not reachable:
             length[i] = math.inf
             head[i, 0], head[i, 1], head[i, 2] = np.nan, np.nan, np.nan
             continue
-        length[i] = _flown(horizontal, ends[i, 2] - start[2], radius, tan_climb, tan_descent)
+        length[i] = _flown(
+            run_out + horizontal, ends[i, 2] - start[2], radius, tan_climb, tan_descent
+        )
         head[i, 0], head[i, 1], head[i, 2] = hx, hy, hz
     return length, head
 
 
 @njit(cache=True)
 def free_airplane_lengths(
-    start: np.ndarray, ends: np.ndarray, radius: float, tan_climb: float, tan_descent: float
+    start: np.ndarray,
+    ends: np.ndarray,
+    radius: float,
+    tan_climb: float,
+    tan_descent: float,
+    run_in: float = 0.0,
 ) -> tuple[np.ndarray, np.ndarray]:
     """``airplane_legs`` with no heading (at A, when none is given): straight horizontal
-    paths, helices where too steep, the heading out along the chord."""
+    paths, helices where too steep, the heading out along the chord; inf where the chord is
+    shorter than ``run_in``."""
     m = ends.shape[0]
     length = np.empty(m)
     head = np.empty((m, 3))
@@ -71,7 +89,10 @@ def free_airplane_lengths(
             head[i, 0], head[i, 1], head[i, 2] = wx / h, wy / h, 0.0 / h
         else:
             head[i, 0], head[i, 1], head[i, 2] = 1.0, 0.0, 0.0
-        length[i] = _flown(h, ends[i, 2] - start[2], radius, tan_climb, tan_descent)
+        if h >= run_in:
+            length[i] = _flown(h, ends[i, 2] - start[2], radius, tan_climb, tan_descent)
+        else:
+            length[i] = math.inf
     return length, head
 
 

@@ -45,6 +45,8 @@ class KernelLegs:
     radius: float
     tan_climb: float  # math.inf: no climb limit
     tan_descent: float
+    run_in: float = 0.0  # airplane: least tangent into a target (m, horizontal)
+    run_out: float = 0.0  # airplane: straight on from a point before turning (m, horizontal)
 
 
 class LegModel(Protocol):
@@ -143,11 +145,15 @@ class CS3DLegs:
 @dataclass(frozen=True)
 class AirplaneLegs:
     """Horizontal turns of radius R, a constant flight-path angle within the climb and descent
-    limits, helices where a leg is too steep (docs/model.md, "Airplane legs")."""
+    limits, helices where a leg is too steep (docs/model.md, "Airplane legs"); with turns, each
+    leg may run ``run_out`` metres straight on before it turns and must arrive on a tangent of
+    at least ``run_in`` metres ("Straight at every landmark")."""
 
     radius: float
     max_climb_angle: float = 90.0
     max_descent_angle: float = 90.0
+    run_in: float = 0.0
+    run_out: float = 0.0
     name: str = "airplane"
 
     @property
@@ -161,18 +167,22 @@ class AirplaneLegs:
 
     @property
     def turns_in_bounds(self) -> bool:
-        return self.radius > 0
+        # The pair relaxation (core/pair_bounds.py) bounds the heading cone and the turn of the
+        # CS path from the point itself; a run-out moves the turn off the point, so with runs
+        # the search goes without it (exact still, only less pruned).
+        return self.radius > 0 and self.run_in == 0.0 and self.run_out == 0.0
 
     def kernel_legs(self) -> KernelLegs | None:
         return KernelLegs(
             "airplane", float(self.radius), slope_tan(self.max_climb_angle),
-            slope_tan(self.max_descent_angle),
+            slope_tan(self.max_descent_angle), float(self.run_in), float(self.run_out),
         )  # fmt: skip
 
     def lengths(self, start, heading, ends):
         legs = airplane_legs(
-            start, heading, ends, self.radius, self.max_climb_angle, self.max_descent_angle
-        )
+            start, heading, ends, self.radius, self.max_climb_angle, self.max_descent_angle,
+            self.run_in, self.run_out,
+        )  # fmt: skip
         return legs.length, (legs.heading if self.radius > 0 else None)
 
     def compiled_lengths(self, start, heading, ends):
@@ -182,7 +192,7 @@ class AirplaneLegs:
 
         return airplane_lengths(
             start, heading, ends, self.radius, slope_tan(self.max_climb_angle),
-            slope_tan(self.max_descent_angle),
+            slope_tan(self.max_descent_angle), float(self.run_in), float(self.run_out),
         )  # fmt: skip
 
     def lower_bounds(self, start, ends):
@@ -192,8 +202,9 @@ class AirplaneLegs:
 
     def leg(self, start, heading, end):
         return airplane_leg(
-            start, heading, end, self.radius, self.max_climb_angle, self.max_descent_angle
-        )
+            start, heading, end, self.radius, self.max_climb_angle, self.max_descent_angle,
+            self.run_in, self.run_out,
+        )  # fmt: skip
 
     def relaxation(self) -> LegModel:
         """Legs whose flown length is this model's heading-free lower bound: a relaxation every
@@ -236,9 +247,13 @@ def leg_model_of(
     leg_model: str = "airplane",
     max_climb_angle: float = 90.0,
     max_descent_angle: float = 90.0,
+    approach: float = 0.0,
+    departure: float = 0.0,
 ) -> LegModel:
     """The leg model a scenario plans with. R = 0 is straight legs (airplane: within the climb
-    limits, a too-steep leg infeasible); cs3d ignores the climb limits."""
+    limits, a too-steep leg infeasible); cs3d ignores the climb limits. ``approach`` and
+    ``departure`` (the run-in and run-out, metres) shape airplane legs with turns only: straight
+    legs carry no heading to run out on, and cs3d is kept as it was published."""
     unlimited = max_climb_angle >= 90.0 and max_descent_angle >= 90.0
     if leg_model == "cs3d":
         return CS3DLegs(radius) if radius > 0 else StraightLegs()
@@ -246,15 +261,21 @@ def leg_model_of(
         raise ValueError(f"unknown leg model {leg_model!r}")
     if radius <= 0 and unlimited:
         return StraightLegs()
-    return AirplaneLegs(radius, max_climb_angle, max_descent_angle)
+    if radius <= 0:
+        approach = departure = 0.0
+    return AirplaneLegs(
+        radius, max_climb_angle, max_descent_angle, float(approach), float(departure)
+    )
 
 
 def scenario_leg_model(scenario) -> LegModel:  # noqa: ANN001 - Scenario, no import cycle
-    """The leg model of ``scenario`` (its turning radius, leg model and climb limits)."""
+    """The leg model of ``scenario`` (its turning radius, leg model, climb limits and the
+    straight run-in and run-out at every landmark)."""
     p = scenario.params
     return leg_model_of(
-        p.turn_radius, scenario.leg_model, p.max_climb_angle, p.max_descent_angle
-    )
+        p.turn_radius, scenario.leg_model, p.max_climb_angle, p.max_descent_angle,
+        p.approach, p.departure,
+    )  # fmt: skip
 
 
 def path_angle_deg(leg: FlownLeg) -> float:

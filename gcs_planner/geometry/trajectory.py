@@ -159,6 +159,8 @@ def _airplane_fields(leg: FlownLeg) -> dict:
         "turn_normal": None if leg.normal is None else _vec(leg.normal),
         "climb_limit_deg": float(leg.climb_limit_deg),
         "descent_limit_deg": float(leg.descent_limit_deg),
+        # metres straight on before the turn (departure waypoint); absent in older plans: 0
+        "run_out": float(leg.run_out),
     }
 
 
@@ -230,7 +232,10 @@ def _airplane_from_dict(d: dict) -> AirplaneLeg:
         reachable=True,
         climb_limit_deg=_read_float(d, "climb_limit_deg"),
         descent_limit_deg=_read_float(d, "descent_limit_deg"),
+        run_out=_read_float(d, "run_out") if "run_out" in d else 0.0,
     )
+    if leg.run_out < 0:
+        raise ValueError("leg: field 'run_out' must be >= 0 metres")
     if (turns > 0 or leg.arc_angle > 0) and leg.normal is None:
         raise ValueError("leg: a leg that turns needs its 'turn_normal'")
     if leg.radius < 0 or (turns > 0 and leg.radius == 0):

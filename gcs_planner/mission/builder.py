@@ -9,6 +9,10 @@ one route of its front into MAVLink mission items (MISSION_ITEM_INT semantics, c
 * A NAV_WAYPOINT exactly on each correction point, overflown: param2 the acceptance radius (the
   capture radius, a whole number of metres within which the aircraft's correction works), param3
   0 (pass through the point, no orbit offset).
+* With a run-out (docs/model.md, "Straight at every landmark"), a NAV_WAYPOINT straight on
+  beyond each point, on the heading the aircraft overflew it with (the departure waypoint):
+  an autopilot that switches to its next item early (PX4 at its npfg switch distance) then does
+  so on this line, past the landmark, and the leg's helix and arc start there.
 * Each Dubins arc densified into NAV_WAYPOINTs at most 16 degrees apart and close enough that a
   chord stays within 2 m of the arc (sagitta R(1 - cos(step/2)) <= 2 m), so the autopilot flies
   the planned turn and not its own shortcut. Straight legs need no intermediate item.
@@ -339,9 +343,8 @@ def arc_waypoints(leg: FlownLeg) -> np.ndarray:
     k = max(1, math.ceil(leg.arc_angle / step - 1e-9))
     angles = leg.arc_angle * np.arange(1, k + 1) / k
     if isinstance(leg, AirplaneLeg):
-        pts = np.array(
-            [leg.point_at_horizontal(leg.helix_horizontal + leg.radius * a) for a in angles]
-        )
+        turn = leg.run_out + leg.helix_horizontal
+        pts = np.array([leg.point_at_horizontal(turn + leg.radius * a) for a in angles])
     else:
         pts = np.array([leg.point_at(leg.radius * a) for a in angles])
     pts[-1] = leg.tangent_point
@@ -356,8 +359,9 @@ def helix_waypoints(leg: FlownLeg) -> np.ndarray:
         return np.empty((0, 3))
     total = 2.0 * math.pi * leg.helix_turns
     k = max(1, math.ceil(total / arc_step(leg.radius) - 1e-9))
-    pts = leg.points_at_horizontal(leg.radius * total * np.arange(1, k + 1) / k)
-    pts[-1, :2] = leg.start[:2]  # whole turns: the helix ends above or below its start
+    pts = leg.points_at_horizontal(leg.run_out + leg.radius * total * np.arange(1, k + 1) / k)
+    # whole turns: the helix ends above or below where it started (the run-out's end)
+    pts[-1, :2] = leg.point_at_horizontal(leg.run_out)[:2]
     return pts
 
 
@@ -366,7 +370,7 @@ def helix_loiter(leg: FlownLeg) -> tuple[np.ndarray, int, float] | None:
     clockwise) of the leg's helix, None when the leg has none."""
     if not isinstance(leg, AirplaneLeg) or leg.helix_turns <= 0 or leg.centre is None:
         return None
-    end_of_helix = leg.point_at_horizontal(leg.helix_horizontal)
+    end_of_helix = leg.point_at_horizontal(leg.run_out + leg.helix_horizontal)
     centre = np.array([leg.centre[0], leg.centre[1], end_of_helix[2]])
     return centre, int(leg.helix_turns), float(-leg.sense * leg.radius)
 
@@ -517,6 +521,13 @@ def build_mission(
 
     n_legs = len(legs)
     for i, leg in enumerate(legs):
+        departure = getattr(leg, "departure_point", None)
+        if departure is not None:
+            # Straight on over the landmark before the next turn (docs/model.md, "Straight at
+            # every landmark"): an autopilot that switches to the next item early does so on
+            # this line, beyond the landmark.
+            note = f"departure {ids[i]} ({leg.run_out:.0f} m straight on)"
+            add(MAV_CMD_NAV_WAYPOINT, mav_frame, note, param2=capture, **at(departure))
         helix = helix_loiter(leg)
         arc = arc_waypoints(leg)
         # A tangent point on the target itself (no straight part) is the target's own waypoint.

@@ -61,6 +61,13 @@ class Parameters:
     # under its autopilot never flies the planned legs exactly: it enters turns late and leaves
     # loiters where its guidance does). 0 is the model of docs/model.md as it stands.
     reserve: float = 0.0
+    # Straight at every landmark (docs/model.md): with turns, each leg arrives at its point on a
+    # tangent of at least ``approach`` metres and the next one leaves it ``departure`` metres
+    # straight on before it turns (horizontal metres, flown and counted in the errors), so that
+    # an autopilot that starts its turns early still overflies the landmark. 0 is the contest's
+    # model; derived from the autopilot when the envelope is (vehicle.DerivedEnvelope).
+    approach: float = 0.0
+    departure: float = 0.0
 
     def validate(self) -> list[str]:
         """Return the names of invalid parameters with why, empty when all are valid."""
@@ -79,6 +86,10 @@ class Parameters:
             value = getattr(self, name)
             if not math.isfinite(value) or not 0.0 < value <= 90.0:
                 bad.append(f"{name} must lie in (0, 90] degrees (got {value!r})")
+        for name in ("approach", "departure"):
+            value = getattr(self, name)
+            if not isinstance(value, (int, float)) or not math.isfinite(value) or value < 0:
+                bad.append(f"{name} must be a finite number >= 0 metres (got {value!r})")
         if bad:
             return bad  # the reserve is judged against valid limits only
         tightest = min(getattr(self, k) for k in PARAMETER_NAMES[:5]) / self.delta
@@ -189,6 +200,8 @@ class Scenario:
             cruise_airspeed=self.cruise_airspeed,
             leg_model=self.leg_model,
             radius_source=self.radius_source,
+            approach=p.approach,
+            departure=p.departure,
         )
 
     def with_vehicle(self, **changes: object) -> Scenario:

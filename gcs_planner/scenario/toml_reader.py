@@ -48,6 +48,8 @@ VEHICLE_KEYS = (
     "max_bank_angle",
     "leg_model",
     "reserve",
+    "approach",
+    "departure",
 )
 ORIGIN_KEYS = ("lat", "lon", "alt")
 POINTS_SUFFIXES = (".csv", ".xlsx", ".geojson", ".json")

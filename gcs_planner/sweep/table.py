@@ -76,6 +76,8 @@ UNITS = {
     "delta": "error units per m flown",
     "turn_radius": "m",
     "reserve": "m",
+    "approach": "m",
+    "departure": "m",
     "p_success": "probability",
     "max_climb_angle": "deg",
     "max_descent_angle": "deg",
