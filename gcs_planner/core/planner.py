@@ -348,10 +348,9 @@ def _branch_and_bound(
         )
         bound = "heading-free cost-to-go per number of further corrections"
         if use_probability and not heading_free:
-            bound += (
-                " (for airplane legs also over the cone of arrival headings), tested per "
-                "probability level"
-            )
+            if scenario_leg_model(scenario).turns_in_bounds:
+                bound += " (for airplane legs also over the cone of arrival headings)"
+            bound += ", tested per probability level"
         statement = (
             f"exact: the Pareto front over all simple feasible routes with {model}, proven by "
             f"exhaustive branch and bound ({res.labels} labels; bound: {bound}; {how})"
