@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import re
 import subprocess
 import sys
 import time
@@ -49,7 +50,8 @@ class WindRow:
     length: float | None
     corrections: int | None
     probability: float | None
-    without_runs: float | None  # chosen length planned with --approach 0 --departure 0
+    # the route chosen when planned with --approach 0 --departure 0: (length, corrections, P)
+    without_runs: tuple[float, int, float] | None
     seconds: float
 
 
@@ -67,13 +69,32 @@ def _plan(workbook: str, firmware: str, wind: float, extra: tuple[str, ...] = ()
         raise RuntimeError(
             f"gcs-planner plan {' '.join(args)}: exit {out.returncode}\n{out.stderr}"
         )
-    if not out.stdout.strip():
-        return {}
+    if not out.stdout.strip():  # infeasible (exit 3): the reason is on stderr
+        return {"infeasible": out.stderr.strip().splitlines()[-1] if out.stderr else "?"}
     return json.loads(out.stdout)
+
+
+def _envelope(error: str, tas: float) -> dict:
+    """The derived envelope of an infeasible case, read off the planner's message (the TAS is
+    the autopilot's at the workbook's highest point, as in the case's other rows)."""
+
+    def number(pattern: str) -> float:
+        m = re.search(pattern, error)
+        return float(m.group(1)) if m else float("nan")
+
+    return {
+        "tas": tas,
+        "turn_radius": number(r"turning radius ([\d.]+) m"),
+        "max_climb_angle": number(r"climb <= ([\d.]+) deg"),
+        "max_descent_angle": number(r"descent <= ([\d.]+) deg"),
+        "approach_m": number(r"run-in >= ([\d.]+) m"),
+    }
 
 
 def _chosen(plan: dict) -> dict | None:
     k = plan.get("chosen")
+    if "front" not in plan:
+        return None
     return None if k is None else plan["front"][k]
 
 
@@ -84,17 +105,24 @@ def run_wind(
     for workbook in ("dataset1", "dataset2"):
         for firmware in firmwares:
             for wind in winds:
+                plan_error = ""
                 t0 = time.perf_counter()
                 plan = _plan(workbook, firmware, wind)
                 seconds = time.perf_counter() - t0
-                env = plan["vehicle"]["envelope"]
+                if "infeasible" in plan:
+                    print(f"{workbook} {firmware} {wind:g} m/s: {plan['infeasible']}")
+                    plan_error = plan["infeasible"]
+                    plan = {"vehicle": {"envelope": None}, "front": [], "chosen": None,
+                            "optimality": {"optimal": True}}  # fmt: skip
+                env = plan["vehicle"]["envelope"] or _envelope(plan_error, rows[-1].tas)
                 chosen = _chosen(plan)
                 plain = None
                 if compare:
                     other = _chosen(
                         _plan(workbook, firmware, wind, ("--approach", "0", "--departure", "0"))
                     )
-                    plain = None if other is None else other["length"]
+                    if other is not None:
+                        plain = (other["length"], other["corrections"], other["probability"])
                 rows.append(
                     WindRow(
                         workbook=workbook,
@@ -120,7 +148,8 @@ def run_wind(
 def wind_table(rows: list[WindRow]) -> str:
     header = [
         "workbook", "autopilot", "wind", "TAS", "R", "climb / descent", "run-in = run-out",
-        "front", "proven", "chosen: length", "corrections", "P", "without the runs",
+        "front", "proven", "chosen: length", "corrections", "P",
+        "without the runs: length, corrections, P",
     ]  # fmt: skip
     body = []
     for r in rows:
@@ -133,12 +162,12 @@ def wind_table(rows: list[WindRow]) -> str:
                 f"{r.radius:.0f} m",
                 f"{r.climb:.1f}° / {r.descent:.1f}°",
                 f"{r.runs:.0f} m",
-                r.front,
+                r.front if r.front else "none: infeasible",
                 "yes" if r.proven else "no",
                 "–" if r.length is None else f"{r.length:,.1f} m",
                 "–" if r.corrections is None else r.corrections,
                 "–" if r.probability is None else f"{r.probability:.3f}",
-                "–" if r.without_runs is None else f"{r.without_runs:,.1f} m",
+                "–" if r.without_runs is None else "{:,.1f} m, {}, {:.3f}".format(*r.without_runs),
             ]
         )
     return table(header, body)

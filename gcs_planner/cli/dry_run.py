@@ -177,6 +177,8 @@ def run(args: argparse.Namespace) -> int:
         # The flown autopilot's defaults fill only what a rate or bank flag leaves open: a dry
         # run with none plans with the stated (or assumed) envelope, as before.
         firmware_defaults=False,
+        # ... but the legs run straight over each landmark as far as the flown autopilot needs.
+        flown_by=args.firmware,
     )
     result = plan_from_args(args, scenario)
     # The vehicle's landmark database comes from the file again, not from the planner.

@@ -51,8 +51,10 @@ def add_mission_arguments(p: argparse.ArgumentParser) -> None:
     g.add_argument(
         "--cruise-speed",
         type=float,
-        default=DEFAULT_CRUISE_SPEED,
-        help=f"airspeed in m/s (default {DEFAULT_CRUISE_SPEED:g})",
+        default=None,
+        help="airspeed in m/s the mission sets (DO_CHANGE_SPEED; default: the plan's cruise "
+        f"airspeed, which its climb angles and turning radius were derived for; "
+        f"{DEFAULT_CRUISE_SPEED:g} for plan files without one)",
     )
     g.add_argument("--at-end", choices=END_ACTIONS, default="loiter", help="action at B")
     g.add_argument("--origin", help="georeference LAT,LON[,ALT] (overrides the plan's)")

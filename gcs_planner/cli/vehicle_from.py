@@ -134,6 +134,7 @@ def derive_envelope(
     wind_field: str = "--wind",
     firmware: str | None = None,
     firmware_defaults: bool = True,
+    flown_by: str | None = None,
 ) -> Scenario:
     """The scenario with its envelope derived from the autopilot's terms, when any is given
     (rates, bank, firmware or a design wind); else ``scenario`` unchanged (today's envelope).
@@ -142,6 +143,8 @@ def derive_envelope(
     ``--max-descent-angle``) win; a figure that nothing derives keeps the scenario's value.
     ``firmware_defaults`` False: no autopilot's shipped defaults fill what flags leave open (the
     dry run, whose --firmware names the flown autopilot and must not change its plan).
+    ``flown_by``: the autopilot that will fly the plan when no firmware fills the envelope (the
+    dry run's): its settle distance gives the straight run-in and run-out at every landmark.
     Bad values are InputError naming the flag."""
     terms, environment, toml = _toml_terms(scenario)
     if "error_unit" in environment or "capture_radius" in environment:
@@ -235,7 +238,8 @@ def derive_envelope(
         autopilot=firmware,
         sources=tuple(sources),
     )
-    env = _with_runs(env, args, scenario, shipped)
+    flier = shipped if shipped is not None or flown_by is None else effective(flown_by, {})
+    env = _with_runs(env, args, scenario, flier)
     for field, why in env.refusals():
         if field == "max_bank_angle" and bank is None:
             continue  # straight legs: no bank to derive a radius from
@@ -285,11 +289,12 @@ def _with_runs(
     if shipped is None or env.bank_deg <= 0:
         return env
     d = shipped.settle_distance(env.ground_speed_max)  # type: ignore[attr-defined]
+    firmware = shipped.firmware  # type: ignore[attr-defined]
     why = (
-        f"derived: {env.autopilot}'s settle distance at {env.ground_speed_max:.1f} m/s ground "
+        f"derived: {firmware}'s settle distance at {env.ground_speed_max:.1f} m/s ground "
         + (
             "speed, the L1 distance NAVL1_PERIOD * NAVL1_DAMPING * V / pi"
-            if env.autopilot == "ardupilot"
+            if firmware == "ardupilot"
             else "speed, npfg's track error bound NPFG_PERIOD * NPFG_DAMPING * V"
         )
     )

@@ -408,6 +408,25 @@ def _whole_metres(value: Any, name: str) -> int:
     return int(v)
 
 
+def plan_cruise_airspeed(plan: dict, source: str = "") -> float:
+    """The cruise airspeed (m/s EAS) the plan's envelope was made for: ``vehicle.cruise_airspeed``
+    (the default airspeed in plan files of releases that did not write it)."""
+    vehicle = plan.get("vehicle")
+    if not isinstance(vehicle, dict) or "cruise_airspeed" not in vehicle:
+        return DEFAULT_CRUISE_SPEED
+    try:
+        speed = float(vehicle["cruise_airspeed"])
+    except (TypeError, ValueError) as exc:
+        raise _bad("vehicle.cruise_airspeed must be a number", source, "cruise_airspeed") from exc
+    if not math.isfinite(speed) or not 0.0 < speed <= 1000.0:
+        raise _bad(
+            f"vehicle.cruise_airspeed must lie in (0, 1000] m/s, got {speed!r}",
+            source,
+            "cruise_airspeed",
+        )
+    return speed
+
+
 def _check_options(firmware: str, altitude_frame: str, at_end: str, cruise_speed: Any) -> float:
     if firmware not in FIRMWARES:
         raise _bad(f"unknown firmware {firmware!r} (one of {', '.join(FIRMWARES)})", "", "firmware")
@@ -442,7 +461,7 @@ def build_mission(
     firmware: str = "ardupilot",
     altitude_frame: str = "amsl",
     acceptance_radius: float = DEFAULT_ACCEPTANCE_RADIUS,
-    cruise_speed: float = DEFAULT_CRUISE_SPEED,
+    cruise_speed: float | None = None,
     at_end: str = "loiter",
     origin: Origin | None = None,
     home: Origin | None = None,
@@ -454,8 +473,13 @@ def build_mission(
     ``Mission.origin_is_default`` is True (the caller warns). ``home`` (lat, lon, alt AMSL) is
     where the aircraft is armed: the files' home, and what relative altitudes are measured from
     (``altitude_frame="relative"`` is refused without it). ``source`` names the plan file in
-    error messages.
+    error messages. ``cruise_speed`` (m/s, the DO_CHANGE_SPEED airspeed) defaults to the plan's
+    own cruise airspeed: its climb angles and turning radius were derived for it, and the same
+    climb rate at a faster airspeed is a flatter climb (a plan for 12 m/s flown at 25 m/s misses
+    its climbing landmarks by up to 180 m).
     """
+    if cruise_speed is None:
+        cruise_speed = plan_cruise_airspeed(plan, source)
     speed = _check_options(firmware, altitude_frame, at_end, cruise_speed)
     if home is not None:
         home = validate_origin(home, field="--home")
@@ -586,6 +610,12 @@ def build_mission(
         seq = add(MAV_CMD_NAV_WAYPOINT, mav_frame, note, param2=capture, param3=0, **at(xyz[i + 1]))
         point_seqs.append((ids[i + 1], seq))
 
+    beyond = _departure_beyond_b(params, legs[-1], radius, source)
+    if beyond is not None:
+        # B overflown straight on too: an autopilot that switches to the end action early (PX4
+        # turns into its loiter at its switch distance) would pass B outside its capture radius.
+        note = f"departure {ids[-1]} ({float(np.linalg.norm(beyond[:2] - xyz[-1][:2])):.0f} m on)"
+        add(MAV_CMD_NAV_WAYPOINT, mav_frame, note, param2=capture, **at(beyond))
     b = at(xyz[-1])
     if at_end == "loiter":
         # MAVLink: a positive loiter radius is clockwise; 0 leaves the autopilot's own radius.
@@ -613,6 +643,24 @@ def build_mission(
         route=tuple(ids),
         point_seqs=tuple(point_seqs),
     )
+
+
+def _departure_beyond_b(
+    params: dict, last: FlownLeg, radius: float, source: str
+) -> np.ndarray | None:
+    """Where the run-out beyond B ends (B's altitude, along the heading the last leg arrives
+    with), or None when the plan has no run-out (``parameters.departure``, 0 in earlier plan
+    files) or straight legs."""
+    try:
+        departure = float(params.get("departure", 0.0))
+    except (TypeError, ValueError) as exc:
+        raise _bad("parameters.departure must be a number", source, "departure") from exc
+    if not math.isfinite(departure) or departure < 0:
+        raise _bad(f"parameters.departure must be >= 0, got {departure!r}", source, "departure")
+    if departure <= 0 or radius <= 0 or not isinstance(last, AirplaneLeg):
+        return None
+    out = np.asarray(last.heading_out, dtype=float)
+    return np.array([*(last.end[:2] + departure * out[:2]), last.end[2]])
 
 
 def _arc_acceptance(leg: FlownLeg, capture: int) -> float:
