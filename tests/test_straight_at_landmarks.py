@@ -210,3 +210,96 @@ def test_the_mission_overflies_each_point_straight_on_to_its_departure_waypoint(
         a = frame.to_local(before.x / 1e7, before.y / 1e7, before.z)
         c = frame.to_local(loiter.x / 1e7, loiter.y / 1e7, loiter.z)
         assert math.hypot(a[0] - c[0], a[1] - c[1]) == pytest.approx(400.0, abs=0.05)
+
+
+def test_b_is_overflown_straight_on_before_the_end_action() -> None:
+    scenario = tall_scenario(4, "airplane", 400.0, True).with_params(
+        approach=300.0, departure=600.0
+    )
+    plan_dict = plan_to_dict(plan(scenario, objectives=TWO, time_limit=None))
+    for firmware in ("ardupilot", "px4"):
+        items = build_mission(plan_dict, firmware=firmware).items
+        b_seq = dict(build_mission(plan_dict, firmware=firmware).point_seqs)[
+            plan_dict["front"][plan_dict["chosen"]]["route"][-1]
+        ]
+        after = items[b_seq + 1]
+        assert after.command == MAV_CMD_NAV_WAYPOINT and after.note.startswith("departure")
+        frame = LocalFrame(resolve_origin(plan_dict, None)[0])
+        b = frame.to_local(items[b_seq].x / 1e7, items[b_seq].y / 1e7, items[b_seq].z)
+        d = frame.to_local(after.x / 1e7, after.y / 1e7, after.z)
+        assert math.hypot(d[0] - b[0], d[1] - b[1]) == pytest.approx(600.0, abs=0.05)
+    # without runs the mission ends at B as before
+    plain = plan_to_dict(plan(tall_scenario(4, "airplane", 400.0, True), objectives=TWO))
+    items = build_mission(plain).items
+    assert not any(it.note.startswith("departure") for it in items)
+
+
+def test_the_mission_flies_at_the_plans_cruise_airspeed() -> None:
+    """DO_CHANGE_SPEED is the plan's cruise airspeed unless the caller says otherwise: the plan's
+    climb angles were derived for it (a faster aircraft climbs flatter at the same rate)."""
+    from gcs_planner.mission.items import MAV_CMD_DO_CHANGE_SPEED
+
+    scenario = tall_scenario(4, "airplane", 400.0, True).with_vehicle(cruise_airspeed=12.0)
+    plan_dict = plan_to_dict(plan(scenario, objectives=TWO, time_limit=None))
+    assert plan_dict["vehicle"]["cruise_airspeed"] == 12.0
+
+    def speed(mission) -> float:
+        (item,) = [it for it in mission.items if it.command == MAV_CMD_DO_CHANGE_SPEED]
+        return item.param2
+
+    assert speed(build_mission(plan_dict)) == 12.0
+    assert speed(build_mission(plan_dict, cruise_speed=18.0)) == 18.0
+    del plan_dict["vehicle"]["cruise_airspeed"]  # a plan file of an earlier release
+    assert speed(build_mission(plan_dict)) == 25.0
+
+
+DS1 = ["--alpha1", "25", "--alpha2", "15", "--beta1", "20", "--beta2", "25", "--theta", "30",
+       "--delta", "0.001"]  # fmt: skip
+
+
+def _plan_json(capsys, dataset_paths, *extra) -> dict:
+    import json
+
+    from gcs_planner.cli import main
+
+    rc = main(["plan", str(dataset_paths[1]), *DS1, "--json", "--quiet", *extra])
+    out = capsys.readouterr().out
+    assert rc == 0
+    return json.loads(out)
+
+
+def test_the_runs_are_derived_from_the_autopilot_and_stated(capsys, dataset_paths) -> None:
+    from gcs_planner.autopilot import effective
+
+    px4 = _plan_json(capsys, dataset_paths, "--firmware", "px4", "--wind", "5")
+    env = px4["vehicle"]["envelope"]
+    # npfg's track error bound at the largest ground speed: NPFG_PERIOD * NPFG_DAMPING * (V + W)
+    want = effective("px4", {}).settle_distance(env["tas"] + 5.0)
+    assert want == pytest.approx(10.0 * 0.7 * (env["tas"] + 5.0))
+    assert px4["parameters"]["approach"] == pytest.approx(want)
+    assert px4["parameters"]["departure"] == pytest.approx(want)
+    assert env["approach_m"] == pytest.approx(want) and "npfg" in env["runs_source"]
+    assert "straight at every landmark" in px4["vehicle"]["description"]
+    ardu = _plan_json(capsys, dataset_paths, "--firmware", "ardupilot")
+    v = ardu["vehicle"]["envelope"]["tas"]
+    assert ardu["parameters"]["approach"] == pytest.approx(17.0 * 0.75 * v / math.pi)
+    # stated: the flags win
+    stated = _plan_json(
+        capsys, dataset_paths, "--firmware", "px4", "--approach", "0", "--departure", "120"
+    )
+    assert stated["parameters"]["approach"] == 0.0
+    assert stated["parameters"]["departure"] == 120.0
+    assert stated["vehicle"]["envelope"]["runs_source"] == "stated"
+    # the envelope stated directly (the contest's model): no runs, as before
+    contest = _plan_json(capsys, dataset_paths, "--turn-radius", "200")
+    assert contest["parameters"]["approach"] == 0.0 and contest["vehicle"]["envelope"] is None
+
+
+def test_a_bad_run_length_names_its_flag(capsys, dataset_paths) -> None:
+    from gcs_planner.cli import main
+
+    for flag in ("--approach", "--departure"):
+        for bad in ("-5", "nan", "inf"):
+            rc = main(["plan", str(dataset_paths[1]), *DS1, flag, bad, "--quiet"])
+            err = capsys.readouterr().err
+            assert rc == 2 and flag.strip("-") in err and "Traceback" not in err, (flag, bad, err)
