@@ -7,13 +7,16 @@ import sys
 from collections.abc import Callable
 from pathlib import Path
 
+from gcs_planner.autopilot import autopilot_for
 from gcs_planner.cli.common import add_quiet_argument
 from gcs_planner.errors import LinkError
 from gcs_planner.link.connection import open_link
 from gcs_planner.link.mission_client import FIRMWARES, TRANSFERS, MissionClient
 from gcs_planner.link.mission_file import load_mission_file
+from gcs_planner.link.params import read_parameter, set_parameter
 from gcs_planner.link.progress import Progress
 from gcs_planner.link.signing import key_from_passphrase
+from gcs_planner.link.vehicle_check import check_vehicle
 
 
 def add_link_arguments(p: argparse.ArgumentParser) -> None:
@@ -148,6 +151,8 @@ def run(args: argparse.Namespace) -> int:
                 f"{args.file} is a {mission.firmware} mission but the vehicle runs "
                 f"{vehicle.firmware}: export it again with --firmware {vehicle.firmware}"
             )
+        if not args.no_param_check and Path(args.file).suffix.lower() == ".json":
+            _check_parameters(client, args, vehicle.firmware)
         radius = args.loiter_radius if args.loiter_radius is not None else mission.loiter_radius
         if args.keep_loiter_radius:
             radius = None
@@ -174,6 +179,49 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _check_parameters(client: MissionClient, args: argparse.Namespace, firmware: str) -> None:
+    """Before anything is written: the vehicle's parameters against what the plan's envelope
+    needs (``link.vehicle_check``); set them with ``--set-params`` (listed first), else refuse
+    naming each parameter, its value and the plan's need."""
+    # The plan JSON's reader imports the planner: loaded only for a plan JSON.
+    from gcs_planner.plan_json import load_plan
+
+    if firmware not in FIRMWARES:
+        return
+    plan = load_plan(args.file)
+    target = client._target()
+
+    def read(name: str) -> float:
+        return read_parameter(
+            client.link, target, name, timeout=client.timeout, retries=client.retries
+        )
+
+    _, short = check_vehicle(plan, firmware, read)
+    if not short:
+        return
+    if not args.set_params:
+        raise LinkError(
+            "the vehicle is not set up to fly this plan: "
+            + "; ".join(s.describe() for s in short)
+            + ". Nothing was uploaded: set them with --set-params, or plan for this vehicle "
+            "(plan --vehicle-from CONN)"
+        )
+    ap = autopilot_for(firmware)
+    for s in short:  # listed before anything is written
+        print(
+            f"will set {s.need.name} = {s.need.set_to:.4g} (is {s.value:g}): {s.need.why}",
+            file=sys.stderr,
+        )
+    for s in short:
+        spec = ap.spec(s.need.name)
+        set_parameter(
+            client.link, target, s.need.name, s.need.set_to,
+            *(() if spec is None else (spec.ptype,)),
+            timeout=client.timeout, retries=client.retries,
+        )  # fmt: skip
+    print(f"set {len(short)} parameter(s) for the plan", file=sys.stderr)
+
+
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "upload",
@@ -193,6 +241,18 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "--keep-loiter-radius",
         action="store_true",
         help="leave the vehicle's loiter radius as it is (for vehicles without the parameter)",
+    )
+    p.add_argument(
+        "--set-params",
+        action="store_true",
+        help="plan JSON: set the parameters the plan's envelope needs and the vehicle lacks "
+        "(climb and sink rates, roll limit, ArduPlane NAVL1_LIM_BANK), listed before they are "
+        "written; without it such a vehicle is refused and nothing is uploaded",
+    )
+    p.add_argument(
+        "--no-param-check",
+        action="store_true",
+        help="do not check the vehicle's parameters against the plan's envelope",
     )
     p.set_defaults(func=run)
 
