@@ -245,7 +245,8 @@ def test_front_is_exact_with_a_cost_to_go_cut_short(monkeypatch, probability: bo
     """A time limit cuts the cost-to-go's layers short (and the pair and failure bounds'): the
     weaker bounds must leave the search exact. Here every table stops after 0 or 1 layers (B's
     own arcs)."""
-    from gcs_planner.core import bnb, cost_to_go, failure_bounds, pair_bounds
+    from gcs_planner.core import cost_to_go, failure_bounds, pair_bounds
+    from gcs_planner.core.bnb import context
 
     layers = 0
 
@@ -253,10 +254,10 @@ def test_front_is_exact_with_a_cost_to_go_cut_short(monkeypatch, probability: bo
         asked = itertools.count(0)
         return cost_to_go.cost_to_go(*args, **{**kwargs, "stop": lambda: next(asked) >= layers})
 
-    monkeypatch.setattr(bnb, "cost_to_go", cut_short)
+    monkeypatch.setattr(context, "cost_to_go", cut_short)
     monkeypatch.setattr(pair_bounds, "cost_to_go", cut_short)
     monkeypatch.setattr(failure_bounds, "cost_to_go", cut_short)
-    monkeypatch.setattr(bnb, "FAILURE_BOUNDS_PER_ARC", 0.0)  # made (and cut) at once
+    monkeypatch.setattr(context, "FAILURE_BOUNDS_PER_ARC", 0.0)  # made (and cut) at once
     cut = failures_cut = 0
     for seed in range(20):
         layers = seed % 2

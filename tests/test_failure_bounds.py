@@ -17,8 +17,9 @@ from test_bnb import (
     uncertain_straight_scenario,
 )
 
-from gcs_planner.core import bnb
-from gcs_planner.core.bnb import PROB_EPS, Ceiling, _Context, _relaxed, flown_route
+from gcs_planner.core.bnb import PROB_EPS, Ceiling, context, flown_route
+from gcs_planner.core.bnb.context import _Context
+from gcs_planner.core.bnb.front import _relaxed
 from gcs_planner.core.budget import Budget
 from gcs_planner.core.failure_bounds import failure_bounds
 from gcs_planner.core.pair_bounds import cone_half_angles, pair_leg_bounds
@@ -159,7 +160,7 @@ def test_fronts_with_the_failure_bounds_from_the_first_label_equal_enumeration(
 ) -> None:
     """The search makes the failure bounds only once it has expanded many labels, which small
     scenarios never reach: here it makes them at once, and the fronts must stay exact."""
-    monkeypatch.setattr(bnb, "FAILURE_BOUNDS_PER_ARC", 0.0)
+    monkeypatch.setattr(context, "FAILURE_BOUNDS_PER_ARC", 0.0)
     nonempty = 0
     for seed in range(24):
         scenario = (

@@ -15,13 +15,15 @@ from test_focus_turns import sparse_scenario
 from test_probes import probed_scenario
 
 from gcs_planner.core import bnb, failure_bounds, probe_kernel
+from gcs_planner.core.bnb import context, dominance, incumbents, probes
+from gcs_planner.core.bnb import search as bnb_search
 from gcs_planner.core.reach import build_reach_graph
 from gcs_planner.scenario.generate import DATASET2
 from gcs_planner.scenario.readers import load_scenario
 
 
 def _run(scenario, probability: bool, compiled: bool, monkeypatch) -> bnb.BnbResult:
-    monkeypatch.setattr(bnb, "COMPILED_PROBES", compiled)
+    monkeypatch.setattr(probes, "COMPILED_PROBES", compiled)
     return bnb.bnb_front(scenario, probability=probability, max_labels=10**6)
 
 
@@ -36,8 +38,8 @@ def _same_search(a: bnb.BnbResult, b: bnb.BnbResult, case) -> None:
 def asked(monkeypatch) -> collections.Counter:
     """Probes from the first label, with the failure bounds, counting what the compiled ones
     answered and the critical points of the probers."""
-    monkeypatch.setattr(bnb, "PROBE_FROM", 0)
-    monkeypatch.setattr(bnb, "FAILURE_BOUNDS_PER_ARC", 0.0)
+    monkeypatch.setattr(bnb_search, "PROBE_FROM", 0)
+    monkeypatch.setattr(context, "FAILURE_BOUNDS_PER_ARC", 0.0)
     seen: collections.Counter[str] = collections.Counter()
     call = probe_kernel.CompiledProbes.__call__
 
@@ -60,7 +62,7 @@ def test_compiled_probes_search_as_the_python_ones(asked, monkeypatch) -> None:
     for legs in ("airplane", "airplane, climb limits", "cs3d"):
         for seed in range(12):
             scenario = probed_scenario(seed, legs)
-            monkeypatch.setattr(bnb, "FAILURE_BOUNDS_PER_ARC", 0.0 if seed % 2 else 1.0)
+            monkeypatch.setattr(context, "FAILURE_BOUNDS_PER_ARC", 0.0 if seed % 2 else 1.0)
             for probability in (True, False) if seed < 4 else (True,):
                 compiled = _run(scenario, probability, True, monkeypatch)
                 python = _run(scenario, probability, False, monkeypatch)
@@ -84,7 +86,7 @@ def test_compiled_probes_on_sparse_maps_with_contest_limits(asked, monkeypatch) 
 
 def test_the_kernel_shares_the_models_constants() -> None:
     assert probe_kernel.MASS_SLACK == failure_bounds._MASS_SLACK
-    assert probe_kernel.MAX_UNIONS == bnb.MAX_UNIONS
+    assert probe_kernel.MAX_UNIONS == dominance.MAX_UNIONS
 
 
 def _pool(states: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -111,7 +113,7 @@ def test_compiled_dominance_between_distributions_answers_as_the_python_one() ->
             for _ in range(int(rng.integers(1, 13)))
         }
         shift = float(rng.choice([0.0, 0.5, 1.0]))
-        want = bnb._stochastically_dominates(bnb._shifted(d1, shift), d2)
+        want = dominance._stochastically_dominates(dominance._shifted(d1, shift), d2)
         got = probe_kernel._stochastically_dominates(
             *_pool(d1), 0, len(d1), shift, *_pool(d2), 0, len(d2)
         )
@@ -170,7 +172,7 @@ def test_compiled_test_per_probability_level_answers_as_the_python_one() -> None
     tails = 0
     for _ in range(3000):
         kmax = int(rng.integers(3, 30))
-        inc = bnb._Incumbents(kmax)
+        inc = incumbents._Incumbents(kmax)
         for _ in range(int(rng.integers(0, 8))):
             inc.add(
                 bnb.Found(

@@ -19,6 +19,8 @@ from test_airplane_legs import climbing_scenario
 from test_bnb import enumerate_front, turning_scenario
 
 from gcs_planner.core import bnb
+from gcs_planner.core.bnb import probes
+from gcs_planner.core.bnb import search as bnb_search
 from gcs_planner.core.probability import propagate
 from gcs_planner.geometry.legs import scenario_leg_model
 from gcs_planner.scenario.generate import random_scenario
@@ -120,8 +122,8 @@ def test_the_depth_first_enumeration_equals_the_plain_one(probability: bool) -> 
 def probe_outcomes(monkeypatch) -> collections.Counter:
     """Counts what the probes answered: covered (and of those, from nogoods alone) or open."""
     outcomes: collections.Counter[str] = collections.Counter()
-    probe = bnb._Prober.__call__
-    monkeypatch.setattr(bnb, "PROBE_FROM", 0)  # small searches probe from their first label
+    probe = probes._Prober.__call__
+    monkeypatch.setattr(bnb_search, "PROBE_FROM", 0)  # small searches probe from their first label
 
     def counted(self, entry, inc, budget):
         covered, spent = probe(self, entry, inc, budget)
@@ -129,7 +131,7 @@ def probe_outcomes(monkeypatch) -> collections.Counter:
         outcomes["by nogoods"] += covered and spent == 0
         return covered, spent
 
-    monkeypatch.setattr(bnb._Prober, "__call__", counted)
+    monkeypatch.setattr(probes._Prober, "__call__", counted)
     return outcomes
 
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from gcs_planner.core import bnb
 from gcs_planner.core.bnb import bnb_front
+from gcs_planner.core.bnb import search as bnb_search
 from gcs_planner.core.budget import Budget
 from gcs_planner.scenario.generate import DATASET1
 from gcs_planner.scenario.readers import load_scenario
@@ -22,7 +23,7 @@ def test_open_routes_left_unexamined_only_weaken_the_claims(dataset_paths, monke
         return bnb_front(scenario, probability=True, budget=Budget(limit, 10_000.0))
 
     examined = stopped()
-    monkeypatch.setattr(bnb, "ENDING_GRACE", -1e9)  # the deadline long past at the ending
+    monkeypatch.setattr(bnb_search, "ENDING_GRACE", -1e9)  # the deadline long past at the ending
     unexamined = stopped()
     assert not examined.optimal and not unexamined.optimal
     assert [g.points for g in unexamined.front] == [g.points for g in examined.front]
