@@ -8,7 +8,7 @@ import numpy as np
 from test_probes import assert_same_front, front_of, probed_front, probed_scenario
 
 from gcs_planner.core import bnb
-from gcs_planner.core.bnb import flown
+from gcs_planner.core.bnb import Options, flown
 from gcs_planner.geometry.airplane import airplane_legs, slope_tan
 from gcs_planner.geometry.airplane_kernel import airplane_lengths
 from gcs_planner.geometry.dubins import cs_lengths
@@ -46,17 +46,19 @@ def test_compiled_airplane_legs_equal_numpys_to_a_few_ulp() -> None:
     assert all(count >= 100 for count in kinds.values()), kinds
 
 
-def test_fronts_flying_compiled_legs_from_the_first_label(monkeypatch) -> None:
+def test_fronts_flying_compiled_legs_from_the_first_label() -> None:
     """The same fronts as numpy's legs and as enumeration, two and three objectives."""
-    monkeypatch.setattr(flown, "COMPILED_LEGS_FROM", -1)
+    compiled, python = Options(compiled_legs_from=-1), Options(compiled_legs=False)
     for legs in ("airplane", "airplane, climb limits", "cs3d"):
         for seed in range(6):
             scenario = probed_scenario(seed, legs)
             for probability in (True, False):
-                got = bnb.bnb_front(scenario, probability=probability, max_labels=10**6)
-                monkeypatch.setattr(flown, "COMPILED_LEGS", False)
-                numpy = bnb.bnb_front(scenario, probability=probability, max_labels=10**6)
-                monkeypatch.setattr(flown, "COMPILED_LEGS", True)
+                got = bnb.bnb_front(
+                    scenario, probability=probability, max_labels=10**6, options=compiled
+                )
+                numpy = bnb.bnb_front(
+                    scenario, probability=probability, max_labels=10**6, options=python
+                )
                 assert got.optimal and numpy.optimal
                 assert [f.points for f in got.front] == [f.points for f in numpy.front]
                 want = probed_front(seed, legs, probability)

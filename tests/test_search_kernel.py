@@ -11,19 +11,22 @@ import collections
 from test_probes import assert_same_front, front_of, probed_front, probed_scenario
 
 from gcs_planner.core import bnb, search_kernel
+from gcs_planner.core.bnb import Options
 from gcs_planner.core.bnb import search as bnb_search
 from gcs_planner.core.budget import Budget
 
 LEGS = ("airplane", "airplane, climb limits", "cs3d")
 
 
-def _pair(scenario, probability: bool, monkeypatch, **budget) -> tuple:
+def _pair(scenario, probability: bool, **budget) -> tuple:
     results = []
     for compiled in (True, False):
-        monkeypatch.setattr(bnb_search, "COMPILED_SEARCH", compiled)
         b = Budget(**budget) if budget else None
+        options = Options(compiled_search=compiled)
         results.append(
-            bnb.bnb_front(scenario, probability=probability, max_labels=10**6, budget=b)
+            bnb.bnb_front(
+                scenario, probability=probability, max_labels=10**6, budget=b, options=options
+            )
         )
     return tuple(results)
 
@@ -55,7 +58,7 @@ def test_compiled_searches_equal_the_python_ones_and_enumeration(monkeypatch) ->
         for seed in range(10):
             scenario = probed_scenario(seed, legs)
             for probability in (True, False) if seed < 4 else (True,):
-                compiled, python = _pair(scenario, probability, monkeypatch)
+                compiled, python = _pair(scenario, probability)
                 _same(compiled, python, (legs, seed, probability))
                 want = probed_front(seed, legs, probability)
                 assert_same_front(front_of(compiled, probability), want, (legs, seed))
@@ -78,9 +81,9 @@ def test_compiled_searches_stop_where_the_python_ones_do(monkeypatch) -> None:
         for seed in range(4):
             scenario = probed_scenario(seed, legs)
             for limit in (5, 40, 150):
-                compiled, python = _pair(scenario, True, monkeypatch, max_labels=limit)
+                compiled, python = _pair(scenario, True, max_labels=limit)
                 _same(compiled, python, (legs, seed, limit))
-            compiled, python = _pair(scenario, True, monkeypatch, max_labels=None, time_limit=0)
+            compiled, python = _pair(scenario, True, max_labels=None, time_limit=0)
             _same(compiled, python, (legs, seed, "time"))
             assert not compiled.exhausted and compiled.labels == 0
     assert stopped["compiled, stopped"] >= 20 and stopped["compiled, exhausted"] >= 5, stopped

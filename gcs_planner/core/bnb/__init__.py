@@ -19,6 +19,7 @@ dominated by a route already found, so is every flown completion, and the partia
 dropped. The states such a probe expanded are covered too and prune later probes (nogoods).
 """
 
+from gcs_planner.core.bnb.context import Options
 from gcs_planner.core.bnb.flown import flown_leg, flown_route, flown_route_legs
 from gcs_planner.core.bnb.front import bnb_front
 from gcs_planner.core.bnb.incumbents import BnbResult, Ceiling, Found
@@ -31,6 +32,7 @@ __all__ = [
     "BnbResult",
     "Ceiling",
     "Found",
+    "Options",
     "bnb_front",
     "flown_leg",
     "flown_route",

@@ -1,11 +1,12 @@
 """What every round of a branch and bound shares: the graph, the cost-to-go and the other
-bounds, the leg model, the seeds flown."""
+bounds, the leg model, the seeds flown, and the ``Options`` it searches with."""
 
 from __future__ import annotations
 
 import copy
 import itertools
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -25,13 +26,43 @@ from gcs_planner.scenario.model import Kind, Scenario
 if TYPE_CHECKING:
     from gcs_planner.core.bnb.probes import _Prober
 
-# Labels a search over simple routes and its probes spend, per arc of the reach graph, before
-# the failure bounds are made (over the reach graph: their cost-to-go has a copy of each arc
-# per forced failure). A search that proves its front in fewer never pays for them: dataset 2
-# with turns proves in about 17,600 probe labels with them, 21,500 without, and made over the
-# pairs at the first probe they cost a quarter of its time; on random 1,500 points they cost
-# 0.7 s to save 50 labels.
-FAILURE_BOUNDS_PER_ARC = 1.0
+
+@dataclass(frozen=True)
+class Options:
+    """How a branch and bound runs, never what it finds: when it makes which bounds and probes,
+    and whether its parts run compiled (numba) or in Python, the readable reference the tests
+    hold the compiled ones to. Every choice leaves the front exact; the defaults are the
+    measured ones (``bnb_front(..., options=Options(...))`` for tests and benchmarks)."""
+
+    # Labels a search over simple routes and its probes spend, per arc of the reach graph,
+    # before the failure bounds are made (over the reach graph: their cost-to-go has a copy of
+    # each arc per forced failure). A search that proves its front in fewer never pays for
+    # them: dataset 2 with turns proves in about 17,600 probe labels with them, 21,500 without,
+    # and made over the pairs at the first probe they cost a quarter of its time; on random
+    # 1,500 points they cost 0.7 s to save 50 labels.
+    failure_bounds_per_arc: float = 1.0
+    # How many times the heading-free floor's labels the pair floor is expected to need at most.
+    pair_floor_cost: int = 4
+    # A probe (``_Prober``) gives up after this many labels: the partial route then stays open.
+    probe_labels: int = 1000
+    # Labels a search over simple routes expands before it probes: a search that proves its
+    # front in fewer never pays for the probes (random 5,000 points, default mode: 4 s, 14 s
+    # probing).
+    probe_from: int = 200
+    # Probes run compiled (``probe_kernel``; False: the Python search), where the critical
+    # points fit the kernel's bit masks.
+    compiled_probes: bool = True
+    # Airplane legs from a heading compiled (``geometry.airplane_kernel``) after this many
+    # labels of a search (-1: from the first); False: numpy's throughout.
+    compiled_legs: bool = True
+    compiled_legs_from: int = 200
+    # The searches over walks with turns (floors, guide) compiled (``search_kernel``) when they
+    # need more than ``trial`` labels; False: Python throughout.
+    compiled_search: bool = True
+    trial: int = 300
+    # Seconds past the time limit a stopped search may spend telling which of its open partial
+    # routes a found route covers (``_search``'s ending).
+    ending_grace: float = 2.0
 
 
 class _Context:
@@ -44,7 +75,9 @@ class _Context:
         max_corrections: int | None,
         graph: ReachGraph | None = None,
         budget: Budget | None = None,
+        options: Options | None = None,
     ) -> None:
+        self.options = options if options is not None else Options()
         # The user's budget: once its time limit has passed, the bounds below are cut short or
         # skipped (each only speeds the proof), and ``cut`` says which; meanwhile it shows
         # what the set-up builds.
@@ -108,11 +141,11 @@ class _Context:
 
     def failures(self, spent: int) -> FailureBounds | None:
         """The failure bounds (``failure_bounds``) for what asks once it has spent ``spent``
-        labels, FAILURE_BOUNDS_PER_ARC per arc of the reach graph: None before (and where
+        labels, ``failure_bounds_per_arc`` per arc of the reach graph: None before (and where
         they do not apply), made on the first call after. The search and its probes count
         their own labels: testing a bound per level costs the search in Python more than
         the compiled probes."""
-        if spent < FAILURE_BOUNDS_PER_ARC * len(self.graph.target):
+        if spent < self.options.failure_bounds_per_arc * len(self.graph.target):
             return None
         if not self._failures_made:
             self._failures_made = True
@@ -143,6 +176,17 @@ class _Context:
         other.pair_floor = self.pairs
         return other
 
+    def probing(self, failures: Callable[[int], FailureBounds | None]) -> _Context:
+        """The context a prober (``_Prober``) searches in: the relaxation that proved the floor
+        (the pair relaxation where there are bounds over the cone of arrival headings), with
+        this search's ceiling, ``failures`` for its failure bounds (the prober's: they count the
+        probes' labels, not the search's) and no prober of its own."""
+        probe = self.pair_relaxed() if self.pairs is not None else self.relaxed()
+        probe.ceiling = self.ceiling
+        probe.failures = failures  # type: ignore[method-assign]
+        probe.prober = None
+        return probe
+
     def seed(self, points: Sequence[int]) -> Found | None:
         """A known route as an incumbent, evaluated under this search's model (once per model
         and route: the floors' routes seed the guide, the guide's the search, the rounds of a
@@ -154,7 +198,9 @@ class _Context:
         return self._seeds[key]
 
     def _flown_seed(self, points: tuple[int, ...]) -> Found | None:
-        lengths = _compiled_flight(self.scenario, points, self.model)
+        lengths = _compiled_flight(
+            self.scenario, points, self.model, compiled=self.options.compiled_legs
+        )
         if lengths is None:
             route = flown_route(self.scenario, points, self.model)
         else:

@@ -12,11 +12,6 @@ from gcs_planner.geometry.legs import FlownLeg, LegModel, path_angle_deg, scenar
 from gcs_planner.geometry.trajectory import route_trajectory
 from gcs_planner.scenario.model import Scenario
 
-# Airplane legs from a heading compiled (``geometry.airplane_kernel``) after this many labels of
-# a search; False: numpy's throughout.
-COMPILED_LEGS = True
-COMPILED_LEGS_FROM = 200
-
 
 def flown_route(
     scenario: Scenario, points: tuple[int, ...], model: LegModel | None = None
@@ -44,14 +39,14 @@ def flown_route_legs(
 
 
 def _compiled_flight(
-    scenario: Scenario, points: tuple[int, ...], model: LegModel
+    scenario: Scenario, points: tuple[int, ...], model: LegModel, *, compiled: bool = True
 ) -> list[float] | None:
     """The flown length of each leg of a route as ``flown_route`` flies it, the legs after the
     first with the model's compiled legs (within a few ulp; about 3 µs a leg instead of about
-    260); None where that would load numba (only once a search has loaded it) or the
-    model has no compiled legs. The first leg is ``flown_route``'s own (a free heading at A
-    has its own rules), the heading carried from it."""
-    fast = getattr(model, "compiled_lengths", None) if COMPILED_LEGS else None
+    260); None where that would load numba (only once a search has loaded it), where the
+    model has no compiled legs or ``compiled`` is False. The first leg is ``flown_route``'s
+    own (a free heading at A has its own rules), the heading carried from it."""
+    fast = getattr(model, "compiled_lengths", None) if compiled else None
     if fast is None or "numba" not in sys.modules or len(points) < 3:
         return None
     xyz = scenario.xyz

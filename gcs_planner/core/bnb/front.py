@@ -6,16 +6,13 @@ from __future__ import annotations
 import time
 from collections.abc import Sequence
 
-from gcs_planner.core.bnb.context import _Context
+from gcs_planner.core.bnb.context import Options, _Context
 from gcs_planner.core.bnb.incumbents import BnbResult, Ceiling, _least_length
 from gcs_planner.core.bnb.probes import _Prober
 from gcs_planner.core.bnb.search import _search
 from gcs_planner.core.budget import DEFAULT_MAX_LABELS, Budget
 from gcs_planner.core.reach import ReachGraph
 from gcs_planner.scenario.model import Scenario
-
-# How many times the heading-free floor's labels the pair floor is expected to need at most.
-PAIR_FLOOR_COST = 4
 
 
 def bnb_front(
@@ -28,6 +25,7 @@ def bnb_front(
     dominance: bool = True,
     budget: Budget | None = None,
     graph: ReachGraph | None = None,
+    options: Options | None = None,
 ) -> BnbResult:
     """Exact Pareto front of (length, corrections[, probability]) with the scenario's turning
     radius, by best-first branch and bound. ``probability`` False treats every correction as
@@ -45,11 +43,13 @@ def bnb_front(
 
     ``budget`` (labels per search, seconds for the whole call, progress) overrides
     ``max_labels``. ``graph``: the scenario's reach graph, when the caller has it already.
+    ``options``: how it runs (compiled or Python parts, when it probes; ``Options``), never
+    what it finds.
     """
     t0 = time.perf_counter()
     if budget is None:
         budget = Budget(max_labels)
-    ctx = _Context(scenario, probability, max_corrections, graph, budget)
+    ctx = _Context(scenario, probability, max_corrections, graph, budget, options)
     if not dominance:
         res = _search(ctx, None, budget.share(stage="search"), seeds)
     elif not ctx.model.carries_heading:
@@ -69,7 +69,8 @@ def bnb_front(
         # keeps more partial routes apart, some 3 to 5 times the labels of the heading-free
         # floor; it is tried when that fits the label budget, and used when it is proven.
         limit = budget.max_labels
-        if ctx.pairs is not None and (limit is None or PAIR_FLOOR_COST * floor.labels <= limit):
+        pair_cost = ctx.options.pair_floor_cost * floor.labels
+        if ctx.pairs is not None and (limit is None or pair_cost <= limit):
             pair = _relaxed(ctx.pair_relaxed(), budget.share(0.25, "pair floor"), ())
             spent = floor.labels + pair.labels
             if pair.optimal or not floor.optimal:

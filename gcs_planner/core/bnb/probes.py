@@ -16,12 +16,6 @@ from gcs_planner.core.failure_bounds import FailureBounds
 if TYPE_CHECKING:
     from gcs_planner.core.probe_kernel import CompiledProbes
 
-# A probe (``_Prober``) gives up after this many labels: the partial route then stays open.
-PROBE_LABELS = 1000
-# Probes run compiled (``probe_kernel``; False: the Python search, the reference the
-# tests hold them to), where the critical points fit the kernel's bit masks.
-COMPILED_PROBES = True
-
 
 class _Prober:
     """Whether a partial route of the search over simple routes can still lead anywhere, asked
@@ -35,21 +29,18 @@ class _Prober:
     routes at one point that came by one arc compare by dominance there (``pair_relaxed``)."""
 
     def __init__(self, ctx: _Context, critical: Sequence[int]) -> None:
-        probe = ctx.pair_relaxed() if ctx.pairs is not None else ctx.relaxed()
-        probe.ceiling = ctx.ceiling
         # The same bounds, made once: once the probes before (not the search) have spent
         # enough, so that a probe, compiled or not, has them throughout or not at all.
         self.root = ctx
         self.spent = 0  # labels of the probes so far
-        probe.failures = self.failures  # type: ignore[method-assign]
-        probe.prober = None
-        self.ctx = probe
+        self.ctx = ctx.probing(self.failures)
+        self.max_labels = ctx.options.probe_labels
         # Walks that revisit none of these points: the floor's, under which it was exact.
         self.critical = frozenset(critical)
         # The probes compiled (``probe_kernel``): the same answers, made on first need (numba
         # is loaded only by searches that probe).
         self.compiled: CompiledProbes | None = None
-        self._compile = COMPILED_PROBES and len(self.critical) <= MAX_COMPILED_CRITICAL
+        self._compile = ctx.options.compiled_probes and len(self.critical) <= MAX_COMPILED_CRITICAL
         # Partial routes of the relaxation proven covered, by ``_key``; the found routes only
         # grow, so they stay covered.
         self.nogoods: dict[tuple, list[tuple]] = {}
@@ -84,8 +75,8 @@ class _Prober:
                 from gcs_planner.core.probe_kernel import CompiledProbes
 
                 self.compiled = CompiledProbes(self.ctx, self.critical)
-            child = budget.probe(PROBE_LABELS)
-            limit = 0 if child.expired() else PROBE_LABELS
+            child = budget.probe(self.max_labels)
+            limit = 0 if child.expired() else self.max_labels
             covered, labels, escape = self.compiled(
                 inc, L, node, k, states, arc, path, to_go, limit
             )
@@ -103,7 +94,7 @@ class _Prober:
         res = _search(
             self.ctx,
             self.critical,
-            budget.probe(PROBE_LABELS),
+            budget.probe(self.max_labels),
             (),
             origin=origin,
             incumbents=inc,

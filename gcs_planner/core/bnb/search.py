@@ -14,7 +14,6 @@ from typing import NamedTuple
 
 import numpy as np
 
-from gcs_planner.core.bnb import flown as flight
 from gcs_planner.core.bnb.context import _Context
 from gcs_planner.core.bnb.dominance import _dominated_by, _kept, _key, _larger
 from gcs_planner.core.bnb.incumbents import BnbResult, Found, _dominated, _Incumbents
@@ -26,16 +25,6 @@ from gcs_planner.core.proof import lower_bounds, settled
 from gcs_planner.geometry.legs import KernelLegs
 from gcs_planner.scenario.model import Kind
 
-# Labels a search over simple routes expands before it probes: a search that proves its front
-# in fewer never pays for the probes (random 5,000 points, default mode: 4 s, 14 s probing).
-PROBE_FROM = 200
-# The searches over walks with turns (floors, guide) compiled (``search_kernel``) when they
-# need more than this many labels; False: Python throughout.
-COMPILED_SEARCH = True
-TRIAL = 300
-# Seconds past the time limit a stopped search may spend telling which of its open partial
-# routes a found route covers (``_search``'s ending).
-ENDING_GRACE = 2.0
 # Critical points the compiled search and probes carry as bits of a mask.
 MAX_COMPILED_CRITICAL = 62
 
@@ -78,16 +67,17 @@ def _search(
     which prune the partial routes of later probes that continue no better.
 
     ``compiled`` False keeps a search over walks in Python (``search_kernel`` otherwise runs
-    it once it needs more than TRIAL labels)."""
+    it once it needs more than ``Options.trial`` labels)."""
     legs_mode = None if origin is not None or not compiled else _legs_mode(ctx, critical)
     left = None if budget.max_labels is None else budget.max_labels - budget.spent
     if legs_mode is not None and critical is not None:
         if "gcs_planner.core.search_kernel" in sys.modules:  # loaded: no trial needed
             return _compiled_search(ctx, critical, budget, seeds, legs_mode)
-    if legs_mode is not None and critical is not None and (left is None or left > TRIAL):
+    trial_labels = ctx.options.trial
+    if legs_mode is not None and critical is not None and (left is None or left > trial_labels):
         # Compiled once the search proves long: a short one never loads numba. The trial is
         # the same search, so starting over loses nothing but its time.
-        trial_budget = budget.probe(TRIAL)
+        trial_budget = budget.probe(trial_labels)
         trial = _search(ctx, critical, trial_budget, seeds, compiled=False)
         if trial.exhausted or trial_budget.stopped_by == "time":
             budget.stopped("" if trial.exhausted else "time", trial.labels)
@@ -102,10 +92,11 @@ def _search(
     relaxed = critical is not None
     fan = FanBound(G, scenario.n)
     is_v_point = scenario.kind == Kind.V
-    fast_legs = getattr(model, "compiled_lengths", None) if flight.COMPILED_LEGS else None
+    options = ctx.options
+    fast_legs = getattr(model, "compiled_lengths", None) if options.compiled_legs else None
     # Once numba is loaded (a search before this one needed it) the compiled legs cost
     # nothing to start: from the first label.
-    legs_from = -1 if "numba" in sys.modules else flight.COMPILED_LEGS_FROM
+    legs_from = -1 if "numba" in sys.modules else options.compiled_legs_from
     # Per (point, critical points visited): the partial routes kept (``_kept``), sorted by
     # length, and their lengths.
     archive: dict[tuple[int, frozenset[int]], tuple[list[float], list[tuple]]] = {}
@@ -203,7 +194,7 @@ def _search(
                 continue
         elif inc.covers(L, k, to_go, mass) or by_level(L, k, node, states, mass, to_go):
             continue
-        if prober is not None and node != start and labels >= PROBE_FROM:
+        if prober is not None and node != start and labels >= options.probe_from:
             covered, spent = prober(entry, inc, budget)
             probe_labels += spent
             if covered:
@@ -318,9 +309,9 @@ def _search(
     live = []
     # Which open partial routes a found route covers only sharpens the statement's bounds: a
     # search the time limit stopped with hundreds of thousands open spent 25 s past a 60 s
-    # limit here. Past the limit plus ENDING_GRACE the rest stay open unexamined: bounds and
+    # limit here. Past the limit plus ``ending_grace`` the rest stay open unexamined: bounds and
     # "optimal" marks only weaker for it, never wrong.
-    stop_at = None if budget.deadline is None else budget.deadline + ENDING_GRACE
+    stop_at = None if budget.deadline is None else budget.deadline + options.ending_grace
 
     def still_open(e: _Open) -> tuple:  # (f, L, k, bounds to go, mass), as ``_ending`` takes
         return (e.f, e.length, e.corrections, e.to_go, sum(e.states.values()))
@@ -375,7 +366,7 @@ def _legs_mode(ctx: _Context, critical: frozenset[int] | None) -> int | None:
     """How ``search_kernel`` flies the legs of a search over walks (None: it cannot, the
     search stays in Python): 0 heading-free legs, 1 the pair relaxation's, 2 airplane or 3
     cs3d legs from the heading (``search_kernel.LEGS_*``)."""
-    if critical is None or ctx.open_order or not COMPILED_SEARCH:
+    if critical is None or ctx.open_order or not ctx.options.compiled_search:
         return None
     if len(critical) > MAX_COMPILED_CRITICAL:
         return None
