@@ -17,6 +17,12 @@ it in the relaxation that proved the floor (legs bounded over the cone of headin
 can arrive with, where partial routes do compare by dominance) are searched, and if every one is
 dominated by a route already found, so is every flown completion, and the partial route is
 dropped. The states such a probe expanded are covered too and prune later probes (nogoods).
+
+The parts: ``front`` (``bnb_front``: the floors, the guide, the search over simple routes),
+``search`` (one best-first search, in Python or compiled, and its ending), ``probes``,
+``context`` (what the rounds share, and the ``Options`` they run with), ``incumbents`` (the
+routes found, ``Ceiling``), ``dominance`` (between partial routes at a point) and ``flown``
+(routes flown again under the leg model, independently of the search).
 """
 
 from gcs_planner.core.bnb.context import Options

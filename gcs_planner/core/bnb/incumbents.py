@@ -87,6 +87,13 @@ class _Incumbents:
         self._probabilities = sorted(f.probability for f in self.found)
         self._levels = None
 
+    def offer(self, route: Found | None) -> None:
+        """Add ``route`` (a seed; None: none) unless a found route is at least as good."""
+        if route is not None and not _dominated(
+            self.found, route.length, route.corrections, route.probability
+        ):
+            self.add(route)
+
     def levels(self) -> list[float]:
         """The found routes' probabilities, largest first, equal ones (within PROB_EPS) once."""
         if self._levels is None:

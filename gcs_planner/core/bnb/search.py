@@ -151,11 +151,7 @@ def _search(
         return inc.covers_by_level(length, k, mass, bound, ceiling)
 
     for points in seeds:
-        seed = ctx.seed(points)
-        if seed is not None and not _dominated(
-            inc.found, seed.length, seed.corrections, seed.probability
-        ):
-            inc.add(seed)
+        inc.offer(ctx.seed(points))
     if prober is not None:
         for route in inc.found:
             prober.hope(route.points)
@@ -396,11 +392,7 @@ def _compiled_search(
     scenario, graph, model = ctx.scenario, ctx.graph, ctx.model
     inc = _Incumbents(ctx.kmax)
     for points in seeds:
-        seed = ctx.seed(points)
-        if seed is not None and not _dominated(
-            inc.found, seed.length, seed.corrections, seed.probability
-        ):
-            inc.add(seed)
+        inc.offer(ctx.seed(points))
     bits = np.full(scenario.n, -1, np.int64)
     for b, point in enumerate(sorted(critical)):
         bits[point] = b
