@@ -8,10 +8,12 @@ import numpy as np
 from test_probes import assert_same_front, front_of, probed_front, probed_scenario
 
 from gcs_planner.core import bnb
+from gcs_planner.core.bnb import Options, flown
 from gcs_planner.geometry.airplane import airplane_legs, slope_tan
 from gcs_planner.geometry.airplane_kernel import airplane_lengths
 from gcs_planner.geometry.dubins import cs_lengths
 from gcs_planner.geometry.dubins_kernel import cs_lengths as compiled_cs_lengths
+from gcs_planner.geometry.legs import scenario_leg_model
 
 
 def test_compiled_airplane_legs_equal_numpys_to_a_few_ulp() -> None:
@@ -44,17 +46,19 @@ def test_compiled_airplane_legs_equal_numpys_to_a_few_ulp() -> None:
     assert all(count >= 100 for count in kinds.values()), kinds
 
 
-def test_fronts_flying_compiled_legs_from_the_first_label(monkeypatch) -> None:
+def test_fronts_flying_compiled_legs_from_the_first_label() -> None:
     """The same fronts as numpy's legs and as enumeration, two and three objectives."""
-    monkeypatch.setattr(bnb, "COMPILED_LEGS_FROM", -1)
+    compiled, python = Options(compiled_legs_from=-1), Options(compiled_legs=False)
     for legs in ("airplane", "airplane, climb limits", "cs3d"):
         for seed in range(6):
             scenario = probed_scenario(seed, legs)
             for probability in (True, False):
-                got = bnb.bnb_front(scenario, probability=probability, max_labels=10**6)
-                monkeypatch.setattr(bnb, "COMPILED_LEGS", False)
-                numpy = bnb.bnb_front(scenario, probability=probability, max_labels=10**6)
-                monkeypatch.setattr(bnb, "COMPILED_LEGS", True)
+                got = bnb.bnb_front(
+                    scenario, probability=probability, max_labels=10**6, options=compiled
+                )
+                numpy = bnb.bnb_front(
+                    scenario, probability=probability, max_labels=10**6, options=python
+                )
                 assert got.optimal and numpy.optimal
                 assert [f.points for f in got.front] == [f.points for f in numpy.front]
                 want = probed_front(seed, legs, probability)
@@ -86,7 +90,7 @@ def test_compiled_cs3d_legs_equal_numpys_to_a_few_ulp() -> None:
 
 
 def test_seed_routes_flown_compiled_as_flown_route_flies_them() -> None:
-    """``bnb._compiled_flight`` (seed routes' legs after the first flown compiled) against
+    """``bnb.flown._compiled_flight`` (seed routes' legs after the first flown compiled) against
     ``flown_route``: random routes, repeated points (coincident legs) and targets inside the
     turning circle included, with a free heading at A and a given one."""
     import numba  # noqa: F401  (loaded: the compiled flight is what a long search uses)
@@ -98,14 +102,14 @@ def test_seed_routes_flown_compiled_as_flown_route_flies_them() -> None:
             scenario = probed_scenario(seed, legs)
             if seed % 2:
                 scenario = scenario.with_vehicle(heading_at_a=tuple(rng.normal(size=3)))
-            model = bnb.scenario_leg_model(scenario)
+            model = scenario_leg_model(scenario)
             inner = [i for i in range(scenario.n) if i not in (scenario.start, scenario.end)]
             for _ in range(30):
                 middle = list(rng.choice(inner, int(rng.integers(1, len(inner))), replace=False))
                 if rng.random() < 0.2:
                     middle.insert(int(rng.integers(0, len(middle))), middle[0])
                 points = (scenario.start, *map(int, middle), scenario.end)
-                got = bnb._compiled_flight(scenario, points, model)
+                got = flown._compiled_flight(scenario, points, model)
                 want = [s.leg.length for s in bnb.flown_route(scenario, points).stops[1:]]
                 assert got is not None and len(got) == len(want)
                 np.testing.assert_array_equal(np.isinf(got), np.isinf(want))

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from helpers import contest_params, mixed_scenario
 
-from gcs_planner.core.bnb import bnb_front, flown_route
+from gcs_planner.core.bnb import Options, bnb_front, flown_route
 from gcs_planner.core.probability import success_probability
 from gcs_planner.core.search import straight_front
 from gcs_planner.scenario.generate import random_scenario
@@ -48,10 +48,12 @@ def enumerate_front(scenario, probability: bool):
     return pareto(values)
 
 
-def assert_front_equals_enumeration(scenario, probability: bool, seed: int):
+def assert_front_equals_enumeration(
+    scenario, probability: bool, seed: int, options: Options | None = None
+):
     """The branch and bound's front, proven, equal to enumeration of every simple route; returns
     (the search's result, the enumerated front)."""
-    result = bnb_front(scenario, probability=probability, max_labels=10**6)
+    result = bnb_front(scenario, probability=probability, max_labels=10**6, options=options)
     assert result.optimal
     got = [
         (round(f.length, 6), f.corrections, round(-f.probability, 12) if probability else 0.0)
@@ -245,7 +247,8 @@ def test_front_is_exact_with_a_cost_to_go_cut_short(monkeypatch, probability: bo
     """A time limit cuts the cost-to-go's layers short (and the pair and failure bounds'): the
     weaker bounds must leave the search exact. Here every table stops after 0 or 1 layers (B's
     own arcs)."""
-    from gcs_planner.core import bnb, cost_to_go, failure_bounds, pair_bounds
+    from gcs_planner.core import cost_to_go, failure_bounds, pair_bounds
+    from gcs_planner.core.bnb import context
 
     layers = 0
 
@@ -253,15 +256,15 @@ def test_front_is_exact_with_a_cost_to_go_cut_short(monkeypatch, probability: bo
         asked = itertools.count(0)
         return cost_to_go.cost_to_go(*args, **{**kwargs, "stop": lambda: next(asked) >= layers})
 
-    monkeypatch.setattr(bnb, "cost_to_go", cut_short)
+    monkeypatch.setattr(context, "cost_to_go", cut_short)
     monkeypatch.setattr(pair_bounds, "cost_to_go", cut_short)
     monkeypatch.setattr(failure_bounds, "cost_to_go", cut_short)
-    monkeypatch.setattr(bnb, "FAILURE_BOUNDS_PER_ARC", 0.0)  # made (and cut) at once
+    at_once = Options(failure_bounds_per_arc=0.0)  # the failure bounds made (and cut) at once
     cut = failures_cut = 0
     for seed in range(20):
         layers = seed % 2
         scenario = turning_scenario(seed, radius=[200.0, 1500.0, 0.0][seed % 3])
-        result, _ = assert_front_equals_enumeration(scenario, probability, seed)
+        result, _ = assert_front_equals_enumeration(scenario, probability, seed, at_once)
         cut += any(c.startswith("the cost-to-go:") for c in result.cut)
         failures_cut += any(c.startswith("the bounds per probability") for c in result.cut)
     assert cut >= 10

@@ -17,8 +17,9 @@ from test_bnb import (
     uncertain_straight_scenario,
 )
 
-from gcs_planner.core import bnb
-from gcs_planner.core.bnb import PROB_EPS, Ceiling, _Context, _relaxed, flown_route
+from gcs_planner.core.bnb import PROB_EPS, Ceiling, Options, flown_route
+from gcs_planner.core.bnb.context import _Context
+from gcs_planner.core.bnb.front import _relaxed
 from gcs_planner.core.budget import Budget
 from gcs_planner.core.failure_bounds import failure_bounds
 from gcs_planner.core.pair_bounds import cone_half_angles, pair_leg_bounds
@@ -154,18 +155,16 @@ def test_arrival_headings_lie_in_the_cone_and_pair_bounds_never_exceed_a_flown_l
 
 
 @pytest.mark.parametrize("make", [climbing_scenario, turning_scenario])
-def test_fronts_with_the_failure_bounds_from_the_first_label_equal_enumeration(
-    monkeypatch, make
-) -> None:
+def test_fronts_with_the_failure_bounds_from_the_first_label_equal_enumeration(make) -> None:
     """The search makes the failure bounds only once it has expanded many labels, which small
     scenarios never reach: here it makes them at once, and the fronts must stay exact."""
-    monkeypatch.setattr(bnb, "FAILURE_BOUNDS_PER_ARC", 0.0)
+    at_once = Options(failure_bounds_per_arc=0.0)
     nonempty = 0
     for seed in range(24):
         scenario = (
             make(seed) if make is climbing_scenario else make(seed, [200.0, 1500.0][seed % 2])
         )
-        _, want = assert_front_equals_enumeration(scenario, True, seed)
+        _, want = assert_front_equals_enumeration(scenario, True, seed, at_once)
         nonempty += bool(want)
     assert nonempty >= 8
 

@@ -10,7 +10,8 @@ import numpy as np
 from test_bnb import enumerate_straight_front, uncertain_straight_scenario
 from test_budget import corridor
 
-from gcs_planner.core.bnb import Found, _Incumbents, bnb_front
+from gcs_planner.core.bnb import Found, bnb_front
+from gcs_planner.core.bnb.incumbents import _Incumbents
 
 
 def test_least_open_is_infinite_exactly_when_covered_and_bounds_every_open_continuation() -> None:

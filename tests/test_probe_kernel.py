@@ -15,14 +15,17 @@ from test_focus_turns import sparse_scenario
 from test_probes import probed_scenario
 
 from gcs_planner.core import bnb, failure_bounds, probe_kernel
+from gcs_planner.core.bnb import Options, dominance, incumbents
 from gcs_planner.core.reach import build_reach_graph
 from gcs_planner.scenario.generate import DATASET2
 from gcs_planner.scenario.readers import load_scenario
 
 
-def _run(scenario, probability: bool, compiled: bool, monkeypatch) -> bnb.BnbResult:
-    monkeypatch.setattr(bnb, "COMPILED_PROBES", compiled)
-    return bnb.bnb_front(scenario, probability=probability, max_labels=10**6)
+def _run(scenario, probability: bool, compiled: bool, per_arc: float = 0.0) -> bnb.BnbResult:
+    """Probes from the first label, with the failure bounds made once the probes have spent
+    ``per_arc`` labels per arc of the reach graph."""
+    options = Options(probe_from=0, failure_bounds_per_arc=per_arc, compiled_probes=compiled)
+    return bnb.bnb_front(scenario, probability=probability, max_labels=10**6, options=options)
 
 
 def _same_search(a: bnb.BnbResult, b: bnb.BnbResult, case) -> None:
@@ -34,10 +37,7 @@ def _same_search(a: bnb.BnbResult, b: bnb.BnbResult, case) -> None:
 
 @pytest.fixture
 def asked(monkeypatch) -> collections.Counter:
-    """Probes from the first label, with the failure bounds, counting what the compiled ones
-    answered and the critical points of the probers."""
-    monkeypatch.setattr(bnb, "PROBE_FROM", 0)
-    monkeypatch.setattr(bnb, "FAILURE_BOUNDS_PER_ARC", 0.0)
+    """Counting what the compiled probes answered and the critical points of the probers."""
     seen: collections.Counter[str] = collections.Counter()
     call = probe_kernel.CompiledProbes.__call__
 
@@ -54,29 +54,29 @@ def asked(monkeypatch) -> collections.Counter:
     return seen
 
 
-def test_compiled_probes_search_as_the_python_ones(asked, monkeypatch) -> None:
+def test_compiled_probes_search_as_the_python_ones(asked) -> None:
     """Half the searches with the failure bounds from the first probe, half making them once
     the probes have spent a label per arc (mid-search: both probes must switch together)."""
     for legs in ("airplane", "airplane, climb limits", "cs3d"):
         for seed in range(12):
             scenario = probed_scenario(seed, legs)
-            monkeypatch.setattr(bnb, "FAILURE_BOUNDS_PER_ARC", 0.0 if seed % 2 else 1.0)
+            per_arc = 0.0 if seed % 2 else 1.0
             for probability in (True, False) if seed < 4 else (True,):
-                compiled = _run(scenario, probability, True, monkeypatch)
-                python = _run(scenario, probability, False, monkeypatch)
+                compiled = _run(scenario, probability, True, per_arc)
+                python = _run(scenario, probability, False, per_arc)
                 _same_search(compiled, python, (legs, seed, probability))
     assert asked["covered"] >= 30 and asked["by nogoods"] >= 10, asked
     assert asked["escaped"] >= 100 and asked["several states"] >= 80, asked
     assert asked["with critical points"] >= 20, asked
 
 
-def test_compiled_probes_on_sparse_maps_with_contest_limits(asked, monkeypatch) -> None:
+def test_compiled_probes_on_sparse_maps_with_contest_limits(asked) -> None:
     for seed in range(40):
         scenario = sparse_scenario(seed)
         if scenario.params.turn_radius == 0.0:
             continue  # straight legs: no probes
-        compiled = _run(scenario, True, True, monkeypatch)
-        python = _run(scenario, True, False, monkeypatch)
+        compiled = _run(scenario, True, True)
+        python = _run(scenario, True, False)
         _same_search(compiled, python, seed)
     assert asked["covered"] >= 35 and asked["open"] >= 10, asked
     assert asked["by nogoods"] >= 15 and asked["several states"] >= 20, asked
@@ -84,7 +84,7 @@ def test_compiled_probes_on_sparse_maps_with_contest_limits(asked, monkeypatch) 
 
 def test_the_kernel_shares_the_models_constants() -> None:
     assert probe_kernel.MASS_SLACK == failure_bounds._MASS_SLACK
-    assert probe_kernel.MAX_UNIONS == bnb.MAX_UNIONS
+    assert probe_kernel.MAX_UNIONS == dominance.MAX_UNIONS
 
 
 def _pool(states: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -111,7 +111,7 @@ def test_compiled_dominance_between_distributions_answers_as_the_python_one() ->
             for _ in range(int(rng.integers(1, 13)))
         }
         shift = float(rng.choice([0.0, 0.5, 1.0]))
-        want = bnb._stochastically_dominates(bnb._shifted(d1, shift), d2)
+        want = dominance._stochastically_dominates(dominance._shifted(d1, shift), d2)
         got = probe_kernel._stochastically_dominates(
             *_pool(d1), 0, len(d1), shift, *_pool(d2), 0, len(d2)
         )
@@ -170,7 +170,7 @@ def test_compiled_test_per_probability_level_answers_as_the_python_one() -> None
     tails = 0
     for _ in range(3000):
         kmax = int(rng.integers(3, 30))
-        inc = bnb._Incumbents(kmax)
+        inc = incumbents._Incumbents(kmax)
         for _ in range(int(rng.integers(0, 8))):
             inc.add(
                 bnb.Found(

@@ -19,6 +19,7 @@ from test_airplane_legs import climbing_scenario
 from test_bnb import enumerate_front, turning_scenario
 
 from gcs_planner.core import bnb
+from gcs_planner.core.bnb import Options, probes
 from gcs_planner.core.probability import propagate
 from gcs_planner.geometry.legs import scenario_leg_model
 from gcs_planner.scenario.generate import random_scenario
@@ -116,12 +117,15 @@ def test_the_depth_first_enumeration_equals_the_plain_one(probability: bool) -> 
     assert nonempty >= 6
 
 
+# Small searches probe from their first label.
+FROM_FIRST_LABEL = Options(probe_from=0)
+
+
 @pytest.fixture
 def probe_outcomes(monkeypatch) -> collections.Counter:
     """Counts what the probes answered: covered (and of those, from nogoods alone) or open."""
     outcomes: collections.Counter[str] = collections.Counter()
-    probe = bnb._Prober.__call__
-    monkeypatch.setattr(bnb, "PROBE_FROM", 0)  # small searches probe from their first label
+    probe = probes._Prober.__call__
 
     def counted(self, entry, inc, budget):
         covered, spent = probe(self, entry, inc, budget)
@@ -129,7 +133,7 @@ def probe_outcomes(monkeypatch) -> collections.Counter:
         outcomes["by nogoods"] += covered and spent == 0
         return covered, spent
 
-    monkeypatch.setattr(bnb._Prober, "__call__", counted)
+    monkeypatch.setattr(probes._Prober, "__call__", counted)
     return outcomes
 
 
@@ -138,7 +142,9 @@ def test_fronts_with_probes_equal_enumeration(probe_outcomes) -> None:
     for legs in ("airplane", "airplane, climb limits", "cs3d"):
         for seed in range(12):
             scenario = probed_scenario(seed, legs)
-            result = bnb.bnb_front(scenario, probability=True, max_labels=10**6)
+            result = bnb.bnb_front(
+                scenario, probability=True, max_labels=10**6, options=FROM_FIRST_LABEL
+            )
             assert result.optimal
             want = probed_front(seed, legs, True)
             assert_same_front(front_of(result, True), want, (legs, seed))
@@ -153,7 +159,9 @@ def test_two_objective_fronts_with_probes_equal_enumeration(probe_outcomes) -> N
     for legs in ("airplane", "cs3d"):
         for seed in range(6):
             scenario = probed_scenario(seed, legs)
-            result = bnb.bnb_front(scenario, probability=False, max_labels=10**6)
+            result = bnb.bnb_front(
+                scenario, probability=False, max_labels=10**6, options=FROM_FIRST_LABEL
+            )
             assert result.optimal
             want = probed_front(seed, legs, False)
             assert_same_front(front_of(result, False), want, (legs, seed))

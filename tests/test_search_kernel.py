@@ -11,18 +11,22 @@ import collections
 from test_probes import assert_same_front, front_of, probed_front, probed_scenario
 
 from gcs_planner.core import bnb, search_kernel
+from gcs_planner.core.bnb import Options
+from gcs_planner.core.bnb import search as bnb_search
 from gcs_planner.core.budget import Budget
 
 LEGS = ("airplane", "airplane, climb limits", "cs3d")
 
 
-def _pair(scenario, probability: bool, monkeypatch, **budget) -> tuple:
+def _pair(scenario, probability: bool, **budget) -> tuple:
     results = []
     for compiled in (True, False):
-        monkeypatch.setattr(bnb, "COMPILED_SEARCH", compiled)
         b = Budget(**budget) if budget else None
+        options = Options(compiled_search=compiled)
         results.append(
-            bnb.bnb_front(scenario, probability=probability, max_labels=10**6, budget=b)
+            bnb.bnb_front(
+                scenario, probability=probability, max_labels=10**6, budget=b, options=options
+            )
         )
     return tuple(results)
 
@@ -42,19 +46,19 @@ def _same(a: bnb.BnbResult, b: bnb.BnbResult, case) -> None:
 
 def test_compiled_searches_equal_the_python_ones_and_enumeration(monkeypatch) -> None:
     modes: collections.Counter[int] = collections.Counter()
-    legs_mode = bnb._legs_mode
+    legs_mode = bnb_search._legs_mode
 
     def counted(ctx, critical):
         mode = legs_mode(ctx, critical)
         modes[mode] += 1
         return mode
 
-    monkeypatch.setattr(bnb, "_legs_mode", counted)
+    monkeypatch.setattr(bnb_search, "_legs_mode", counted)
     for legs in LEGS:
         for seed in range(10):
             scenario = probed_scenario(seed, legs)
             for probability in (True, False) if seed < 4 else (True,):
-                compiled, python = _pair(scenario, probability, monkeypatch)
+                compiled, python = _pair(scenario, probability)
                 _same(compiled, python, (legs, seed, probability))
                 want = probed_front(seed, legs, probability)
                 assert_same_front(front_of(compiled, probability), want, (legs, seed))
@@ -65,21 +69,21 @@ def test_compiled_searches_equal_the_python_ones_and_enumeration(monkeypatch) ->
 def test_compiled_searches_stop_where_the_python_ones_do(monkeypatch) -> None:
     """Label budgets that stop the floors or the guide midway, and a time limit of 0."""
     stopped = collections.Counter()
-    compiled_search = bnb._compiled_search
+    compiled_search = bnb_search._compiled_search
 
     def counted(*args):
         result = compiled_search(*args)
         stopped["compiled, stopped" if not result.exhausted else "compiled, exhausted"] += 1
         return result
 
-    monkeypatch.setattr(bnb, "_compiled_search", counted)
+    monkeypatch.setattr(bnb_search, "_compiled_search", counted)
     for legs in LEGS:
         for seed in range(4):
             scenario = probed_scenario(seed, legs)
             for limit in (5, 40, 150):
-                compiled, python = _pair(scenario, True, monkeypatch, max_labels=limit)
+                compiled, python = _pair(scenario, True, max_labels=limit)
                 _same(compiled, python, (legs, seed, limit))
-            compiled, python = _pair(scenario, True, monkeypatch, max_labels=None, time_limit=0)
+            compiled, python = _pair(scenario, True, max_labels=None, time_limit=0)
             _same(compiled, python, (legs, seed, "time"))
             assert not compiled.exhausted and compiled.labels == 0
     assert stopped["compiled, stopped"] >= 20 and stopped["compiled, exhausted"] >= 5, stopped

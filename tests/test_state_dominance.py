@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from scipy.optimize import linprog
 
-from gcs_planner.core.bnb import _stochastically_dominates
+from gcs_planner.core.bnb.dominance import _stochastically_dominates
 
 
 def _movable(d1: dict, d2: dict) -> float:

@@ -5,25 +5,26 @@ unexamined, they may only weaken what the result claims, never make it wrong."""
 from __future__ import annotations
 
 from gcs_planner.core import bnb
-from gcs_planner.core.bnb import bnb_front
+from gcs_planner.core.bnb import Options, bnb_front
 from gcs_planner.core.budget import Budget
 from gcs_planner.scenario.generate import DATASET1
 from gcs_planner.scenario.readers import load_scenario
 
 
-def test_open_routes_left_unexamined_only_weaken_the_claims(dataset_paths, monkeypatch) -> None:
+def test_open_routes_left_unexamined_only_weaken_the_claims(dataset_paths) -> None:
     scenario = load_scenario(dataset_paths[1], DATASET1.to_dict())
     full = bnb_front(scenario, probability=True, max_labels=10**6)
     assert full.optimal
     limit = max(1, full.labels // 5)
 
-    def stopped() -> bnb.BnbResult:
+    def stopped(options: Options | None = None) -> bnb.BnbResult:
         # A time limit nobody reaches gives the search a deadline; the labels stop it.
-        return bnb_front(scenario, probability=True, budget=Budget(limit, 10_000.0))
+        budget = Budget(limit, 10_000.0)
+        return bnb_front(scenario, probability=True, budget=budget, options=options)
 
     examined = stopped()
-    monkeypatch.setattr(bnb, "ENDING_GRACE", -1e9)  # the deadline long past at the ending
-    unexamined = stopped()
+    # The deadline long past at the ending.
+    unexamined = stopped(Options(ending_grace=-1e9))
     assert not examined.optimal and not unexamined.optimal
     assert [g.points for g in unexamined.front] == [g.points for g in examined.front]
     # No partial route that was open is dropped.

@@ -141,21 +141,21 @@ def test_the_front_with_runs_equals_enumeration() -> None:
 def test_the_compiled_search_flies_runs_as_the_python_one(monkeypatch, legs: str) -> None:
     """The branch and bound's compiled search (search_kernel: the legs from airplane_kernel with
     the runs in its Legs record) against the Python one, both against depth-first enumeration."""
-    from gcs_planner.core import bnb
+    from gcs_planner.core.bnb import search as bnb_search
 
     modes = []
-    legs_mode = bnb._legs_mode
+    legs_mode = bnb_search._legs_mode
 
     def counted(ctx, critical):
         modes.append(legs_mode(ctx, critical))
         return modes[-1]
 
-    monkeypatch.setattr(bnb, "_legs_mode", counted)
+    monkeypatch.setattr(bnb_search, "_legs_mode", counted)
     for seed in range(6):
         base = probed_scenario(seed, legs)
         scenario = base.with_params(approach=400.0 + 100 * seed, departure=700.0 - 80 * seed)
         assert scenario_leg_model(scenario).kernel_legs().run_out > 0
-        compiled, python = _pair(scenario, True, monkeypatch)
+        compiled, python = _pair(scenario, True)
         _same(compiled, python, (legs, seed))
         assert_same_front(front_of(compiled, True), dfs_front(scenario, True), (legs, seed))
     assert 2 in modes  # airplane legs flown by the kernel

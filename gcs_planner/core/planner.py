@@ -29,6 +29,22 @@ from gcs_planner.scenario.model import Scenario
 OBJECTIVES = ("length", "corrections", "probability")
 
 
+@dataclass
+class EngineResult:
+    """What a search engine gives the planner: the layered label search (straight legs,
+    ``search.straight_front``) or the branch and bound (turns, the probability objective,
+    ``bnb.bnb_front``). Its routes are flown again from their points, independently of the
+    search's labels."""
+
+    routes: list[Route]  # the front, in the engine's order (empty: no route)
+    lower_bounds: list[float]  # per route: a proven lower bound on its front value
+    optimal: bool  # the front is proven (or, with no route, infeasibility is)
+    statement: str  # what is proven and how, in words (why there is no route when none)
+    stats: dict  # the search's figures (``Plan.stats``)
+    # Per route: settled (see ``Plan.settled``); None: every route is.
+    settled: list[bool] | None = None
+
+
 @dataclass(frozen=True)
 class Plan:
     """The answer to a scenario: the Pareto front, one chosen route, and how sure we are."""
@@ -126,14 +142,12 @@ def plan(
         result = _branch_and_bound(scenario, use_probability, max_corrections, budget)
     else:
         result = _straight(scenario, max_corrections)
-    routes, lower_bounds, optimal, statement, stats = result
-    settled = stats.pop("settled", None) or [True] * len(routes)
-    if not routes:
-        raise InfeasibleError(f"{scenario.name}: {statement}")
-    order = sorted(range(len(routes)), key=lambda i: (routes[i].corrections, routes[i].length))
-    routes = [routes[i] for i in order]
-    lower_bounds = [lower_bounds[i] for i in order]
-    settled = [bool(settled[i]) for i in order]
+    if not result.routes:
+        raise InfeasibleError(f"{scenario.name}: {result.statement}")
+    found = result.routes
+    settled = result.settled or [True] * len(found)
+    order = sorted(range(len(found)), key=lambda i: (found[i].corrections, found[i].length))
+    routes = [found[i] for i in order]
     # Every route's probability is exact (re-evaluated), whichever objectives were searched.
     chosen, threshold_met = choose_index(
         routes,
@@ -143,19 +157,19 @@ def plan(
         use_probability=use_probability,
     )
     return Plan(
-        scenario,
-        tuple(routes),
-        chosen,
-        choice,
-        objectives,
-        optimal,
-        statement,
-        tuple(lower_bounds),
-        stats,
-        min_probability,
-        threshold_met,
+        scenario=scenario,
+        routes=tuple(routes),
+        chosen=chosen,
+        choice=choice,
+        objectives=objectives,
+        optimal=result.optimal,
+        statement=result.statement,
+        lower_bounds=tuple(result.lower_bounds[i] for i in order),
+        stats=result.stats,
+        min_probability=min_probability,
+        threshold_met=threshold_met,
         warnings=climb_warnings(scenario, routes),
-        settled=tuple(settled),
+        settled=tuple(bool(settled[i]) for i in order),
     )
 
 
@@ -191,7 +205,7 @@ def climb_warnings(scenario: Scenario, routes: Sequence[Route]) -> tuple[str, ..
     return ()
 
 
-def _straight(scenario: Scenario, max_corrections: int | None):
+def _straight(scenario: Scenario, max_corrections: int | None) -> EngineResult:
     res = straight_front(scenario, max_corrections=max_corrections)
     stats = {
         "search_seconds": res.stats.seconds,
@@ -207,7 +221,7 @@ def _straight(scenario: Scenario, max_corrections: int | None):
     if not res.front:
         model = scenario.vehicle.describe()
         why = f"no feasible route with {model} (exhaustive search): {res.why_infeasible}"
-        return [], [], True, why, stats
+        return EngineResult([], [], True, why, stats)
     # Flown under the scenario's leg model (with R = 0 and climb limits, each leg's path angle
     # and the limits' say on it), independently of the search's labels.
     routes = [_with_probability(scenario, flown_route(scenario, fp.points)) for fp in res.front]
@@ -221,7 +235,13 @@ def _straight(scenario: Scenario, max_corrections: int | None):
         f"{legs} (label search with dominance and bounds, elementarity by decremental "
         "state-space relaxation)"
     )
-    return routes, [r.length for r in routes], True, statement, stats
+    return EngineResult(
+        routes=routes,
+        lower_bounds=[r.length for r in routes],
+        optimal=True,
+        statement=statement,
+        stats=stats,
+    )
 
 
 def _with_probability(scenario: Scenario, route: Route) -> Route:
@@ -240,7 +260,7 @@ def _cut_text(cut: Sequence[str]) -> str:
 
 def _branch_and_bound(
     scenario: Scenario, use_probability: bool, max_corrections: int | None, budget: Budget
-):
+) -> EngineResult:
     # With the probability objective, the two-objective straight-leg front seeds the search
     # (its fewest-corrections end first of all) and bounds each route from below; the front
     # without the unreliable points seeds it with routes certain to arrive (``seeding``). On
@@ -320,18 +340,14 @@ def _branch_and_bound(
                 max_corrections,
                 probability=use_probability,
             )
-            return [], [], True, f"no feasible route with {model} (exhaustive search): {why}", stats
-        return (
-            [],
-            [],
-            False,
-            (
-                f"no feasible route found with {model} within the search budget of "
-                f"{budget.describe()} ({res.open_labels} partial routes left open), so "
-                f"infeasibility is not proven: {budget.advice()}{_cut_text(res.cut)}"
-            ),
-            stats,
+            why = f"no feasible route with {model} (exhaustive search): {why}"
+            return EngineResult([], [], True, why, stats)
+        unproven = (
+            f"no feasible route found with {model} within the search budget of "
+            f"{budget.describe()} ({res.open_labels} partial routes left open), so "
+            f"infeasibility is not proven: {budget.advice()}{_cut_text(res.cut)}"
         )
+        return EngineResult([], [], False, unproven, stats)
     # Every reported route is re-evaluated from scratch: its flown length, errors and
     # probability come from the route, not from the search's labels.
     routes = [_with_probability(scenario, flown_route(scenario, g.points)) for g in res.front]
@@ -371,6 +387,12 @@ def _branch_and_bound(
             f"marked optimal because partial routes that may lead to front routes with no "
             f"more corrections (or a higher probability) are still open{_cut_text(res.cut)}"
         )
-    if res.proven is not None:
-        stats["settled"] = list(res.proven)
-    return routes, res.lower_bounds, res.optimal, statement, stats
+    settled = None if res.proven is None else list(res.proven)
+    return EngineResult(
+        routes=routes,
+        lower_bounds=res.lower_bounds,
+        optimal=res.optimal,
+        statement=statement,
+        stats=stats,
+        settled=settled,
+    )
