@@ -188,8 +188,8 @@ def test_the_mission_overflies_each_point_straight_on_to_its_departure_waypoint(
     seqs = dict(mission.point_seqs)
     items = mission.items
     departures = [it for it in items if it.note.startswith("departure")]
-    # every point the route leaves, A with its given heading included, has one
-    assert len(departures) == len(route.points) - 1
+    # every point, A with its given heading included and B before the end action, has one
+    assert len(departures) == len(route.points)
     frame_points = {it.seq: it for it in items if it.command == MAV_CMD_NAV_WAYPOINT}
     for pid, seq in list(seqs.items())[:-1]:
         after = items[seq + 1]
