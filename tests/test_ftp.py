@@ -31,7 +31,7 @@ from gcs_planner.link.mission_ftp import (
     stored_file,
     stored_item_bytes,
 )
-from gcs_planner.link.protocol import mission_differences
+from gcs_planner.link.protocol import item_differences, mission_differences
 from gcs_planner.mission.items import MissionItem
 from sim import ftp_server
 from sim.radio import RadioConfig, SikRadio
@@ -132,12 +132,18 @@ def test_the_stored_file_is_what_get_item_gives_back():
     assert len(raw) == ITEM.size and raw[32:34] == bytes([1, 1])  # get_item's target 1/1
     home = stored_item_bytes(MissionItem(0, 0, 16, x=9, y=9, z=5.0), 0)
     assert len(stored_file([sent, sent], home)) == 10 + 2 * ITEM.size
+    # Read back by either way, a command without a position comes back with frame 0 from
+    # ArduPilot whether it was sent as 0 or as 2 (MAV_FRAME_MISSION): not a difference; a
+    # waypoint's frame still is.
+    speed = MissionItem(4, 2, 178, param2=22.0)
+    assert as_stored(speed, 4).frame == 0 and not item_differences(speed, as_stored(speed, 4))
+    assert item_differences(MissionItem(4, 2, 16), MissionItem(4, 0, 16))
 
 
 # Transfers -----------------------------------------------------------------------------------
 def test_upload_and_download_by_ftp_over_loopback():
     items = _mission(300)
-    with _loopback(transfer="auto") as (vehicle, client):
+    with _loopback() as (vehicle, client):  # the library's default, auto, as the CLI's
         report = client.upload_verified(items)
         assert report.transfer == "ftp" and _holds(vehicle, items)
         assert vehicle.ftp.writes_stored == 1
@@ -437,6 +443,9 @@ def test_upload_and_download_commands_go_by_ftp_and_say_so(tmp_path, capsys):
         assert main(["upload", str(wp), *conn, "--keep-loiter-radius"]) == 0
         assert "uploaded and verified 12 items" in (out := capsys.readouterr().out)
         assert "by MAVFTP" in out and vehicle.ftp.writes_stored == 1
+        assert "checked by the vehicle's CRC" in out and vehicle.ftp.crcs_served == 1
+        assert main(["upload", str(wp), *conn, "--keep-loiter-radius", "--verify", "read"]) == 0
+        assert "CRC" not in capsys.readouterr().out and vehicle.ftp.crcs_served == 1
         back = tmp_path / "back.json"
         assert main(["download", *conn, "--out", str(back), "--transfer", "mission"]) == 0
         assert "by MAVFTP" not in capsys.readouterr().out  # the flag chose the mission protocol

@@ -16,7 +16,7 @@ Missions can also travel by MAVLink FTP (:mod:`gcs_planner.link.ftp`,
 ``@MISSION/mission.dat`` when the vehicle's AUTOPILOT_VERSION sets MAV_PROTOCOL_CAPABILITY_FTP
 and it runs ArduPilot (PX4 sets the bit but serves no @MISSION), and falls back to the mission
 protocol when the vehicle answers that it has no such file; ``"ftp"`` and ``"mission"`` force
-one. The library's default is ``"mission"``; the command line's is ``auto``. The read-back
+one; ``auto`` is the default, the library's as the command line's. The read-back
 goes the way the upload went, with the same verdicts (differs / could not read it back).
 
 An upload by MAVFTP is verified, by default (``verify="crc"``), by the vehicle's CRC-32 of
@@ -173,7 +173,7 @@ class MissionClient:
         retries: int = DEFAULT_RETRIES,
         progress: ProgressFactory | None = None,
         window: int = DOWNLOAD_WINDOW,
-        transfer: str = "mission",
+        transfer: str = "auto",
         verify: str = "crc",
     ) -> None:
         if transfer not in TRANSFERS:
@@ -907,9 +907,11 @@ class MissionClient:
             return False
         if self.transfer == "ftp":
             return True
-        offers = self.autopilot_capabilities() & mavlink.MAV_PROTOCOL_CAPABILITY_FTP
-        # Only ArduPilot serves @MISSION (PX4 sets the FTP bit for its file system).
-        return bool(offers) and self.firmware == "ardupilot"
+        # Only ArduPilot serves @MISSION (PX4 sets the FTP bit for its file system): any other
+        # vehicle is not asked for its capabilities at all.
+        if self.firmware != "ardupilot":
+            return False
+        return bool(self.autopilot_capabilities() & mavlink.MAV_PROTOCOL_CAPABILITY_FTP)
 
     def _ftp(self) -> FtpClient:
         return FtpClient(
