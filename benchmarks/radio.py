@@ -297,8 +297,10 @@ def target_line(results: list[dict[str, object]], who: str = "project") -> str:
     fs = sum(1 for d in done if d["verified"] and not d["holds"])
     met = med <= TARGET_FACTOR * air and ff == 0 and fs == 0
     extra = ""
-    if who == "ftp":
-        by_crc = sum(d["verified_by"] == "crc" for d in done)
+    by_crc = sum(d["verified_by"] == "crc" for d in done)
+    if who == "ftp" and not by_crc:
+        extra = " Verified by the full read-back."
+    elif who == "ftp":
         own = ftp_air_time(1000, 64, "crc")
         extra = (
             f" Verified by the vehicle's CRC in {by_crc} of {len(done)} runs (the others read "

@@ -52,7 +52,16 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 from gcs_planner.link import ftp
-from gcs_planner.link.mission_ftp import HEADER, ITEM, MAGIC, crc32, stored_item_bytes
+from gcs_planner.link.mission_ftp import (
+    CRC_READ,
+    HEADER,
+    ITEM,
+    MAGIC,
+    crc32,
+    read_call,
+    stored_item_bytes,
+    xyz_written,
+)
 from gcs_planner.link.pacing import RadioFlow
 from gcs_planner.mission.items import MissionItem
 from sim.mission_server import MissionServer, check_item
@@ -66,14 +75,18 @@ MAV_CMD_DO_JUMP = 177
 FRAME_BYTES = 12 + 254  # a MAVLink 2 FILE_TRANSFER_PROTOCOL frame (PAYLOAD_SIZE)
 
 
-def mission_file(items: list[MissionItem], current_nav: int | None) -> bytes:
-    """mission.dat as AP_Filesystem_Mission::read builds it from the stored ``items``: the
-    header (magic, data_type, options 0, start 0, count), then each item as AP_Mission's
-    get_item gives it."""
-    out = bytearray(HEADER.pack(MAGIC, 0, 0, 0, len(items)))
-    for k, item in enumerate(items):
-        out += stored_item_bytes(item, k, current_nav)
-    return bytes(out)
+Reader = Callable[[int, int], bytes]  # (offset, size) -> what one read call gives
+
+
+def mission_reader(items: list[MissionItem], current_nav: int | None) -> Reader:
+    """mission.dat as AP_Filesystem_Mission::read gives it from the stored ``items``, one read
+    call at a time: the header (magic, data_type, options 0, start 0, count), then each item
+    as AP_Mission's get_item builds it into the call's item buffer (x, y, z a command does not
+    write are the previous item's in that call: mission_ftp.read_call)."""
+    header = HEADER.pack(MAGIC, 0, 0, 0, len(items))
+    rendered = [(stored_item_bytes(it, k, current_nav), xyz_written(it.command))
+                for k, it in enumerate(items)]  # fmt: skip
+    return lambda offset, size: read_call(header, rendered, offset, size)
 
 
 @dataclass
@@ -81,7 +94,7 @@ class _Session:
     sid: int
     peer: tuple[int, int]
     mode: str = ""  # "read" | "write" | ""
-    content: bytes = b""  # the file as it was at the open (read)
+    content: Reader = lambda offset, size: b""  # noqa: E731 - the file as it was at the open
     buf: bytearray = field(default_factory=bytearray)  # what was written (write)
 
 
@@ -224,7 +237,7 @@ class FtpServer:
             if s.mode != "read":
                 self._nak(peer, p, ftp.FILE_NOT_FOUND if not s.mode else 1)
                 return
-            piece = s.content[p.offset : p.offset + min(p.size or ftp.DATA_MAX, ftp.DATA_MAX)]
+            piece = s.content(p.offset, min(p.size or ftp.DATA_MAX, ftp.DATA_MAX))
             if not piece:
                 self._nak(peer, p, ftp.EOF)
             else:
@@ -242,7 +255,10 @@ class FtpServer:
                 self._nak(peer, p, ftp.FILE_NOT_FOUND, session=s.sid)
                 return
             self.crcs_served += 1
-            crc = crc32(self._file())
+            # AP_Filesystem::crc32: the file opened afresh, read CRC_READ bytes at a time.
+            read, crc, offset = self._file(), 0, 0
+            while piece := read(offset, CRC_READ):
+                crc, offset = crc32(piece, crc), offset + len(piece)
             self._reply(peer, p, ftp.ACK, data=struct.pack("<I", crc), session=s.sid)
         elif op == ftp.WRITE_FILE:
             if s.mode != "write":
@@ -267,7 +283,7 @@ class FtpServer:
                     self._burst = None
                 break
             b.blocked_since = None
-            piece = b.session.content[b.offset : b.offset + ftp.DATA_MAX]
+            piece = b.session.content(b.offset, ftp.DATA_MAX)  # one read per packet
             seq = (b.reply.seq + 1 + b.sent) & 0xFFFF
             if not piece:
                 self._nak(b.session.peer, b.reply, ftp.EOF, offset=b.offset, seq=seq,
@@ -289,9 +305,9 @@ class FtpServer:
             self._serve()
 
     # The mission file -------------------------------------------------------------------------
-    def _file(self) -> bytes:
+    def _file(self) -> Reader:
         """The file a read or a CRC sees now: built from the stored mission."""
-        return mission_file(self.missions.mission, self.missions.current)
+        return mission_reader(self.missions.mission, self.missions.current)
 
     def _close(self, s: _Session) -> bool:
         if s.mode != "write":

@@ -291,6 +291,25 @@ def test_an_upload_is_verified_by_the_vehicles_crc_without_reading_the_file_back
         assert ftp.BURST_READ_FILE in seen
 
 
+def test_a_command_without_a_position_after_home_verifies_both_ways():
+    # As the planner's missions begin: home, a speed change (no position), waypoints. In
+    # ArduPilot's file the speed change carries the home's x, y, z (get_item leaves them in the
+    # read call's item buffer), which the CRC's 64-byte reads and a 239-byte burst both see.
+    speed = MissionItem(1, 2, 178, param1=0.0, param2=22.0, param3=-1.0)
+    items = [_mission(1)[0], speed, *[it.with_seq(i + 2) for i, it in enumerate(_mission(40))]]
+    with _loopback(transfer="ftp") as (vehicle, client):
+        vehicle.missions.commit(items)
+        read = ftp_server.mission_reader(vehicle.missions.mission, None)
+        home_x = vehicle.mission[0].x
+        assert ITEM.unpack_from(read(0, 239), 10 + ITEM.size)[4] == home_x != 0
+        report = client.upload_verified(items)
+        assert report.verify == "crc" and _holds(vehicle, items)
+        got = client.download()
+        assert (got[1].x, got[1].y, got[1].z) == (0, 0, 0.0)  # leftovers, not the vehicle's
+    with _loopback(transfer="ftp", verify="read") as (vehicle, client):
+        assert client.upload_verified(items).verify == "read" and _holds(vehicle, items)
+
+
 def test_the_crc_never_verifies_a_mission_the_vehicle_did_not_store():
     items = _mission(30)
     with _loopback(transfer="ftp") as (vehicle, client):
@@ -418,10 +437,17 @@ def test_hostile_replies_are_clear_errors(monkeypatch):
             with pytest.raises(LinkError, match=message):
                 client.download()
     # A file longer than its header says: bytes past its end.
-    real = ftp_server.mission_file
-    monkeypatch.setattr(
-        ftp_server, "mission_file", lambda items, nav: real(items, nav) + b"\x01" * 300
-    )
+    real_reader = ftp_server.mission_reader
+
+    def longer(items, nav):
+        real = real_reader(items, nav)
+        whole = bytearray()
+        while piece := real(len(whole), 239):
+            whole += piece
+        data = bytes(whole) + b"\x01" * 300
+        return lambda offset, size: data[offset : offset + size]
+
+    monkeypatch.setattr(ftp_server, "mission_reader", longer)
     with _loopback(transfer="ftp", timeout=0.3, retries=1) as (vehicle, client):
         vehicle.missions.commit(_mission(30))
         with pytest.raises(LinkError, match="past its end"):
@@ -453,7 +479,10 @@ def test_upload_and_download_commands_go_by_ftp_and_say_so(tmp_path, capsys):
 
 
 def test_a_garbage_mission_file_is_a_one_line_error_from_download(monkeypatch, tmp_path, capsys):
-    monkeypatch.setattr(ftp_server, "mission_file", lambda items, nav: b"\x55" * 700)
+    garbage = b"\x55" * 700
+    monkeypatch.setattr(
+        ftp_server, "mission_reader", lambda items, nav: lambda o, n: garbage[o : o + n]
+    )
     port = free_udp_port()
     with MockVehicle(f"udpin:127.0.0.1:{port}"):
         out = tmp_path / "m.json"

@@ -53,6 +53,7 @@ from gcs_planner.link.mission_ftp import (
     mission_length,
     stored_file,
     stored_item_bytes,
+    without_leftovers,
 )
 from gcs_planner.link.pacing import RadioFlow, Window
 from gcs_planner.link.params import read_parameter, set_loiter_radius
@@ -954,7 +955,9 @@ class MissionClient:
             data = client.read(MISSION_PATH, mission_length, chunks)
         finally:
             self.retry_count += client.retry_count
-        return decode_mission(data)
+        # A command without a position carries in ArduPilot's file the x, y, z of the item read
+        # before it (one item buffer per read call), which the vehicle does not store.
+        return without_leftovers(decode_mission(data))
 
     def _ftp_read_back(
         self, sent: Sequence[MissionItem], tol: Tolerance, *, acknowledged: bool, attempts: int = 3

@@ -100,6 +100,18 @@ def as_stored(item: MissionItem, seq: int, current_nav: int | None = None) -> Mi
 
 # AP_Mission::get_item writes these placeholders into every item it gives out.
 STORED_TARGET = (1, 1)
+# Which of x, y, z mission_cmd_to_mavlink_int writes for a command: a stored Location all three,
+# a few commands some (DIGICAM_CONFIGURE, DIGICAM_CONTROL, GIMBAL_MANAGER_PITCHYAW,
+# NAV_SCRIPT_TIME, NAV_ATTITUDE_TIME), any other none. What it does not write keeps what the
+# item buffer held (see :func:`read_call`).
+_XYZ_WRITTEN = {202: "xyz", 203: "xy", 1000: "xz", 42702: "xy", 42703: "x"}
+_XYZ_SLICES = {"x": slice(16, 20), "y": slice(20, 24), "z": slice(24, 28)}
+CRC_READ = 64  # AP_Filesystem::crc32 reads the file 64 bytes at a time
+
+
+def xyz_written(command: int) -> str:
+    """The fields of x, y, z that ArduPilot's get_item writes for ``command``."""
+    return "xyz" if command in LOCATION_COMMANDS else _XYZ_WRITTEN.get(command, "")
 
 
 def stored_item_bytes(item: MissionItem, seq: int, current_nav: int | None = None) -> bytes:
@@ -107,18 +119,68 @@ def stored_item_bytes(item: MissionItem, seq: int, current_nav: int | None = Non
     return _pack_item(as_stored(item, seq, current_nav), seq, STORED_TARGET)
 
 
-def stored_file(items: Sequence[MissionItem], home: bytes) -> bytes:
-    """The mission.dat a vehicle holding ``items`` serves: the header, ``home`` (item 0's
-    38 bytes as the vehicle gave them: ArduPilot serves its own home there, whatever was
-    sent), then the other items as stored."""
+def read_call(header: bytes, items: Sequence[tuple[bytes, str]], offset: int, size: int) -> bytes:
+    """What one ``read`` of ``size`` bytes at ``offset`` gives (AP_Filesystem_Mission::read):
+    ``header``'s bytes, then the items it reaches, each built by get_item into one item
+    buffer zeroed at the start of the call, so the x, y, z a command does not write
+    (``items``: each item's 38 bytes and the fields written) are the previous item's in that
+    call, or 0 for the first. The bytes of such an item therefore depend on where the read
+    that built it started: a 64-byte CRC read and a 239-byte burst packet can differ there."""
+    out = bytearray(header[offset : offset + size])
+    pos = offset + len(out)
+    buf = bytearray(ITEM.size)
+    end = offset + size
+    while pos < end:
+        k, within = divmod(pos - len(header), ITEM.size)
+        if k >= len(items):
+            break
+        raw, written = items[k]
+        built = bytearray(raw)
+        for field, where in _XYZ_SLICES.items():
+            if field not in written:
+                built[where] = buf[where]
+        buf = built
+        take = min(ITEM.size - within, end - pos)
+        out += built[within : within + take]
+        pos += take
+    return bytes(out)
+
+
+def read_whole(header: bytes, items: Sequence[tuple[bytes, str]], chunk: int) -> bytes:
+    """The file as read from its start in ``chunk``-byte calls (the CRC's: :data:`CRC_READ`)."""
+    out = bytearray()
+    while piece := read_call(header, items, len(out), chunk):
+        out += piece
+    return bytes(out)
+
+
+def stored_file(items: Sequence[MissionItem], home: bytes, chunk: int = CRC_READ) -> bytes:
+    """The mission.dat a vehicle holding ``items`` serves, read in ``chunk``-byte calls: the
+    header, ``home`` (item 0's 38 bytes as the vehicle gave them: ArduPilot serves its own
+    home there, whatever was sent; a home is a Location, all of it written), then the other
+    items as stored."""
     if len(home) != ITEM.size:
         raise ValueError(f"home is {ITEM.size} bytes, not {len(home)}")
-    out = bytearray(HEADER.pack(MAGIC, MAV_MISSION_TYPE_MISSION, 0, 0, len(items)))
-    if items:
-        out += home
-    for seq, it in enumerate(items[1:], start=1):
-        out += stored_item_bytes(it, seq)
-    return bytes(out)
+    header = HEADER.pack(MAGIC, MAV_MISSION_TYPE_MISSION, 0, 0, len(items))
+    rendered = [(home, "xyz")] if items else []
+    rendered += [(stored_item_bytes(it, k), xyz_written(it.command))
+                 for k, it in enumerate(items[1:], start=1)]  # fmt: skip
+    return read_whole(header, rendered, chunk)
+
+
+def without_leftovers(items: Sequence[MissionItem]) -> list[MissionItem]:
+    """``items`` read from ArduPilot's mission.dat with the x, y, z its get_item did not write
+    set to 0: those are what the item buffer held from the item before (:func:`read_call`),
+    not anything the vehicle stores (the mission protocol gives 0 there)."""
+    out = []
+    for it in items:
+        written = xyz_written(it.command)
+        if written == "xyz":
+            out.append(it)
+            continue
+        out.append(replace(it, x=it.x if "x" in written else 0, y=it.y if "y" in written else 0,
+                           z=it.z if "z" in written else 0.0))  # fmt: skip
+    return out
 
 
 def mission_length(prefix: bytes) -> int | None:
