@@ -51,7 +51,8 @@ def transfer(
         link = open_link(f"udpout:127.0.0.1:{port}")
         error = ""
         try:
-            client = MissionClient(link, window=8 if adaptive else 1)
+            # The mission protocol's window under loss (MAVFTP: benchmarks.radio).
+            client = MissionClient(link, window=8 if adaptive else 1, transfer="mission")
             if not adaptive:  # the specification's fixed item timeout, as before
                 client._rtt = RoundTrip(ITEM_TIMEOUT_S, ITEM_TIMEOUT_S)
             client.connect(timeout=30.0)

@@ -27,7 +27,7 @@ def benchmark_upload(n_items: int = 1000, flavour: str = "ardupilot") -> dict[st
     with MockVehicle(f"udpin:127.0.0.1:{port}", flavour=flavour, capacity=max(n_items, 1)):
         link = open_link(f"udpout:127.0.0.1:{port}")
         try:
-            client = MissionClient(link)
+            client = MissionClient(link, transfer="mission")  # this table is the protocol's
             client.connect(timeout=10.0)
             report = client.upload_verified(items)
         finally:

@@ -319,7 +319,9 @@ def dry_run(
     start = time.perf_counter()
     with vehicle:
         link = open_link(f"udpout:127.0.0.1:{port}")
-        client = MissionClient(link, timeout=timeout, retries=retries)
+        # The mission protocol, as before MissionClient's default became auto: its refusals
+        # name the reason (NO_SPACE), which the dry run reports; MAVFTP's close says none.
+        client = MissionClient(link, timeout=timeout, retries=retries, transfer="mission")
         try:
             client.connect(timeout=connect_timeout)
             for _ in range(attempts):

@@ -25,6 +25,17 @@ AP_Filesystem_Mission.cpp:
   the mission (``finish_upload``): the header's magic and count must match the bytes, no item
   may be all zeros, every item must be one this vehicle stores, a DO_JUMP target must be
   inside the mission; a failure is NAK FailErrno EINVAL and the mission is left as it was;
+* CalcFileCRC32 of mission.dat answers ``crc_crc32`` from 0 over the file as a read of it
+  gives it at that moment (``AP_Filesystem::crc32`` opens the file and reads it 64 bytes at a
+  time through AP_Filesystem_Mission::read): over the mission stored, not the bytes the last
+  upload sent. It is one reply, sent at once like any other: the worker builds the file from
+  the stored items without a pause (the time it takes, milliseconds for a thousand items, is
+  not modelled);
+* the file a read or a CRC sees is built item by item as AP_Mission::get_item gives them
+  (:func:`gcs_planner.link.mission_ftp.as_stored`: target 1/1, autocontinue 1, the frame and
+  centimetre altitude of a stored Location, ``current`` where the command's id equals the
+  current nav index), home at item 0; ArduPilot's narrower storage of some commands' params
+  is not modelled;
 * any other file is NAK FileNotFound, an unknown opcode NAK UnknownCommand.
 
 PX4 serves FTP on its file system but has no ``@MISSION``: its flavour here answers every open
@@ -41,7 +52,16 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 from gcs_planner.link import ftp
-from gcs_planner.link.mission_ftp import HEADER, ITEM, MAGIC, encode_mission
+from gcs_planner.link.mission_ftp import (
+    CRC_READ,
+    HEADER,
+    ITEM,
+    MAGIC,
+    crc32,
+    read_call,
+    stored_item_bytes,
+    xyz_written,
+)
 from gcs_planner.link.pacing import RadioFlow
 from gcs_planner.mission.items import MissionItem
 from sim.mission_server import MissionServer, check_item
@@ -55,12 +75,26 @@ MAV_CMD_DO_JUMP = 177
 FRAME_BYTES = 12 + 254  # a MAVLink 2 FILE_TRANSFER_PROTOCOL frame (PAYLOAD_SIZE)
 
 
+Reader = Callable[[int, int], bytes]  # (offset, size) -> what one read call gives
+
+
+def mission_reader(items: list[MissionItem], current_nav: int | None) -> Reader:
+    """mission.dat as AP_Filesystem_Mission::read gives it from the stored ``items``, one read
+    call at a time: the header (magic, data_type, options 0, start 0, count), then each item
+    as AP_Mission's get_item builds it into the call's item buffer (x, y, z a command does not
+    write are the previous item's in that call: mission_ftp.read_call)."""
+    header = HEADER.pack(MAGIC, 0, 0, 0, len(items))
+    rendered = [(stored_item_bytes(it, k, current_nav), xyz_written(it.command))
+                for k, it in enumerate(items)]  # fmt: skip
+    return lambda offset, size: read_call(header, rendered, offset, size)
+
+
 @dataclass
 class _Session:
     sid: int
     peer: tuple[int, int]
     mode: str = ""  # "read" | "write" | ""
-    content: bytes = b""  # the file as it was at the open (read)
+    content: Reader = lambda offset, size: b""  # noqa: E731 - the file as it was at the open
     buf: bytearray = field(default_factory=bytearray)  # what was written (write)
 
 
@@ -104,6 +138,7 @@ class FtpServer:
         self._last: tuple[tuple[int, int], ftp.Packet] | None = None  # the last reply sent
         self.requests = 0  # requests served (re-requests answered from the last reply too)
         self.writes_stored = 0  # mission files stored
+        self.crcs_served = 0  # CalcFileCRC32 answered
 
     # Receiving --------------------------------------------------------------------------------
     def handle(self, msg: Any, peer: tuple[int, int]) -> None:
@@ -191,7 +226,7 @@ class FtpServer:
             elif self.flavour != "ardupilot" or name != MISSION_FILE:
                 self._nak(peer, p, ftp.FILE_NOT_FOUND, session=s.sid)
             elif op == ftp.OPEN_FILE_RO:
-                s.mode, s.content = "read", encode_mission(self.missions.mission)
+                s.mode, s.content = "read", self._file()
                 self._reply(peer, p, ftp.ACK, data=struct.pack("<I", STAT_SIZE), session=s.sid)
             elif any(o.mode == "write" for o in self.sessions.values()):
                 self._nak(peer, p, 1, session=s.sid)  # only one upload at a time
@@ -202,7 +237,7 @@ class FtpServer:
             if s.mode != "read":
                 self._nak(peer, p, ftp.FILE_NOT_FOUND if not s.mode else 1)
                 return
-            piece = s.content[p.offset : p.offset + min(p.size or ftp.DATA_MAX, ftp.DATA_MAX)]
+            piece = s.content(p.offset, min(p.size or ftp.DATA_MAX, ftp.DATA_MAX))
             if not piece:
                 self._nak(peer, p, ftp.EOF)
             else:
@@ -213,6 +248,18 @@ class FtpServer:
                 return
             request = replace(p, session=s.sid)  # what each packet of the burst answers
             self._burst = _Burst(s, request, p.offset, 0, time.monotonic())
+        elif op == ftp.CALC_FILE_CRC32:
+            # GCS_FTP::Session::handle_request, CalcFileCRC32: no file need be open; the
+            # reply carries the session the worker gave the request.
+            if self.flavour != "ardupilot" or name != MISSION_FILE:
+                self._nak(peer, p, ftp.FILE_NOT_FOUND, session=s.sid)
+                return
+            self.crcs_served += 1
+            # AP_Filesystem::crc32: the file opened afresh, read CRC_READ bytes at a time.
+            read, crc, offset = self._file(), 0, 0
+            while piece := read(offset, CRC_READ):
+                crc, offset = crc32(piece, crc), offset + len(piece)
+            self._reply(peer, p, ftp.ACK, data=struct.pack("<I", crc), session=s.sid)
         elif op == ftp.WRITE_FILE:
             if s.mode != "write":
                 self._nak(peer, p, ftp.FILE_NOT_FOUND if not s.mode else 1)
@@ -236,7 +283,7 @@ class FtpServer:
                     self._burst = None
                 break
             b.blocked_since = None
-            piece = b.session.content[b.offset : b.offset + ftp.DATA_MAX]
+            piece = b.session.content(b.offset, ftp.DATA_MAX)  # one read per packet
             seq = (b.reply.seq + 1 + b.sent) & 0xFFFF
             if not piece:
                 self._nak(b.session.peer, b.reply, ftp.EOF, offset=b.offset, seq=seq,
@@ -258,6 +305,10 @@ class FtpServer:
             self._serve()
 
     # The mission file -------------------------------------------------------------------------
+    def _file(self) -> Reader:
+        """The file a read or a CRC sees now: built from the stored mission."""
+        return mission_reader(self.missions.mission, self.missions.current)
+
     def _close(self, s: _Session) -> bool:
         if s.mode != "write":
             return True

@@ -12,6 +12,7 @@ import threading
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
+from dataclasses import replace
 
 import pytest
 
@@ -20,8 +21,17 @@ from gcs_planner.errors import LinkError
 from gcs_planner.link import ftp
 from gcs_planner.link.connection import open_link
 from gcs_planner.link.mission_client import MissionClient, ReadBackError
-from gcs_planner.link.mission_ftp import decode_mission, encode_mission, mission_length
-from gcs_planner.link.protocol import mission_differences
+from gcs_planner.link.mission_ftp import (
+    ITEM,
+    as_stored,
+    crc32,
+    decode_mission,
+    encode_mission,
+    mission_length,
+    stored_file,
+    stored_item_bytes,
+)
+from gcs_planner.link.protocol import item_differences, mission_differences
 from gcs_planner.mission.items import MissionItem
 from sim import ftp_server
 from sim.radio import RadioConfig, SikRadio
@@ -94,10 +104,46 @@ def test_payload_round_trip_and_an_oversized_size_is_refused():
         ftp.unpack(raw)
 
 
+def test_crc32_is_ardupilots_crc_crc32_from_zero():
+    # crc_crc32 (AP_Math/crc.cpp): crc = tab[(crc ^ byte) & 0xff] ^ (crc >> 8), the table of the
+    # reflected polynomial 0xEDB88320; AP_Filesystem::crc32 starts from 0 and does not invert.
+    def bitwise(data: bytes, crc: int = 0) -> int:
+        for byte in data:
+            crc ^= byte
+            for _ in range(8):
+                crc = (crc >> 1) ^ (0xEDB88320 if crc & 1 else 0)
+        return crc
+
+    for data in (b"", b"123456789", encode_mission(_mission(40))):
+        assert crc32(data) == bitwise(data)
+    assert crc32(b"123456789") == 0x2DFD2D88  # not zlib's 0xCBF43926: no inversions
+    assert crc32(b"6789", crc32(b"12345")) == crc32(b"123456789")  # read 64 bytes at a time
+
+
+def test_the_stored_file_is_what_get_item_gives_back():
+    sent = MissionItem(3, 6, 16, current=1, autocontinue=0, param2=30.0, x=1, y=2, z=100.129)
+    got = as_stored(sent, 3)
+    # RELATIVE_ALT_INT is kept as a flag and given back as GLOBAL_RELATIVE_ALT; the altitude
+    # in whole centimetres (truncated); autocontinue 1; current 0 (no mission running).
+    assert (got.frame, got.autocontinue, got.current, got.param2) == (3, 1, 0, 30.0)
+    assert got.z == pytest.approx(100.12, abs=1e-5)
+    assert as_stored(MissionItem(3, 0, 177, param1=2.0, z=1.2345), 3).z == 1.2345  # no Location
+    raw = stored_item_bytes(sent, 3)
+    assert len(raw) == ITEM.size and raw[32:34] == bytes([1, 1])  # get_item's target 1/1
+    home = stored_item_bytes(MissionItem(0, 0, 16, x=9, y=9, z=5.0), 0)
+    assert len(stored_file([sent, sent], home)) == 10 + 2 * ITEM.size
+    # Read back by either way, a command without a position comes back with frame 0 from
+    # ArduPilot whether it was sent as 0 or as 2 (MAV_FRAME_MISSION): not a difference; a
+    # waypoint's frame still is.
+    speed = MissionItem(4, 2, 178, param2=22.0)
+    assert as_stored(speed, 4).frame == 0 and not item_differences(speed, as_stored(speed, 4))
+    assert item_differences(MissionItem(4, 2, 16), MissionItem(4, 0, 16))
+
+
 # Transfers -----------------------------------------------------------------------------------
 def test_upload_and_download_by_ftp_over_loopback():
     items = _mission(300)
-    with _loopback(transfer="auto") as (vehicle, client):
+    with _loopback() as (vehicle, client):  # the library's default, auto, as the CLI's
         report = client.upload_verified(items)
         assert report.transfer == "ftp" and _holds(vehicle, items)
         assert vehicle.ftp.writes_stored == 1
@@ -215,6 +261,130 @@ def test_the_read_back_by_ftp_tells_differs_from_could_not_read():
         assert _holds(vehicle, items)
 
 
+def _opcodes_served(vehicle: MockVehicle) -> list[int]:
+    seen: list[int] = []
+    handle = vehicle.ftp.handle
+
+    def counting(msg, peer):
+        seen.append(ftp.unpack(msg.payload).opcode)
+        handle(msg, peer)
+
+    vehicle.ftp.handle = counting  # type: ignore[method-assign]
+    return seen
+
+
+def test_an_upload_is_verified_by_the_vehicles_crc_without_reading_the_file_back():
+    items = _mission(300)
+    with _loopback(transfer="ftp") as (vehicle, client):
+        seen = _opcodes_served(vehicle)
+        report = client.upload_verified(items)
+        assert (report.transfer, report.verify, report.crc_note) == ("ftp", "crc", "")
+        assert vehicle.ftp.crcs_served == 1 and _holds(vehicle, items)
+        # The file's first item (the vehicle's home) by one ReadFile; no burst read.
+        assert ftp.BURST_READ_FILE not in seen and seen.count(ftp.READ_FILE) == 1
+        # The vehicle's home is not the item 0 sent, and the CRC matched all the same.
+        assert vehicle.mission[0] != items[0]
+    with _loopback(transfer="ftp", verify="read") as (vehicle, client):
+        seen = _opcodes_served(vehicle)
+        report = client.upload_verified(items)
+        assert report.verify == "read" and vehicle.ftp.crcs_served == 0
+        assert ftp.BURST_READ_FILE in seen
+
+
+def test_a_command_without_a_position_after_home_verifies_both_ways():
+    # As the planner's missions begin: home, a speed change (no position), waypoints. In
+    # ArduPilot's file the speed change carries the home's x, y, z (get_item leaves them in the
+    # read call's item buffer), which the CRC's 64-byte reads and a 239-byte burst both see.
+    speed = MissionItem(1, 2, 178, param1=0.0, param2=22.0, param3=-1.0)
+    items = [_mission(1)[0], speed, *[it.with_seq(i + 2) for i, it in enumerate(_mission(40))]]
+    with _loopback(transfer="ftp") as (vehicle, client):
+        vehicle.missions.commit(items)
+        read = ftp_server.mission_reader(vehicle.missions.mission, None)
+        home_x = vehicle.mission[0].x
+        assert ITEM.unpack_from(read(0, 239), 10 + ITEM.size)[4] == home_x != 0
+        report = client.upload_verified(items)
+        assert report.verify == "crc" and _holds(vehicle, items)
+        got = client.download()
+        assert (got[1].x, got[1].y, got[1].z) == (0, 0, 0.0)  # leftovers, not the vehicle's
+    with _loopback(transfer="ftp", verify="read") as (vehicle, client):
+        assert client.upload_verified(items).verify == "read" and _holds(vehicle, items)
+
+
+def test_the_crc_never_verifies_a_mission_the_vehicle_did_not_store():
+    items = _mission(30)
+    with _loopback(transfer="ftp") as (vehicle, client):
+        real = vehicle.ftp._parse
+
+        def one_item_off(data: bytes):  # stores item 7 a centimetre east of where it was sent
+            got = real(data)
+            return [*got[:7], replace(got[7], y=got[7].y + 1000), *got[8:]]
+
+        vehicle.ftp._parse = one_item_off  # type: ignore[method-assign]
+        with pytest.raises(LinkError, match="item 7: y") as err:
+            client.upload_verified(items)
+        assert not isinstance(err.value, ReadBackError) and vehicle.ftp.crcs_served == 1
+    with _loopback(transfer="ftp") as (vehicle, client):
+        real = vehicle.ftp._parse
+        vehicle.ftp._parse = lambda data: real(data)[:-1]  # type: ignore[method-assign]
+        with pytest.raises(LinkError, match="holds 29 items, 30 were uploaded"):
+            client.upload_verified(items)
+
+
+def test_a_crc_that_differs_or_is_not_answered_leaves_the_verdict_to_the_read_back():
+    items = _mission(30)
+    # The vehicle stores a parameter a hair off (as an autopilot storing it narrower would):
+    # the CRC differs, the read-back finds it the same item within tolerance.
+    with _loopback(transfer="ftp") as (vehicle, client):
+        real = vehicle.ftp._parse
+
+        def narrower(data: bytes):
+            got = real(data)
+            return [*got[:5], replace(got[5], param1=got[5].param1 + 1e-5), *got[6:]]
+
+        vehicle.ftp._parse = narrower  # type: ignore[method-assign]
+        report = client.upload_verified(items)
+        assert report.verify == "read" and "CRC 0x" in report.crc_note
+    # An ArduPilot that does not know CalcFileCRC32.
+    with _loopback(transfer="ftp") as (vehicle, client):
+        handle = vehicle.ftp.handle
+
+        def no_crc(msg, peer):
+            p = ftp.unpack(msg.payload)
+            if p.opcode == ftp.CALC_FILE_CRC32:
+                vehicle.ftp._nak(peer, p, ftp.UNKNOWN_COMMAND)
+                return
+            handle(msg, peer)
+
+        vehicle.ftp.handle = no_crc  # type: ignore[method-assign]
+        report = client.upload_verified(items)
+        assert report.verify == "read" and "unknown command" in report.crc_note
+        assert _holds(vehicle, items)
+
+
+def test_a_5_s_fade_in_the_middle_of_an_ftp_upload_is_survived():
+    items = _mission(400)
+    half = len(encode_mission(items)) // 2
+    with _over_radio(loss=0.0, seed=5) as (vehicle, r, client):
+        faded = threading.Event()
+
+        def watch() -> None:
+            deadline = time.monotonic() + 300.0
+            while time.monotonic() < deadline:
+                writing = [s for s in list(vehicle.ftp.sessions.values()) if s.mode == "write"]
+                if writing and len(writing[0].buf) > half:
+                    r.fade(5.0)
+                    faded.set()
+                    return
+                time.sleep(0.01)
+
+        t = threading.Thread(target=watch, daemon=True)
+        t.start()
+        report = client.upload_verified(items)
+        t.join(timeout=5.0)
+        assert faded.is_set() and report.transfer == "ftp" and _holds(vehicle, items)
+        assert vehicle.ftp.writes_stored == 1 and report.retries > 0  # pieces the fade took
+
+
 def test_px4_falls_back_to_the_mission_protocol():
     items = _mission(15)
     with _loopback("px4", transfer="auto") as (vehicle, client):
@@ -267,8 +437,17 @@ def test_hostile_replies_are_clear_errors(monkeypatch):
             with pytest.raises(LinkError, match=message):
                 client.download()
     # A file longer than its header says: bytes past its end.
-    real = ftp_server.encode_mission
-    monkeypatch.setattr(ftp_server, "encode_mission", lambda items: real(items) + b"\x01" * 300)
+    real_reader = ftp_server.mission_reader
+
+    def longer(items, nav):
+        real = real_reader(items, nav)
+        whole = bytearray()
+        while piece := real(len(whole), 239):
+            whole += piece
+        data = bytes(whole) + b"\x01" * 300
+        return lambda offset, size: data[offset : offset + size]
+
+    monkeypatch.setattr(ftp_server, "mission_reader", longer)
     with _loopback(transfer="ftp", timeout=0.3, retries=1) as (vehicle, client):
         vehicle.missions.commit(_mission(30))
         with pytest.raises(LinkError, match="past its end"):
@@ -290,6 +469,9 @@ def test_upload_and_download_commands_go_by_ftp_and_say_so(tmp_path, capsys):
         assert main(["upload", str(wp), *conn, "--keep-loiter-radius"]) == 0
         assert "uploaded and verified 12 items" in (out := capsys.readouterr().out)
         assert "by MAVFTP" in out and vehicle.ftp.writes_stored == 1
+        assert "checked by the vehicle's CRC" in out and vehicle.ftp.crcs_served == 1
+        assert main(["upload", str(wp), *conn, "--keep-loiter-radius", "--verify", "read"]) == 0
+        assert "CRC" not in capsys.readouterr().out and vehicle.ftp.crcs_served == 1
         back = tmp_path / "back.json"
         assert main(["download", *conn, "--out", str(back), "--transfer", "mission"]) == 0
         assert "by MAVFTP" not in capsys.readouterr().out  # the flag chose the mission protocol
@@ -297,7 +479,10 @@ def test_upload_and_download_commands_go_by_ftp_and_say_so(tmp_path, capsys):
 
 
 def test_a_garbage_mission_file_is_a_one_line_error_from_download(monkeypatch, tmp_path, capsys):
-    monkeypatch.setattr(ftp_server, "encode_mission", lambda items: b"\x55" * 700)
+    garbage = b"\x55" * 700
+    monkeypatch.setattr(
+        ftp_server, "mission_reader", lambda items, nav: lambda o, n: garbage[o : o + n]
+    )
     port = free_udp_port()
     with MockVehicle(f"udpin:127.0.0.1:{port}"):
         out = tmp_path / "m.json"

@@ -46,7 +46,8 @@ def _over_radio(
         with SikRadio("udpin:127.0.0.1:0", f"udpout:127.0.0.1:{port}", cfg) as r:
             link = open_link(r.ground_connection)
             try:
-                client = MissionClient(link)
+                # The mission protocol over the radio (MAVFTP's tests: tests/test_ftp.py).
+                client = MissionClient(link, transfer="mission")
                 client.connect(timeout=30.0)
                 yield vehicle, r, client
             finally:
@@ -261,7 +262,7 @@ def test_a_lost_final_ack_is_settled_by_the_read_back(flavour):
         dropped = _drop_first_accepted(vehicle)
         link = open_link(f"udpout:127.0.0.1:{port}")
         try:
-            client = MissionClient(link)
+            client = MissionClient(link, transfer="mission")  # its MISSION_ACKs are the test
             client.connect(timeout=10.0)
             report = client.upload_verified(items)
         finally:
@@ -282,7 +283,7 @@ def test_an_unacknowledged_upload_the_vehicle_did_not_store_is_never_a_success()
         vehicle.missions.commit = lambda got: None  # type: ignore[method-assign]
         link = open_link(f"udpout:127.0.0.1:{port}")
         try:
-            client = MissionClient(link)
+            client = MissionClient(link, transfer="mission")  # its MISSION_ACKs are the test
             client.connect(timeout=10.0)
             with pytest.raises(LinkError, match="differs") as err:
                 client.upload_verified(items)

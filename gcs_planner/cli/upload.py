@@ -11,7 +11,7 @@ from gcs_planner.autopilot import autopilot_for
 from gcs_planner.cli.common import add_quiet_argument
 from gcs_planner.errors import LinkError
 from gcs_planner.link.connection import open_link
-from gcs_planner.link.mission_client import FIRMWARES, TRANSFERS, MissionClient
+from gcs_planner.link.mission_client import FIRMWARES, TRANSFERS, VERIFIES, MissionClient
 from gcs_planner.link.mission_file import load_mission_file
 from gcs_planner.link.params import read_parameter, set_parameter
 from gcs_planner.link.progress import Progress
@@ -109,6 +109,7 @@ def connect_client(args: argparse.Namespace) -> MissionClient:
         retries=args.retries,
         progress=progress,
         transfer=getattr(args, "transfer", "auto"),
+        verify=getattr(args, "verify", "crc"),
     )
     if not quiet:
         # Said at once: the wait may be long, and silence looks like a hang.
@@ -167,6 +168,7 @@ def run(args: argparse.Namespace) -> int:
         f"uploaded and verified {report.items} items to system {vehicle.system} "
         f"({vehicle.firmware}) in {report.seconds:.2f} s"
         + (" by MAVFTP" if report.transfer == "ftp" else "")
+        + (" (checked by the vehicle's CRC of its mission file)" if report.verify == "crc" else "")
         + (f", {report.retries} resends" if report.retries else "")
         + (
             " (its final acknowledgement never came: the read-back shows it holds the mission)"
@@ -253,6 +255,15 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "--no-param-check",
         action="store_true",
         help="do not check the vehicle's parameters against the plan's envelope",
+    )
+    p.add_argument(
+        "--verify",
+        choices=VERIFIES,
+        default="crc",
+        help="how an upload by MAVFTP is checked: crc asks the vehicle for the CRC-32 of the "
+        "mission file it builds from what it stored and reads the mission back only when that "
+        "does not match or is not answered; read always reads it back (default crc). The "
+        "mission protocol is always checked by reading back",
     )
     p.set_defaults(func=run)
 

@@ -28,7 +28,7 @@ from gcs_planner.link.rtt import RoundTrip
 # Opcodes (the specification's table; GCS_FTP.h, enum FTP_OP).
 NONE, TERMINATE_SESSION, RESET_SESSIONS, LIST_DIRECTORY, OPEN_FILE_RO, READ_FILE = range(6)
 CREATE_FILE, WRITE_FILE, REMOVE_FILE = 6, 7, 8
-OPEN_FILE_WO, BURST_READ_FILE = 11, 15
+OPEN_FILE_WO, CALC_FILE_CRC32, BURST_READ_FILE = 11, 14, 15
 ACK, NAK = 128, 129
 # NAK codes (data[0]).
 ERRORS = {
@@ -256,6 +256,47 @@ class FtpClient:
     def terminate(self) -> Packet:
         p = self._exchange(TERMINATE_SESSION, "TerminateSession")
         return p
+
+    # Checking ---------------------------------------------------------------------------------
+    def crc32(self, path: str) -> int:
+        """CalcFileCRC32: the vehicle's CRC-32 of ``path`` (ArduPilot: AP_Filesystem::crc32,
+        ``crc_crc32`` from 0 over the file as its file system reads it). A request of its own,
+        in a session the vehicle gives it (GCS_FTP::worker), not ours."""
+        saved, self.session = self.session, 0
+        try:
+            p = self._exchange(CALC_FILE_CRC32, f"CRC of {path}", data=path.encode())
+        finally:
+            self.session = saved
+        if p.opcode == NAK:
+            raise self._refused(p, f"CRC of {path}")
+        if p.size != 4:
+            raise FtpError(
+                f"the vehicle answered the CRC of {path} with {p.size} data bytes, not 4"
+            )
+        return int.from_bytes(p.data[:4], "little")
+
+    def read_head(self, path: str, size: int) -> bytes:
+        """The first ``size`` bytes (at most one payload) of ``path`` by one ReadFile."""
+        if not 0 < size <= DATA_MAX:
+            raise ValueError(f"one ReadFile reads 1..{DATA_MAX} bytes, not {size}")
+        self._open(OPEN_FILE_RO, path)
+        try:
+            p = self._exchange(READ_FILE, f"read of {path}", offset=0, size=size)
+        finally:
+            try:
+                self.terminate()
+            except FtpError:
+                pass  # ArduPilot closes an idle session after 20 s
+        if p.opcode == NAK:
+            if (p.data[:1] or b"\0")[0] == EOF:
+                return b""
+            raise self._refused(p, f"read of {path}")
+        if p.offset != 0 or p.size > size:
+            raise FtpError(
+                f"the vehicle answered a read of bytes 0..{size - 1} of {path} with "
+                f"{p.size} bytes at {p.offset}"
+            )
+        return p.data
 
     # Reading ----------------------------------------------------------------------------------
     def read(

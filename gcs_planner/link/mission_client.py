@@ -16,8 +16,18 @@ Missions can also travel by MAVLink FTP (:mod:`gcs_planner.link.ftp`,
 ``@MISSION/mission.dat`` when the vehicle's AUTOPILOT_VERSION sets MAV_PROTOCOL_CAPABILITY_FTP
 and it runs ArduPilot (PX4 sets the bit but serves no @MISSION), and falls back to the mission
 protocol when the vehicle answers that it has no such file; ``"ftp"`` and ``"mission"`` force
-one. The library's default is ``"mission"``; the command line's is ``auto``. The read-back
+one; ``auto`` is the default, the library's as the command line's. The read-back
 goes the way the upload went, with the same verdicts (differs / could not read it back).
+
+An upload by MAVFTP is verified, by default (``verify="crc"``), by the vehicle's CRC-32 of
+the mission file it serves (CalcFileCRC32): ArduPilot builds that file from the mission it
+stores (AP_Filesystem_Mission::read through AP_Mission::get_item), not from the bytes it was
+sent, so a CRC equal to that of the file predicted for the items sent
+(:func:`~gcs_planner.link.mission_ftp.stored_file`, with the vehicle's own home read from
+the file's first item) says it stores them, every byte. A CRC that differs, or a vehicle
+that does not answer it, is not a verdict: the whole file is read back and compared, as with
+``verify="read"``. The CRC costs four small exchanges instead of the file's burst read,
+which ArduPilot paces to a third of the serial rate.
 """
 
 from __future__ import annotations
@@ -33,10 +43,17 @@ from gcs_planner.errors import InputError, LinkError
 from gcs_planner.link.connection import Link, mavlink
 from gcs_planner.link.ftp import FILE_NOT_FOUND, NAK, UNKNOWN_COMMAND, FtpClient, FtpError
 from gcs_planner.link.mission_ftp import (
+    HEADER,
+    ITEM,
+    MAGIC,
     MISSION_PATH,
+    crc32,
     decode_mission,
     encode_mission,
     mission_length,
+    stored_file,
+    stored_item_bytes,
+    without_leftovers,
 )
 from gcs_planner.link.pacing import RadioFlow, Window
 from gcs_planner.link.params import read_parameter, set_loiter_radius
@@ -81,6 +98,9 @@ _NOT_VEHICLES = {mavlink.MAV_TYPE_GCS, mavlink.MAV_TYPE_GIMBAL, mavlink.MAV_TYPE
 # How missions travel: MAVFTP where the vehicle offers @MISSION/mission.dat (ArduPilot, with
 # MAV_PROTOCOL_CAPABILITY_FTP), the mission protocol otherwise; or either, by choice.
 TRANSFERS = ("auto", "ftp", "mission")
+# How an upload by MAVFTP is verified: the vehicle's CRC of the file (a full read-back when it
+# differs or is not answered), or always the full read-back.
+VERIFIES = ("crc", "read")
 # An open refused with these says the vehicle has no such file or no FTP: auto falls back.
 _NO_MISSION_FILE = (FILE_NOT_FOUND, UNKNOWN_COMMAND)
 
@@ -110,6 +130,11 @@ class UploadReport:
     # ArduPilot answers one): the read-back alone showed that it holds the mission.
     unacknowledged: bool = False
     transfer: str = "mission"  # "ftp" (MAVFTP, @MISSION/mission.dat) or "mission"
+    # "crc": the vehicle's CRC of the mission file matched the items sent; "read": the mission
+    # was read back and compared.
+    verify: str = "read"
+    # Why a CRC verification asked was not enough (the read-back decided then), else "".
+    crc_note: str = ""
 
 
 class ReadBackError(LinkError):
@@ -149,11 +174,15 @@ class MissionClient:
         retries: int = DEFAULT_RETRIES,
         progress: ProgressFactory | None = None,
         window: int = DOWNLOAD_WINDOW,
-        transfer: str = "mission",
+        transfer: str = "auto",
+        verify: str = "crc",
     ) -> None:
         if transfer not in TRANSFERS:
             raise LinkError(f"unknown transfer {transfer!r}: expected one of {TRANSFERS}")
+        if verify not in VERIFIES:
+            raise LinkError(f"unknown verification {verify!r}: expected one of {VERIFIES}")
         self.transfer = transfer
+        self.verify = verify
         self.capabilities: int | None = None  # AUTOPILOT_VERSION's, once asked
         self.transfer_used = "mission"  # how the last upload or download went
         if firmware is not None and firmware not in FIRMWARES:
@@ -879,9 +908,11 @@ class MissionClient:
             return False
         if self.transfer == "ftp":
             return True
-        offers = self.autopilot_capabilities() & mavlink.MAV_PROTOCOL_CAPABILITY_FTP
-        # Only ArduPilot serves @MISSION (PX4 sets the FTP bit for its file system).
-        return bool(offers) and self.firmware == "ardupilot"
+        # Only ArduPilot serves @MISSION (PX4 sets the FTP bit for its file system): any other
+        # vehicle is not asked for its capabilities at all.
+        if self.firmware != "ardupilot":
+            return False
+        return bool(self.autopilot_capabilities() & mavlink.MAV_PROTOCOL_CAPABILITY_FTP)
 
     def _ftp(self) -> FtpClient:
         return FtpClient(
@@ -924,7 +955,9 @@ class MissionClient:
             data = client.read(MISSION_PATH, mission_length, chunks)
         finally:
             self.retry_count += client.retry_count
-        return decode_mission(data)
+        # A command without a position carries in ArduPilot's file the x, y, z of the item read
+        # before it (one item buffer per read call), which the vehicle does not store.
+        return without_leftovers(decode_mission(data))
 
     def _ftp_read_back(
         self, sent: Sequence[MissionItem], tol: Tolerance, *, acknowledged: bool, attempts: int = 3
@@ -950,6 +983,36 @@ class MissionClient:
                     "mission is unknown: run `gcs-planner download` to check"
                 ) from None
         raise AssertionError("unreachable")
+
+    def _ftp_crc_check(self, sent: Sequence[MissionItem]) -> str:
+        """Empty when the vehicle's CRC of its mission file is that of the file it serves
+        holding ``sent``; otherwise why not (the read-back then decides). Item 0 of that file is the
+        vehicle's own home, so its first 48 bytes are read to predict the file; a home that
+        moves between the two answers only costs the read-back."""
+        if not sent:
+            return "nothing was sent"
+        client = self._ftp()
+        try:
+            head = client.read_head(MISSION_PATH, HEADER.size + ITEM.size)
+            vehicle_crc = client.crc32(MISSION_PATH)
+        except FtpError as exc:
+            return f"no CRC: {exc}"
+        finally:
+            self.retry_count += client.retry_count
+        if len(head) < HEADER.size + ITEM.size:
+            return f"the file's first {len(head)} bytes hold no home item"
+        magic, _, _, _, count = HEADER.unpack_from(head)
+        if magic != MAGIC or count != len(sent):
+            return f"the file's header says {count} items (magic 0x{magic:04x})"
+        # ArduPilot serves its own home as item 0 (the read-back skips it likewise); any other
+        # firmware is held to the item sent.
+        home = (
+            head[HEADER.size :] if self.firmware == "ardupilot" else stored_item_bytes(sent[0], 0)
+        )
+        expected = crc32(stored_file(sent, home))
+        if vehicle_crc != expected:
+            return f"CRC 0x{vehicle_crc:08x}, expected 0x{expected:08x}"
+        return ""
 
     # The whole job ----------------------------------------------------------------------------
     def upload_verified(
@@ -985,12 +1048,19 @@ class MissionClient:
             # The read-back decides: the same mission is a success, anything else is not.
             unconfirmed = exc.reason
         uploaded = time.perf_counter()
-        if self.transfer_used == "ftp":
-            got = self._ftp_read_back(sent, tol, acknowledged=unconfirmed is None)
+        verify, crc_note = "read", ""
+        if self.transfer_used == "ftp" and self.verify == "crc":
+            crc_note = self._ftp_crc_check(sent)
+            verify = "read" if crc_note else "crc"
+        if verify == "crc":
+            diffs = []  # the vehicle serves, byte for byte, the file of the items sent
         else:
-            got = self._read_back(sent, tol, acknowledged=unconfirmed is None)
-        skip_home = self.firmware == "ardupilot"
-        diffs = mission_differences(list(items), got, skip_home=skip_home, tol=tol)
+            if self.transfer_used == "ftp":
+                got = self._ftp_read_back(sent, tol, acknowledged=unconfirmed is None)
+            else:
+                got = self._read_back(sent, tol, acknowledged=unconfirmed is None)
+            skip_home = self.firmware == "ardupilot"
+            diffs = mission_differences(list(items), got, skip_home=skip_home, tol=tol)
         if diffs:
             more = f"; and {len(diffs) - 5} more" if len(diffs) > 5 else ""
             shown = "; ".join(diffs[:5]) + more
@@ -1014,4 +1084,6 @@ class MissionClient:
             retries=self.retry_count - retries_before,
             unacknowledged=unconfirmed is not None,
             transfer=self.transfer_used,
+            verify=verify,
+            crc_note=crc_note,
         )

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from gcs_planner.link.connection import mavlink
+from gcs_planner.link.mission_ftp import LOCATION_COMMANDS
 from gcs_planner.mission.items import MissionItem
 
 # The MAVLink specification's recommended timeout and retries (mission protocol, "Timeouts and
@@ -26,6 +27,10 @@ GLOBAL_FLOAT_FRAMES = frozenset({0, 3, 10})
 # Autopilots store the altitude reference, not whether the GCS sent the _INT spelling, and give
 # back either (ArduPilot answers 3 for an item sent as 6): compare frames modulo that.
 _SAME_FRAME = {0: 0, 5: 0, 3: 3, 6: 3, 10: 10, 11: 10}
+# A command without a position has no frame to keep: ArduPilot stores none and gives such an
+# item back with frame 0 (mission_cmd_to_mavlink_int), whether it was sent as 0 or as 2
+# (MAV_FRAME_MISSION).
+_NO_POSITION_FRAMES = frozenset({0, 2})
 
 RESULT_TEXT = {
     mavlink.MAV_MISSION_ACCEPTED: "accepted",
@@ -133,7 +138,9 @@ def item_differences(sent: MissionItem, got: MissionItem, tol: Tolerance = _EXAC
     out: list[str] = []
     if sent.command != got.command:
         out.append(f"command {sent.command} became {got.command}")
-    if _SAME_FRAME.get(sent.frame, sent.frame) != _SAME_FRAME.get(got.frame, got.frame):
+    if _SAME_FRAME.get(sent.frame, sent.frame) != _SAME_FRAME.get(got.frame, got.frame) and not (
+        {sent.frame, got.frame} <= _NO_POSITION_FRAMES and sent.command not in LOCATION_COMMANDS
+    ):
         out.append(f"frame {sent.frame} became {got.frame}")
     if sent.autocontinue != got.autocontinue:
         out.append(f"autocontinue {sent.autocontinue} became {got.autocontinue}")
