@@ -71,7 +71,11 @@ def enumerated(seed: int, leg_model: str, radius: float, limited: bool) -> dict:
     -probability) tuples (probability 0 for two objectives): every simple route flown once.
     A route with any chance to arrive is one that arrives when every correction succeeds
     (``seeding``), so the two-objective routes are those with probability above 0."""
-    scenario = tall_scenario(seed, leg_model, radius, limited)
+    return enumerate_fronts(tall_scenario(seed, leg_model, radius, limited))
+
+
+def enumerate_fronts(scenario: Scenario) -> dict:
+    """``enumerated``'s two fronts of any scenario: every simple route flown once."""
     two, three = [], []
     for points in all_routes(scenario):
         route = flown_route(scenario, points)

@@ -15,14 +15,18 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from test_bnb import all_routes, pareto
-from test_plan_exact import THREE, TWO, assert_same, planned_front, tall_scenario
+from test_plan_exact import (
+    THREE,
+    TWO,
+    assert_same,
+    enumerate_fronts,
+    planned_front,
+    tall_scenario,
+)
 from test_probes import assert_same_front, dfs_front, front_of, probed_scenario
 from test_search_kernel import _pair, _same
 
-from gcs_planner.core.bnb import flown_route
 from gcs_planner.core.planner import plan
-from gcs_planner.core.probability import success_probability
 from gcs_planner.geometry.airplane import airplane_leg, tangent_lengths
 from gcs_planner.geometry.legs import AirplaneLegs, leg_model_of, scenario_leg_model
 from gcs_planner.mission.builder import build_mission, resolve_origin
@@ -105,19 +109,6 @@ def _with_runs(scenario, seed: int):
     )
 
 
-def _enumerated(scenario) -> dict:
-    two, three = [], []
-    for points in all_routes(scenario):
-        route = flown_route(scenario, points)
-        if not route.feasible:
-            continue
-        legs = [s.leg for s in route.stops[1:]]
-        p = success_probability(scenario, points, legs).probability
-        two.append((round(route.length, 6), route.corrections, 0.0))
-        three.append((round(route.length, 6), route.corrections, round(-p, 12)))
-    return {TWO: pareto(two), THREE: pareto(three)}
-
-
 def test_the_front_with_runs_equals_enumeration() -> None:
     """Tall random scenarios (turning radius 400 m, with and without climb limits), runs of
     0.3 to 3 km: the planner's fronts (two and three objectives) equal brute force, and the
@@ -127,12 +118,12 @@ def test_the_front_with_runs_equals_enumeration() -> None:
         for limited in (False, True):
             base = tall_scenario(seed, "airplane", 400.0, limited)
             scenario = _with_runs(base, seed)
-            want = _enumerated(scenario)
+            want = enumerate_fronts(scenario)
             for objectives in (TWO, THREE):
                 what = f"seed {seed}, {limited=}, {objectives}"
                 assert_same(planned_front(scenario, objectives), want[objectives], what)
             nonempty += bool(want[TWO])
-            bitten += want != _enumerated(base)
+            bitten += want != enumerate_fronts(base)
     assert nonempty >= 10
     assert bitten >= 8, "the runs must change the front in the sample"
 
