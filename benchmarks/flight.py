@@ -15,7 +15,13 @@ command) with ``--runs N`` per autopilot, compiled, against the Python flight wh
 ``--python-dry-run`` is given (PX4's takes minutes), else against the figures measured before
 the kernel (stated as such: ArduPlane 11.1 s, PX4 241.7 s for 200 runs, issue 26's session).
 
-    python -m benchmarks.flight [--runs N] [--dry-run-runs 200 [--python-dry-run]]
+A long mission (``--long``, on by default): dataset 2's longest front route out to B and its
+waypoints back to A, about 220 km, flown in WIND (5 m/s, gusts 1.5 m/s) by each autopilot on
+the truth (``sim.guidance.fly``), compiled and in Python, against the still-air replay of the
+same mission (``sim.replay.replay``: flight and INS, as the dry run replays), timed in the same
+run: issue 26's "a 220 km mission flown with wind and gusts in under 1 s".
+
+    python -m benchmarks.flight [--runs N] [--dry-run-runs 200 [--python-dry-run]] [--no-long]
 """
 
 from __future__ import annotations
@@ -154,6 +160,105 @@ def render(rows: list[FlightRow]) -> str:
     return table(head, body)
 
 
+@dataclass(frozen=True)
+class LongRow:
+    flavour: str
+    items: int
+    flown_m: float  # the wind flight's length
+    still_replay_s: float  # replay in still air: the flight and the INS along it
+    still_flight_s: float  # the flight alone in still air, compiled
+    wind_s: float  # the flight in WIND, compiled
+    python_wind_s: float  # the same in the Python navigators
+    ended: str
+
+
+def out_and_back(items: list, home: bool) -> list:
+    """The mission ``items`` to B, where its final loiter becomes a waypoint, and its
+    waypoints back to the first, in reverse (home, on ArduPilot, left at seq 0)."""
+    from dataclasses import replace
+
+    body = items[1:] if home else list(items)
+    if body[-1].command == 17:  # NAV_LOITER_UNLIM at B: fly on
+        body[-1] = replace(body[-1], command=16, param1=0.0, param2=1.0, param3=0.0, param4=0.0)
+    back = [it for it in reversed(body[:-1]) if it.command == 16]
+    out = ([items[0]] if home else []) + body + back
+    return [it.with_seq(k) for k, it in enumerate(out)]
+
+
+def run_long(runs: int) -> list[LongRow]:
+    from sim.guidance import fly
+    from sim.replay import scenario_frame
+
+    scenario = load_case("dataset2", TURN_RADIUS)
+    result = plan(scenario, objectives=("length", "corrections"))
+    longest = max(range(len(result.routes)), key=lambda k: result.routes[k].length)
+    frame = scenario_frame(scenario)
+    a = scenario.xyz[scenario.start]
+    start = (float(a[0]), float(a[1]), float(a[2]))
+    wind = WindSpec(WIND.speed, WIND.from_deg, WIND.gust).draw(np.random.default_rng(0))
+    rows = []
+    for flavour in FLAVOURS:
+        home = flavour == "ardupilot"
+        mission = build_mission(plan_to_dict(result), route_index=longest, firmware=flavour,
+                                acceptance_radius=DRY_RUN_ACCEPTANCE_RADIUS_M)  # fmt: skip
+        items = out_and_back(list(mission.items), home)
+        ap = AutopilotParams(
+            flavour, acceptance_radius=DRY_RUN_ACCEPTANCE_RADIUS_M, loiter_radius=TURN_RADIUS
+        )
+        still_t, still_fly_t, wind_t, py_t = [], [], [], []
+        flight = None
+        for _ in range(runs):
+            t0 = time.perf_counter()
+            replay_mod.replay(items, scenario, home_at_seq0=home, flavour=flavour, autopilot=ap)
+            still_t.append(time.perf_counter() - t0)
+            t0 = time.perf_counter()
+            fly(items, frame, start, scenario.vehicle, flavour=flavour, params=ap,
+                home_at_seq0=home)  # fmt: skip
+            still_fly_t.append(time.perf_counter() - t0)
+            for compiled, out in ((True, wind_t), (False, py_t)):
+                t0 = time.perf_counter()
+                flight = fly(items, frame, start, scenario.vehicle, flavour=flavour, params=ap,
+                             home_at_seq0=home, wind=wind, compiled=compiled)  # fmt: skip
+                out.append(time.perf_counter() - t0)
+        assert flight is not None
+        rows.append(
+            LongRow(
+                flavour,
+                len(items),
+                float(flight.cumulative[-1]),
+                statistics.median(still_t),
+                statistics.median(still_fly_t),
+                statistics.median(wind_t),
+                statistics.median(py_t),
+                flight.ended,
+            )
+        )
+    return rows
+
+
+def render_long(rows: list[LongRow]) -> str:
+    head = ["autopilot", "items", "flown (wind)", "ended", "still-air replay (flight + INS)",
+            "still-air flight", "wind 5 + gusts 1.5 flight, compiled", "ratio to still-air replay",
+            "ratio to still-air flight", "Python", "speed-up"]  # fmt: skip
+    body = [
+        [
+            r.flavour,
+            str(r.items),
+            f"{r.flown_m / 1000:,.1f} km",
+            r.ended,
+            seconds(r.still_replay_s),
+            seconds(r.still_flight_s),
+            seconds(r.wind_s),
+            f"{r.wind_s / r.still_replay_s:.2f}x",
+            f"{r.wind_s / r.still_flight_s:.2f}x",
+            seconds(r.python_wind_s),
+            f"{r.python_wind_s / r.wind_s:.1f}x",
+        ]  # fmt: skip
+        for r in rows
+    ]
+    return table(head, body)
+
+
 # README's dataset 2 dry run; --runs and --firmware are added.
 DRY_RUN_ARGS = ["dry-run", str(DATA / "dataset2.xlsx"), "--alpha1", "20", "--alpha2", "10",
                 "--beta1", "15", "--beta2", "20", "--theta", "20", "--delta", "0.001",
@@ -211,8 +316,13 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--scenarios", nargs="+", default=["dataset1", "dataset2"])
     ap.add_argument("--dry-run-runs", type=int, default=0)
     ap.add_argument("--python-dry-run", action="store_true")
+    ap.add_argument("--no-long", dest="long", action="store_false",
+                    help="leave out the ~220 km out-and-back mission")  # fmt: skip
     args = ap.parse_args(argv)
     print(render(run_flight(args.scenarios, args.runs)))
+    if args.long:
+        print()
+        print(render_long(run_long(args.runs)))
     if args.dry_run_runs > 0:
         print()
         print(render_dry_runs(args.dry_run_runs, args.python_dry_run))

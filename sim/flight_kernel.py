@@ -1,21 +1,27 @@
 """The compiled flight (numba): the plain steps of mode AUTO, those where nothing happens but the
-flight itself, flown in one call until the next event.
+flight itself, and the waypoints of a mission, flown in one call until the next event.
 
 The Python navigator (sim/navigators/) stays the reference and the test oracle
 (``guidance.fly(..., compiled=False)``); this kernel flies, with the same formulas in the same
-order, the two kinds of step that make most of a flight:
+order, what makes most of a flight:
 
 * tracking a waypoint (``Navigator.tick``: the acceptance radius of the autopilot, the glide
-  slope, L1 on the line, the coarse step of a settled leg, the aircraft step through the wind);
+  slope, L1 on the line, the coarse step of a settled leg, the step stopped on the finish line,
+  the aircraft step through the wind);
 * PX4 circling a waypoint for its altitude (``Navigator._tick_altitude_loiter``: PX4's
   NAV_LOITER_RAD circle, climbing at its rate, until the altitude is in and the course is on the
-  next waypoint).
+  next waypoint);
+* the decisions between plain waypoints (``Navigator._check_waypoint``, ``reached`` and
+  ``advance``): a NAV_WAYPOINT reached within its acceptance radius or past its finish line,
+  PX4 turning to circle one it reaches off its altitude and leaving that circle, and the next
+  leg's start (ArduPlane's set_next_WP), when the item after it is a plain waypoint too. The
+  events are handed back with the texts the Python navigator gives them.
 
-A step is plain when it reaches nothing (not the waypoint's acceptance circle nor its finish
-line, not the altitude loiter's exit), passes within the capture radius of no unused landmark
-(the INS then only counts the metres) and needs no new batch of gust draws. The kernel stops
-BEFORE the first step that is not plain, without keeping it, and the Python navigator flies
-that step: every decision, every draw of the seeded generators and every correction stays in
+A step is the kernel's when it passes within the capture radius of no unused landmark (the INS
+then only counts the metres), needs no new batch of gust draws and, when something is reached,
+reaches a plain waypoint followed by one. The kernel stops BEFORE the first step that is not
+its own, without keeping it, and the Python navigator flies that step: every correction, every
+draw of the seeded generators, every loiter item, DO item, landing and mission end stays in
 Python, in the same order, so the seeded reports do not change. Only the rounding of a
 reassociated sum may differ (tests/test_flight_kernel.py flies both).
 """
@@ -61,6 +67,23 @@ PARAM_SIZE = 28
  C_MODE, C_PREV_Z) = range(12)  # fmt: skip
 CMD_SIZE = 12
 
+# The mission's commands (in), one row per navigator command: its position, ArduPlane's
+# acceptance radius (param2), seq, the next waypoint it flies to, and whether it is a plain
+# waypoint (a NAV_WAYPOINT with a position that the autopilot flies: the kernel may reach it
+# and advance onto it; any other item is reached, skipped or flown by the Python navigator).
+(T_X, T_Y, T_Z, T_ACP, T_SEQ, T_HAS_NEXT, T_NEXT_X, T_NEXT_Y, T_PLAIN) = range(9)  # fmt: skip
+TABLE_SIZE = 9
+
+# The decisions the kernel made (out), one row each: when, the sample row, the item's seq,
+# what, and the figure the navigator's event text gives.
+E_T, E_SAMPLE, E_SEQ, E_KIND, E_VALUE = range(5)
+EVENT_SIZE = 5
+EVENT_NONE = -1
+EVENT_WITHIN = 0  # reached within the acceptance radius (value: the distance)
+EVENT_PASSED = 1  # reached past the finish line (value: the distance)
+EVENT_ALTITUDE = 2  # PX4 at the waypoint off its altitude, circling it (value: how far off)
+EVENT_ALTITUDE_REACHED = 3  # PX4 leaves the altitude loiter of a waypoint
+
 SAMPLE_SIZE = 12
 _SIGMA11 = atmosphere._SIGMA11
 _T11 = atmosphere._T11
@@ -90,8 +113,9 @@ def _max_lateral(bank_deg: float) -> float:
 
 
 @njit(cache=True)
-def _acceptance(s: np.ndarray, p: np.ndarray, c: np.ndarray) -> float:
-    """ArduPlaneNavigator.acceptance / PX4Navigator.acceptance."""
+def _acceptance(s: np.ndarray, p: np.ndarray, c: np.ndarray, e2t: float) -> float:
+    """ArduPlaneNavigator.acceptance / PX4Navigator.acceptance (``e2t`` at the state's
+    altitude)."""
     vg = max(s[S_GS], 1e-3)
     if p[P_FLAVOUR] == FLAVOUR_PX4:
         time_const = p[P_NPFG_PERIOD] * p[P_NPFG_DAMPING]
@@ -99,7 +123,6 @@ def _acceptance(s: np.ndarray, p: np.ndarray, c: np.ndarray) -> float:
         return max(p[P_ACC_RADIUS], min(500.0, bound * p[P_NPFG_MULT]))
     if c[C_ACP] > 0:
         return c[C_ACP]
-    e2t = _eas2tas(s[S_Z] + p[P_ALT_OFFSET])
     l1 = L1_DAMPING * L1_PERIOD_S * vg / math.pi
     turn = 90.0
     if c[C_HAS_NEXT] > 0:
@@ -111,14 +134,14 @@ def _acceptance(s: np.ndarray, p: np.ndarray, c: np.ndarray) -> float:
 
 @njit(cache=True)
 def _step(s: np.ndarray, p: np.ndarray, lateral: float, climb: float, dt: float, wx: float,
-          wy: float, e2t: float, out: np.ndarray) -> None:  # fmt: skip
-    """sim/aircraft.py step, for an aircraft with a turn limit; writes the new state's first
-    ten fields into ``out``."""
+          wy: float, e2t: float, limit: float, out: np.ndarray) -> None:  # fmt: skip
+    """sim/aircraft.py step, for an aircraft with a turn limit (``limit``: its largest lateral
+    acceleration, _max_lateral of its roll limit); writes the new state's first ten fields into
+    ``out``."""
     v = p[P_AIRSPEED] * e2t
     vz = min(max(climb, -p[P_SINK]), p[P_CLIMB])
     vh = math.sqrt(max(v * v - vz * vz, 0.0))
     psi0 = s[S_HEADING]
-    limit = _max_lateral(p[P_BANK])
     a = min(max(lateral, -limit), limit)
     w = a / v
     if abs(w) < 1e-9:
@@ -143,14 +166,17 @@ def _step(s: np.ndarray, p: np.ndarray, lateral: float, climb: float, dt: float,
 
 
 @njit(cache=True)
-def _offset(p: np.ndarray, distance: float) -> tuple[float, float, float]:
-    """InsEstimate.offset at ``distance`` flown (0 without an INS)."""
+def _offset(
+    p: np.ndarray, distance: float, cos_h: float, sin_h: float
+) -> tuple[float, float, float]:
+    """InsEstimate.offset at ``distance`` flown (0 without an INS); ``cos_h``, ``sin_h`` of the
+    error's direction."""
     if p[P_INS] <= 0:
         return 0.0, 0.0, 0.0
     v = p[P_V0] + (distance - p[P_V_AT])
     h = p[P_H0] + (distance - p[P_H_AT])
     dh = h * p[P_INS_SCALE]
-    return dh * math.cos(p[P_H_DIR]), dh * math.sin(p[P_H_DIR]), p[P_V_SIGN] * v * p[P_INS_SCALE]
+    return dh * cos_h, dh * sin_h, p[P_V_SIGN] * v * p[P_INS_SCALE]
 
 
 @njit(cache=True)
@@ -172,35 +198,70 @@ def _near_landmark(s0: np.ndarray, s1: np.ndarray, landmarks: np.ndarray, r: flo
 
 
 @njit(cache=True)
+def _load_command(table: np.ndarray, j: int, prev: np.ndarray, mode: int, c: np.ndarray) -> None:
+    """The active command vector ``c`` of command ``j`` of ``table`` (see _command_table)."""
+    c[C_X], c[C_Y], c[C_Z] = table[j, T_X], table[j, T_Y], table[j, T_Z]
+    c[C_PREV_X], c[C_PREV_Y], c[C_PREV_Z] = prev[0], prev[1], prev[2]
+    c[C_HAS_NEXT], c[C_NEXT_X], c[C_NEXT_Y] = (
+        table[j, T_HAS_NEXT],
+        table[j, T_NEXT_X],
+        table[j, T_NEXT_Y],
+    )
+    c[C_ACP], c[C_SEQ], c[C_MODE] = table[j, T_ACP], table[j, T_SEQ], mode
+
+
+@njit(cache=True)
 def fly_plain(
     state: np.ndarray,
     p: np.ndarray,
-    c: np.ndarray,
+    table: np.ndarray,
+    cmd: int,
+    prev: np.ndarray,
+    mode: int,
     landmarks: np.ndarray,
     normals: np.ndarray,
     k: int,
     samples: np.ndarray,
-) -> tuple[int, int, int]:
-    """Fly plain steps of the active command (module docstring) from ``state`` (updated in
-    place), writing one row per step into ``samples``; (steps, next gust draw index, why it
-    stopped: STOP_EVENT, STOP_FULL or STOP_TIME)."""
+    events: np.ndarray,
+) -> tuple[int, int, int, int, int, int]:
+    """Fly the steps of command ``cmd`` of ``table`` and of the plain waypoints after it (module
+    docstring) from ``state`` (updated in place) and the leg's start ``prev`` (updated when a
+    waypoint is reached), in ``mode``, writing one row per step into ``samples`` and one per
+    decision into ``events`` (time, sample row, seq, EVENT_*, the distance or altitude error
+    its text gives); (steps, next gust draw index, why it stopped: STOP_EVENT, STOP_FULL or
+    STOP_TIME, the active command, its mode, events)."""
     new = np.empty(STATE_SIZE)
+    c = np.empty(CMD_SIZE)
+    _load_command(table, cmd, prev, mode, c)
     dt0 = p[P_DT]
     coarse = dt0 * COARSE_STEPS
-    cx, cy, cz = c[C_X], c[C_Y], c[C_Z]
-    ax, ay = c[C_PREV_X], c[C_PREV_Y]
-    mode = int(c[C_MODE])
     px4 = p[P_FLAVOUR] == FLAVOUR_PX4
     gusty = p[P_SIGMA] > 0
     n = 0
+    ne = 0
+    e2t_z, e2t = math.nan, 1.0
+    # Constant over the call: the roll limit's lateral acceleration, the error's direction.
+    max_lat = _max_lateral(p[P_BANK])
+    cos_h, sin_h = math.cos(p[P_H_DIR]), math.sin(p[P_H_DIR])
+    # The estimate's offset at the distance flown (the end of a kept step is the next start).
+    off_d = math.nan
+    ox, oy, oz = 0.0, 0.0, 0.0
     while True:
-        if n >= samples.shape[0]:
-            return n, k, STOP_FULL
+        if n >= samples.shape[0] or ne >= events.shape[0]:
+            return n, k, STOP_FULL, cmd, mode, ne
         if state[S_T] >= p[P_TIME_LIMIT]:
-            return n, k, STOP_TIME
+            return n, k, STOP_TIME, cmd, mode, ne
         if gusty and k + 2 > normals.shape[0]:
-            return n, k, STOP_EVENT  # the Python wind field draws the next batch
-        ox, oy, oz = _offset(p, state[S_DISTANCE])
+            return n, k, STOP_EVENT, cmd, mode, ne  # the Python wind field draws the next batch
+        cx, cy, cz = c[C_X], c[C_Y], c[C_Z]
+        ax, ay = c[C_PREV_X], c[C_PREV_Y]
+        # Navigator.advance flies on to the next command only when it is a plain waypoint;
+        # this command's decisions are the kernel's only when it is one itself.
+        decides = table[cmd, T_PLAIN] > 0
+        advances = decides and cmd + 1 < table.shape[0] and table[cmd + 1, T_PLAIN] > 0
+        if state[S_DISTANCE] != off_d:
+            off_d = state[S_DISTANCE]
+            ox, oy, oz = _offset(p, off_d, cos_h, sin_h)
         ex, ey, ez = state[S_X] + ox, state[S_Y] + oy, state[S_Z] + oz
         vg = max(state[S_GS], 1e-3)
         l1 = L1_DAMPING * L1_PERIOD_S * vg / math.pi
@@ -208,11 +269,21 @@ def fly_plain(
         min_dist, alt_error, settled = state[S_MIN_DIST], state[S_ALT_ERROR], state[S_SETTLED]
         dt = dt0
         acc = 0.0
+        # EAS2TAS at the state's altitude (one pow saved while the altitude holds).
+        if state[S_Z] != e2t_z:
+            e2t_z = state[S_Z]
+            e2t = _eas2tas(e2t_z + p[P_ALT_OFFSET])
         if mode == MODE_TRACK:
             dist = math.hypot(cx - ex, cy - ey)
-            acc = _acceptance(state, p, c)
+            acc = _acceptance(state, p, c, e2t)
             if dist <= acc and (not px4 or abs(ez - cz) <= ALTITUDE_ACCEPTANCE_M):
-                return n, k, STOP_EVENT
+                # Navigator.tick: already there, reached at once without a step.
+                if not advances:
+                    return n, k, STOP_EVENT, cmd, mode, ne
+                _event(events, ne, state[S_T], n - 1, c[C_SEQ], EVENT_WITHIN, dist)
+                ne += 1
+                cmd = _advance(state, table, cmd, prev, c, ex, ey, ez)
+                continue
             # Navigator.glide from the leg's start.
             az = c[C_PREV_Z]
             end_dist = max(acc, abs(p[P_LOITER_RADIUS])) if px4 else 0.0
@@ -261,7 +332,6 @@ def fly_plain(
         else:
             # PX4Navigator circling waypoint c on NAV_LOITER_RAD for its altitude.
             lr = p[P_LOITER_RADIUS]
-            max_lat = _max_lateral(p[P_BANK])
             radius = max(abs(lr), state[S_TAS] * state[S_TAS] / max_lat)
             direction = -1 if lr >= 0 else 1
             rx, ry = ex - cx, ey - cy
@@ -283,41 +353,57 @@ def fly_plain(
             gy_u = gy_u * a + b * normals[kn + 1]
             kn += 2
         wx, wy = p[P_WX] + gx_u, p[P_WY] + gy_u
-        e2t = _eas2tas(state[S_Z] + p[P_ALT_OFFSET])
-        _step(state, p, lateral, climb, dt, wx, wy, e2t, new)
+        _step(state, p, lateral, climb, dt, wx, wy, e2t, max_lat, new)
+        crossed = False
         if mode == MODE_TRACK:
             # Navigator.finish_line before and after, on the estimate's offset of the start.
             fx0 = (ex - cx) * (cx - ax) + (ey - cy) * (cy - ay)
             nx, ny = new[S_X] + (ex - state[S_X]), new[S_Y] + (ey - state[S_Y])
             fx1 = (nx - cx) * (cx - ax) + (ny - cy) * (cy - ay)
             if fx0 < 0 <= fx1:
-                return n, k, STOP_EVENT
+                if not decides:
+                    return n, k, STOP_EVENT, cmd, mode, ne
+                # Navigator.tick stops the step on the finish line.
+                crossed = True
+                _step(state, p, lateral, climb, dt * fx0 / (fx0 - fx1), wx, wy, e2t, max_lat, new)
         if p[P_INS] > 0 and _near_landmark(state, new, landmarks, p[P_CAPTURE]):
-            return n, k, STOP_EVENT
+            return n, k, STOP_EVENT, cmd, mode, ne
         sx, sy, sz = new[S_X] - state[S_X], new[S_Y] - state[S_Y], new[S_Z] - state[S_Z]
         distance = state[S_DISTANCE] + math.sqrt(sx * sx + sy * sy + sz * sz)
-        ox, oy, oz = _offset(p, distance)
+        off_d = distance
+        ox, oy, oz = _offset(p, off_d, cos_h, sin_h)
         ex, ey, ez = new[S_X] + ox, new[S_Y] + oy, new[S_Z] + oz
+        event = EVENT_NONE
+        value = 0.0
         if mode == MODE_TRACK:
             # Navigator._check_waypoint with the acceptance of the step's start.
             dist = math.hypot(cx - ex, cy - ey)
             point_leg = px4 and math.hypot(cx - ax, cy - ay) < 1e-3
-            passed = (ex - cx) * (cx - ax) + (ey - cy) * (cy - ay) >= 0 and not point_leg
+            passed = crossed or (
+                (ex - cx) * (cx - ax) + (ey - cy) * (cy - ay) >= 0 and not point_leg
+            )
             if dist <= acc or passed:
-                return n, k, STOP_EVENT
-        else:
-            if abs(ez - cz) <= ALTITUDE_ACCEPTANCE_M:
-                # PX4Navigator.exit_heading_ok after the step (Navigator.course_lined_up).
-                if c[C_HAS_NEXT] <= 0:
-                    return n, k, STOP_EVENT
+                dz = abs(ez - cz)
+                if px4 and dz > ALTITUDE_ACCEPTANCE_M:
+                    event, value = EVENT_ALTITUDE, dz
+                else:
+                    event, value = (EVENT_WITHIN if dist <= acc else EVENT_PASSED), dist
+        elif abs(ez - cz) <= ALTITUDE_ACCEPTANCE_M:
+            # PX4Navigator.exit_heading_ok after the step (Navigator.course_lined_up).
+            if c[C_HAS_NEXT] <= 0:
+                event = EVENT_ALTITUDE_REACHED
+            else:
                 radius = max(abs(p[P_LOITER_RADIUS]), new[S_TAS] * new[S_TAS] / max_lat)
                 nxx, nxy = c[C_NEXT_X], c[C_NEXT_Y]
                 if math.hypot(nxx - cx, nxy - cy) <= EXIT_REACHABLE * radius:
-                    return n, k, STOP_EVENT
-                bearing = math.atan2(nxy - ey, nxx - ex)
-                if abs(_wrap(bearing - new[S_COURSE])) <= math.radians(EXIT_COURSE_DEG):
-                    return n, k, STOP_EVENT
-        # The step is plain: keep it.
+                    event = EVENT_ALTITUDE_REACHED
+                else:
+                    bearing = math.atan2(nxy - ey, nxx - ex)
+                    if abs(_wrap(bearing - new[S_COURSE])) <= math.radians(EXIT_COURSE_DEG):
+                        event = EVENT_ALTITUDE_REACHED
+        if event != EVENT_NONE and not (advances or (event == EVENT_ALTITUDE and decides)):
+            return n, k, STOP_EVENT, cmd, mode, ne
+        # The step is kept.
         for j in range(10):
             state[j] = new[j]
         state[S_MIN_DIST], state[S_ALT_ERROR], state[S_SETTLED] = min_dist, alt_error, settled
@@ -329,6 +415,40 @@ def fly_plain(
         row[7] = p[P_AIRSPEED]
         row[8], row[9], row[10], row[11] = c[C_SEQ], state[S_HEADING], state[S_TAS], state[S_GS]
         n += 1
+        if event == EVENT_ALTITUDE:
+            # PX4: at the waypoint but off its altitude: circle it.
+            _event(events, ne, state[S_T], n - 1, c[C_SEQ], event, value)
+            ne += 1
+            mode = MODE_ALTITUDE_LOITER
+            c[C_MODE] = mode
+        elif event != EVENT_NONE:
+            _event(events, ne, state[S_T], n - 1, c[C_SEQ], event, value)
+            ne += 1
+            mode = MODE_TRACK
+            cmd = _advance(state, table, cmd, prev, c, ex, ey, ez)
+
+
+@njit(cache=True)
+def _event(events: np.ndarray, i: int, t: float, sample: int, seq: float, kind: int,
+           value: float) -> None:  # fmt: skip
+    e = events[i]
+    e[E_T], e[E_SAMPLE], e[E_SEQ], e[E_KIND], e[E_VALUE] = t, sample, seq, kind, value
+
+
+@njit(cache=True)
+def _advance(state: np.ndarray, table: np.ndarray, cmd: int, prev: np.ndarray, c: np.ndarray,
+             ex: float, ey: float, ez: float) -> int:  # fmt: skip
+    """Navigator.reached and advance onto the plain waypoint after ``cmd``: the next leg starts
+    at the waypoint reached, or at the estimate when it is already past the new leg's finish
+    line (ArduPlane set_next_WP); returns the new active command."""
+    prev[0], prev[1], prev[2] = table[cmd, T_X], table[cmd, T_Y], table[cmd, T_Z]
+    cmd += 1
+    state[S_MIN_DIST] = math.inf
+    nx, ny = table[cmd, T_X], table[cmd, T_Y]
+    if (ex - nx) * (nx - prev[0]) + (ey - ny) * (ny - prev[1]) > 0:
+        prev[0], prev[1], prev[2] = ex, ey, ez
+    _load_command(table, cmd, prev, MODE_TRACK, c)
+    return cmd
 
 
 # The Python side ------------------------------------------------------------------------------
@@ -348,12 +468,52 @@ def _landmarks(ins: object, cache: dict) -> np.ndarray:
     return cache["xyz"]
 
 
+def _command_table(nav: object) -> np.ndarray:
+    """The navigator's commands as the kernel reads them (T_* columns)."""
+    from sim.navigators.base import NAV_WAYPOINT
+
+    cmds = nav.cmds  # type: ignore[attr-defined]
+    px4 = nav.flavour == "px4"  # type: ignore[attr-defined]
+    table = np.zeros((len(cmds), TABLE_SIZE))
+    for j, cmd in enumerate(cmds):
+        table[j, T_SEQ] = cmd.seq
+        if cmd.pos is None:
+            continue
+        table[j, T_X], table[j, T_Y], table[j, T_Z] = cmd.pos
+        if not px4 and cmd.command == NAV_WAYPOINT:
+            table[j, T_ACP] = float(int(cmd.params[1]) & 0xFF)
+        # Navigator.next_target with command j active.
+        after = nav._next_nav_index(j + 1)  # type: ignore[attr-defined]
+        nxt = None if after is None else cmds[after].pos
+        if nxt is not None:
+            table[j, T_HAS_NEXT], table[j, T_NEXT_X], table[j, T_NEXT_Y] = 1.0, nxt[0], nxt[1]
+        plain = cmd.command == NAV_WAYPOINT and nav.flies(cmd)  # type: ignore[attr-defined]
+        table[j, T_PLAIN] = 1.0 if plain else 0.0
+    return table
+
+
+_EVENT_KINDS = {EVENT_WITHIN: "reached", EVENT_PASSED: "reached", EVENT_ALTITUDE: "altitude",
+                EVENT_ALTITUDE_REACHED: "reached"}  # fmt: skip
+
+
+def _event_text(kind: int, value: float) -> str:
+    """The text Navigator._check_waypoint and _tick_altitude_loiter give the event."""
+    if kind == EVENT_WITHIN:
+        return f"within {value:.1f} m"
+    if kind == EVENT_PASSED:
+        return f"passed at {value:.1f} m"
+    if kind == EVENT_ALTITUDE:
+        return f"{value:.0f} m off its altitude: circling it"
+    return "altitude reached circling it"
+
+
 def fly_plain_steps(pilot: object, time_limit: float, cache: dict) -> None:
     """Fly the navigator ``pilot``'s plain steps in the kernel (module docstring), if its
     active command and phase are of the kinds the kernel flies; the navigator's state, its
-    samples, the wind field's gusts and the INS's distance are updated as the Python steps
-    would have. Returns before the first step the Python navigator must fly."""
-    from sim.navigators.base import LOITERS
+    samples and events, the active command, the wind field's gusts and the INS's distance are
+    updated as the Python steps would have. Returns before the first step the Python navigator
+    must fly."""
+    from sim.navigators.base import LOITERS, Event
 
     nav = pilot  # a sim.navigators.base.Navigator
     if nav.free_turn or nav.k < 0 or nav.k >= len(nav.cmds):  # type: ignore[attr-defined]
@@ -373,16 +533,9 @@ def fly_plain_steps(pilot: object, time_limit: float, cache: dict) -> None:
         return
     wind = nav.wind  # type: ignore[attr-defined]
     s, env, ap = nav.s, nav.env, nav.ap  # type: ignore[attr-defined]
-    nxt = nav.next_target()  # type: ignore[attr-defined]
-    prev = nav.prev  # type: ignore[attr-defined]
-    acp = 0.0
-    if not px4 and cmd.command == 16:
-        acp = float(int(cmd.params[1]) & 0xFF)
-    c = np.array([
-        cmd.pos[0], cmd.pos[1], cmd.pos[2], prev[0], prev[1], 0.0 if nxt is None else 1.0,
-        0.0 if nxt is None else nxt[0], 0.0 if nxt is None else nxt[1], acp, cmd.seq, mode,
-        prev[2],
-    ])  # fmt: skip
+    table = cache.get("table")
+    if table is None:
+        table = cache["table"] = _command_table(nav)
     p = np.zeros(PARAM_SIZE)
     p[P_AIRSPEED], p[P_BANK], p[P_CLIMB], p[P_SINK] = (
         env.airspeed,
@@ -420,19 +573,34 @@ def fly_plain_steps(pilot: object, time_limit: float, cache: dict) -> None:
         0.0 if wind is None else wind.ux, 0.0 if wind is None else wind.uy,
         0.0 if ins is None else ins.distance,
     ])  # fmt: skip
+    prev = np.array(nav.prev, dtype=float)  # type: ignore[attr-defined]
+    events = cache.get("events")
+    if events is None:
+        events = cache["events"] = np.empty((_EVENT_ROWS, EVENT_SIZE))
+    k_cmd = nav.k  # type: ignore[attr-defined]
     total = 0
+    decided = 0
     while True:
         nav.reserve(_BUFFER_STEPS)  # type: ignore[attr-defined]
         start = nav.n_samples  # type: ignore[attr-defined]
         rows = nav.track[start : start + _BUFFER_STEPS]  # type: ignore[attr-defined]
-        n, k, why = fly_plain(state, p, c, landmarks, normals, k, rows)
+        n, k, why, k_cmd, mode, ne = fly_plain(
+            state, p, table, k_cmd, prev, mode, landmarks, normals, k, rows, events
+        )
+        for e in events[:ne].tolist():
+            kind = int(e[E_KIND])
+            nav.events.append(  # type: ignore[attr-defined]
+                Event(e[E_T], start + int(e[E_SAMPLE]), int(e[E_SEQ]), _EVENT_KINDS[kind],
+                      _event_text(kind, e[E_VALUE]))
+            )  # fmt: skip
         nav.n_samples += n  # type: ignore[attr-defined]
         total += n
+        decided += ne
         if why != STOP_FULL:
             break
-    if total == 0:
+    if total == 0 and decided == 0:
         return
-    x, y, z, course, t, bank, climb, heading, tas, gs = (float(v) for v in state[:10])
+    x, y, z, course, t, bank, climb, heading, tas, gs = state[:10].tolist()
     nav.s = AircraftState(x, y, z, course, t, bank, climb, heading, tas, gs)  # type: ignore[attr-defined]
     nav.min_dist, nav.alt_error = float(state[S_MIN_DIST]), float(state[S_ALT_ERROR])  # type: ignore[attr-defined]
     nav.settled = bool(state[S_SETTLED] > 0)  # type: ignore[attr-defined]
@@ -440,7 +608,18 @@ def fly_plain_steps(pilot: object, time_limit: float, cache: dict) -> None:
         wind.ux, wind.uy, wind._k = float(state[S_UX]), float(state[S_UY]), int(k)
     if ins is not None:
         ins.distance = float(state[S_DISTANCE])
+    if decided:
+        if k_cmd != nav.k:  # type: ignore[attr-defined]
+            # Navigator.advance's resets of the loiter state.
+            nav.k = k_cmd  # type: ignore[attr-defined]
+            nav.loiter_sum, nav.loiter_started, nav.hold_alt = 0.0, False, None  # type: ignore[attr-defined]
+            x0, y0, z0 = prev.tolist()
+            nav.prev = (x0, y0, z0)  # type: ignore[attr-defined]
+        nav.phase = "track" if mode == MODE_TRACK else "loiter"  # type: ignore[attr-defined]
     nav._estimate()  # type: ignore[attr-defined]
+
+
+_EVENT_ROWS = 256
 
 
 _EMPTY = np.empty(0)
@@ -448,38 +627,88 @@ _EMPTY_XYZ = np.empty((0, 3))
 
 
 @njit(cache=True)
+def _segment_miss(points: np.ndarray, i: int, point: np.ndarray) -> tuple[float, float]:
+    """(3D miss, fraction along) of segment i of ``points`` at its closest to ``point``."""
+    dx = points[i + 1, 0] - points[i, 0]
+    dy = points[i + 1, 1] - points[i, 1]
+    dz = points[i + 1, 2] - points[i, 2]
+    rx, ry, rz = point[0] - points[i, 0], point[1] - points[i, 1], point[2] - points[i, 2]
+    len2 = dx * dx + dy * dy + dz * dz
+    t = (rx * dx + ry * dy + rz * dz) / len2 if len2 > 0 else 0.0
+    t = min(max(t, 0.0), 1.0)
+    mx, my, mz = rx - t * dx, ry - t * dy, rz - t * dz
+    return math.sqrt(mx * mx + my * my + mz * mz), t
+
+
+TRACK_BLOCK = 64  # segments per bounding box of track_blocks
+
+
+@njit(cache=True)
+def track_blocks(points: np.ndarray) -> np.ndarray:
+    """The bounding box (x, y, z low, then high) of each TRACK_BLOCK segments of the track
+    ``points``: closest_approach skips the blocks too far to matter."""
+    m = points.shape[0] - 1
+    nb = (m + TRACK_BLOCK - 1) // TRACK_BLOCK
+    out = np.empty((nb, 6))
+    for b in range(nb):
+        lo = b * TRACK_BLOCK
+        hi = min(lo + TRACK_BLOCK, m)
+        for a in range(3):
+            v0 = points[lo, a]
+            v1 = v0
+            for i in range(lo + 1, hi + 1):
+                v = points[i, a]
+                v0 = min(v0, v)
+                v1 = max(v1, v)
+            out[b, a], out[b, a + 3] = v0, v1
+    return out
+
+
+@njit(cache=True)
+def _block_distance(blocks: np.ndarray, b: int, point: np.ndarray) -> float:
+    d2 = 0.0
+    for a in range(3):
+        g = max(blocks[b, a] - point[a], 0.0, point[a] - blocks[b, a + 3])
+        d2 += g * g
+    return math.sqrt(d2)
+
+
+@njit(cache=True)
 def closest_approach(
-    points: np.ndarray, cumulative: np.ndarray, point: np.ndarray, radius: float
+    points: np.ndarray,
+    cumulative: np.ndarray,
+    point: np.ndarray,
+    radius: float,
+    blocks: np.ndarray,
 ) -> tuple[float, float]:
     """sim/replay.py closest_approach over the track ``points`` (m >= 2, 3) with its
-    ``cumulative`` length: (distance flown, 3D miss) at the closest approach of the first pass
-    within ``radius`` of ``point``, else at the closest approach overall."""
+    ``cumulative`` length and ``track_blocks``: (distance flown, 3D miss) at the closest
+    approach of the first pass within ``radius`` of ``point``, else at the closest approach
+    overall (the first segment of the least miss, as numpy's argmin). One pass, stopping at
+    the end of the first pass; a block of segments whose bounding box is farther than the
+    radius and than the least miss so far (by more than rounding) is skipped: none of its
+    segments could be in a pass or a new least."""
     m = points.shape[0] - 1
-    miss = np.empty(m)
-    ts = np.empty(m)
-    for i in range(m):
-        dx = points[i + 1, 0] - points[i, 0]
-        dy = points[i + 1, 1] - points[i, 1]
-        dz = points[i + 1, 2] - points[i, 2]
-        rx, ry, rz = point[0] - points[i, 0], point[1] - points[i, 1], point[2] - points[i, 2]
-        len2 = dx * dx + dy * dy + dz * dz
-        t = (rx * dx + ry * dy + rz * dz) / len2 if len2 > 0 else 0.0
-        t = min(max(t, 0.0), 1.0)
-        mx, my, mz = rx - t * dx, ry - t * dy, rz - t * dz
-        miss[i] = math.sqrt(mx * mx + my * my + mz * mz)
-        ts[i] = t
-    first = -1
-    for i in range(m):
-        if miss[i] <= radius:
-            first = i
-            break
-    if first >= 0:
-        j = first
-        i = first + 1
-        while i < m and miss[i] <= radius:
-            if miss[i] < miss[j]:
-                j = i
-            i += 1
-    else:
-        j = int(np.argmin(miss))
-    return cumulative[j] + ts[j] * (cumulative[j + 1] - cumulative[j]), miss[j]
+    best_j, best_miss, best_t = 0, math.inf, 0.0
+    for b in range(blocks.shape[0]):
+        gap = _block_distance(blocks, b, point) - 1e-6
+        if gap > radius and gap > best_miss:
+            continue
+        for i in range(b * TRACK_BLOCK, min((b + 1) * TRACK_BLOCK, m)):
+            miss, t = _segment_miss(points, i, point)
+            if miss <= radius:
+                # The first pass: its least miss, up to the first segment outside the radius.
+                j, jm, jt = i, miss, t
+                i += 1
+                while i < m:
+                    miss, t = _segment_miss(points, i, point)
+                    if miss > radius:
+                        break
+                    if miss < jm:
+                        j, jm, jt = i, miss, t
+                    i += 1
+                return cumulative[j] + jt * (cumulative[j + 1] - cumulative[j]), jm
+            if miss < best_miss:
+                best_j, best_miss, best_t = i, miss, t
+    j = best_j
+    return cumulative[j] + best_t * (cumulative[j + 1] - cumulative[j]), best_miss

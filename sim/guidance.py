@@ -111,6 +111,19 @@ def nav_commands(
     return out
 
 
+def mission_commands(
+    items: Sequence[MissionItem],
+    frame: LocalFrame,
+    start: tuple[float, float, float],
+    *,
+    home_at_seq0: bool = False,
+    home_alt: float | None = None,
+) -> list[NavCommand]:
+    """The commands ``fly`` flies for ``items`` from ``start`` (its ``commands``)."""
+    base_alt = float(start[2] + frame.origin.alt) if home_alt is None else home_alt
+    return nav_commands(items, frame, base_alt, home_at_seq0=home_at_seq0)
+
+
 def fly(
     items: Sequence[MissionItem],
     frame: LocalFrame,
@@ -127,6 +140,7 @@ def fly(
     wind: WindModel | None = None,
     ins: object | None = None,
     compiled: bool = True,
+    commands: Sequence[NavCommand] | None = None,
 ) -> Flight:
     """Fly the stored ``items`` in mode AUTO from ``start`` (local frame) at ``profile``'s cruise
     airspeed (EAS) under ``flavour``'s navigator with the autopilot ``params`` (by default its
@@ -139,12 +153,17 @@ def fly(
     towards the first item that is not a loiter. ``time_limit`` (s) stops an aircraft that never
     finishes, by default three times the time to fly the items' chords plus ten minutes.
 
-    ``compiled`` flies the plain steps (nothing reached, no landmark near, sim/flight_kernel.py)
-    in the numba kernel; False flies every step in the Python navigator, the reference.
+    ``compiled`` flies the plain steps and waypoints (sim/flight_kernel.py) in the numba
+    kernel; False flies every step in the Python navigator, the reference. ``commands``: the
+    items as mission_commands gives them for these arguments, when the caller has them (a
+    Monte Carlo flies one mission many times).
     """
     ap = params or AutopilotParams(flavour=flavour, loiter_radius=profile.turn_radius)
-    base_alt = float(start[2] + frame.origin.alt) if home_alt is None else home_alt
-    cmds = nav_commands(items, frame, base_alt, home_at_seq0=home_at_seq0)
+    if commands is None:
+        commands = mission_commands(
+            items, frame, start, home_at_seq0=home_at_seq0, home_alt=home_alt
+        )
+    cmds = list(commands)
     positions = [c.pos for c in cmds if c.pos is not None]
     if course is None:
         # A loiter's position is its centre, off the path: aim at the first other item, so an

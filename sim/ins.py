@@ -49,6 +49,23 @@ class InsCorrection:
     h_after_m: float
 
 
+# The landmark grid of the last scenario flown: a Monte Carlo builds its INS once per flight.
+_GRID_CACHE: list[tuple[Scenario, dict[tuple[int, int], list[int]]]] = []
+
+
+def _landmark_grid(scenario: Scenario) -> dict[tuple[int, int], list[int]]:
+    """The scenario's V and H landmarks by _CELL_M square (read only)."""
+    if _GRID_CACHE and _GRID_CACHE[0][0] is scenario:
+        return _GRID_CACHE[0][1]
+    grid: dict[tuple[int, int], list[int]] = {}
+    mask = (scenario.kind == Kind.V) | (scenario.kind == Kind.H)
+    for i in np.flatnonzero(mask):
+        x, y = scenario.xyz[i, 0], scenario.xyz[i, 1]
+        grid.setdefault((int(x // _CELL_M), int(y // _CELL_M)), []).append(int(i))
+    _GRID_CACHE[:] = [(scenario, grid)]
+    return grid
+
+
 class InsEstimate:
     """The INS of one flight (one seeded draw of directions and outcomes)."""
 
@@ -76,11 +93,7 @@ class InsEstimate:
         self.lost = False
         self._passes: dict[int, tuple[float, float]] = {}  # landmark -> (best miss, distance)
         self._used: set[int] = set()
-        self._grid: dict[tuple[int, int], list[int]] = {}
-        mask = (scenario.kind == Kind.V) | (scenario.kind == Kind.H)
-        for i in np.flatnonzero(mask):
-            x, y = scenario.xyz[i, 0], scenario.xyz[i, 1]
-            self._grid.setdefault((int(x // _CELL_M), int(y // _CELL_M)), []).append(int(i))
+        self._grid = _landmark_grid(scenario)
 
     # The estimate -------------------------------------------------------------------------
     def errors_m(self, distance: float | None = None) -> tuple[float, float]:

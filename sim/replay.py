@@ -85,6 +85,15 @@ class FlightPath:
     def length(self) -> float:
         return float(self.cumulative[-1])
 
+    @cached_property
+    def contiguous_points(self) -> np.ndarray:
+        return np.ascontiguousarray(self.points, dtype=float)
+
+    @cached_property
+    def blocks(self) -> np.ndarray:
+        """Bounding boxes of its segments (sim/flight_kernel.py track_blocks)."""
+        return flight_kernel.track_blocks(self.contiguous_points)
+
     def position_at(self, distance: float) -> np.ndarray:
         cum = self.cumulative
         if distance <= 0 or len(cum) < 2:
@@ -346,8 +355,10 @@ def closest_approach(
     if len(path.points) < 2:
         return 0.0, float(np.linalg.norm(path.points[0] - point))
     if compiled:
-        points = np.ascontiguousarray(path.points, dtype=float)
-        d, miss = flight_kernel.closest_approach(points, path.cumulative, point, float(radius))
+        points = path.contiguous_points
+        d, miss = flight_kernel.closest_approach(
+            points, path.cumulative, point, float(radius), path.blocks
+        )
         return float(d), float(miss)
     segs = np.arange(len(path.points) - 1)
     hit = _first_pass(path, point, segs, radius)
@@ -545,6 +556,27 @@ def monte_carlo(
     )  # fmt: skip
 
 
+def mission_landmarks(
+    nominal: FlightPath, scenario: Scenario, capture_radius: float = DEFAULT_CAPTURE_RADIUS_M
+) -> list[tuple[int, int]]:
+    """(landmark, seq) of the correction landmarks the mission has a waypoint on (within
+    ``capture_radius``), in mission order, each once."""
+    mask = (scenario.kind == Kind.V) | (scenario.kind == Kind.H)
+    idx = np.flatnonzero(mask)
+    if idx.size == 0 or len(nominal.points) < 2:
+        return []
+    tree = cKDTree(scenario.xyz[idx])
+    out: list[tuple[int, int]] = []
+    seen: set[int] = set()
+    for p, seq in zip(nominal.points[1:], nominal.seqs[1:], strict=True):
+        for j in tree.query_ball_point(p, r=capture_radius):
+            li = int(idx[j])
+            if li not in seen:
+                seen.add(li)
+                out.append((li, int(seq)))
+    return out
+
+
 def find_missed(
     nominal: FlightPath,
     flown: FlightPath,
@@ -553,35 +585,32 @@ def find_missed(
     capture_radius: float = DEFAULT_CAPTURE_RADIUS_M,
     *,
     compiled: bool = False,
+    landmarks: Sequence[tuple[int, int]] | None = None,
 ) -> list[Missed]:
     """Correction landmarks the mission has a waypoint on (within ``capture_radius``) that the
     flown track did not pass within ``capture_radius`` of, in mission order (``compiled``:
-    their closest approaches found by the kernel)."""
-    mask = (scenario.kind == Kind.V) | (scenario.kind == Kind.H)
-    idx = np.flatnonzero(mask)
-    if idx.size == 0 or len(nominal.points) < 2:
-        return []
-    tree = cKDTree(scenario.xyz[idx])
+    their closest approaches found by the kernel). ``landmarks``: mission_landmarks of
+    ``nominal``, when the caller has them (a Monte Carlo flies one mission many times)."""
+    if landmarks is None:
+        landmarks = mission_landmarks(nominal, scenario, capture_radius)
     met = {e.landmark for e in encounters}
     out: list[Missed] = []
-    seen: set[int] = set()
-    for p, seq in zip(nominal.points[1:], nominal.seqs[1:], strict=True):
-        for j in tree.query_ball_point(p, r=capture_radius):
-            li = int(idx[j])
-            if li in met or li in seen:
-                continue
-            seen.add(li)
-            distance, miss = closest_approach(
-                flown, scenario.xyz[li], capture_radius, compiled=compiled
-            )
-            kind = Kind(int(scenario.kind[li])).name
-            out.append(Missed(li, scenario.ids[li], kind, int(seq), distance, miss))
+    for li, seq in landmarks:
+        if li in met:
+            continue
+        distance, miss = closest_approach(
+            flown, scenario.xyz[li], capture_radius, compiled=compiled
+        )
+        kind = Kind(int(scenario.kind[li])).name
+        out.append(Missed(li, scenario.ids[li], kind, seq, distance, miss))
     return out
 
 
 def flown_path(flight: guidance.Flight) -> FlightPath:
     """The flown track as a path (one point per step of the flight model)."""
-    return FlightPath(flight.xyz, tuple(flight.current.tolist()), tuple(flight.airspeed.tolist()))
+    # Contiguous: the compiled closest approaches read it many times.
+    points = np.ascontiguousarray(flight.xyz, dtype=float)
+    return FlightPath(points, tuple(flight.current.tolist()), tuple(flight.airspeed.tolist()))
 
 
 def _ins_run(
@@ -647,6 +676,23 @@ class FlightSetup:
     nominal: FlightPath
     compiled: bool = True  # plain steps in sim/flight_kernel.py; False: the Python reference
 
+    @cached_property
+    def mission_landmarks(self) -> list[tuple[int, int]]:
+        return mission_landmarks(self.nominal, self.scenario, self.capture_radius)
+
+    @cached_property
+    def commands(self) -> list[guidance.NavCommand]:
+        """The stored items as the navigators' commands (the same for every flight)."""
+        return guidance.mission_commands(
+            self.items, self.frame, self.scenario_start, home_at_seq0=self.home_at_seq0,
+            home_alt=self.home_alt,
+        )  # fmt: skip
+
+    @property
+    def scenario_start(self) -> tuple[float, float, float]:
+        a = np.asarray(self.scenario.xyz[self.scenario.start], float)
+        return (float(a[0]), float(a[1]), float(a[2]))
+
     def fly_once(
         self, rng: np.random.Generator, wind: WindModel | None
     ) -> tuple[ReplayRun, guidance.Flight, FlightPath, list[Encounter], list[Missed]]:
@@ -662,7 +708,7 @@ class FlightSetup:
             self.items, self.frame, (float(a[0]), float(a[1]), float(a[2])), self.profile,
             flavour=self.flavour, params=self.autopilot, home_at_seq0=self.home_at_seq0,
             home_alt=self.home_alt, course=self.course, dt=self.dt, wind=wind, ins=ins,
-            compiled=self.compiled,
+            compiled=self.compiled, commands=self.commands,
         )  # fmt: skip
         track = flown_path(flight)
         b_distance, _ = closest_approach(
@@ -676,8 +722,9 @@ class FlightSetup:
             encounters = find_encounters(path, sc, self.capture_radius)
             run = _fly(path, encounters, sc, self.params, rng, self.capture_radius)
         missed = find_missed(
-            self.nominal, path, encounters, sc, self.capture_radius, compiled=self.compiled
-        )
+            self.nominal, path, encounters, sc, self.capture_radius, compiled=self.compiled,
+            landmarks=self.mission_landmarks,
+        )  # fmt: skip
         if flight.ended == "lost":
             # The flight ended where it was lost: a landmark whose mission item it had not
             # reached yet was not missed, just not reached.

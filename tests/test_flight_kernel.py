@@ -14,6 +14,8 @@ be the same.
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 from test_helix_flight import DS2, DS2_LIMITS, configured
@@ -46,10 +48,17 @@ def kernel_steps(monkeypatch) -> list[int]:
     def counted(*args):
         out = original(*args)
         flown.append(int(out[0]))
+        kernel_decisions.append(int(out[5]))
         return out
 
+    kernel_decisions.clear()
     monkeypatch.setattr(flight_kernel, "fly_plain", counted)
     return flown
+
+
+# The decisions (waypoints reached, PX4 altitude loiters begun and left) the kernel made in the
+# last test using kernel_steps.
+kernel_decisions: list[int] = []
 
 
 def both(items, scenario, flavour, autopilot, wind, runs=0, estimate=True):
@@ -58,11 +67,29 @@ def both(items, scenario, flavour, autopilot, wind, runs=0, estimate=True):
     return replay(items, scenario, compiled=False, **kw), replay(items, scenario, **kw)
 
 
+_NUMBER = re.compile(r"-?\d+(?:\.\d+)?")
+
+
+def _words(text: str) -> str:
+    return _NUMBER.sub("#", text)
+
+
+def _figures(text: str) -> list[float]:
+    return [float(x) for x in _NUMBER.findall(text)]
+
+
 def assert_same_flight(ref, got) -> None:
     assert got.flight.ended == ref.flight.ended
-    assert [(e.seq, e.kind) for e in got.flight.events] == [
-        (e.seq, e.kind) for e in ref.flight.events
+    # The decisions, with the words of their texts and the figures they give (the distance a
+    # waypoint was reached at, how far off its altitude PX4 began to circle it) within the
+    # tracks' tolerance; each event's sample is the one at its time.
+    assert [(e.seq, e.kind, _words(e.text)) for e in got.flight.events] == [
+        (e.seq, e.kind, _words(e.text)) for e in ref.flight.events
     ]
+    for a, b in zip(got.flight.events, ref.flight.events, strict=True):
+        assert a.t == pytest.approx(b.t, abs=5.0)
+        assert got.flight.t[a.sample] == a.t
+        assert _figures(a.text) == pytest.approx(_figures(b.text), abs=TRACK_TOLERANCE_M)
     assert [(c.id, c.succeeded, c.within_limits) for c in got.run.corrections] == [
         (c.id, c.succeeded, c.within_limits) for c in ref.run.corrections
     ]
@@ -143,3 +170,32 @@ def test_dataset2_lost_flight_is_the_same_compiled(kernel_steps, ds2_missions, f
     assert not ref.arrived
     assert_same_flight(ref, got)
     assert sum(kernel_steps) > len(got.flight.t) // 2
+    if flavour == "px4":
+        # PX4 switches ~56 m before its waypoints, away from the landmarks on them: most of
+        # its decisions (waypoints reached, circled for altitude and left) are the kernel's.
+        assert any(e.kind == "altitude" for e in got.flight.events)
+        assert sum(kernel_decisions) > len(got.flight.events) // 2
+
+
+def test_closest_approaches_compiled_are_numpys():
+    """sim/replay.py closest_approach on a flown track, compiled (one pass over bounding boxes
+    of the segments, skipping those too far) and in numpy: the same first pass, the same
+    closest approach when there is none, for points on, near and far from the track."""
+    from sim.replay import FlightPath, closest_approach
+
+    rng = np.random.default_rng(5)
+    steps = rng.normal(0.0, 1.0, (5000, 3)) * (12.0, 12.0, 1.0) + (10.0, 3.0, 0.0)
+    points = np.cumsum(np.vstack([np.zeros((1, 3)), steps]), axis=0)
+    path = FlightPath(points, tuple(range(len(points))), tuple([25.0] * len(points)))
+    on = points[rng.integers(0, len(points), 40)] + rng.normal(0.0, 3.0, (40, 3))
+    far = rng.uniform(points.min(axis=0) - 500.0, points.max(axis=0) + 500.0, (40, 3))
+    # A point the track passes twice: the first pass counts, not the closer second one.
+    twice = np.vstack([points[:200], points[199::-1] + (0.0, 0.5, 0.0)])
+    again = FlightPath(twice, tuple(range(len(twice))), tuple([25.0] * len(twice)))
+    for track, targets in ((path, np.vstack([on, far])), (again, points[50:150:7] + 1.0)):
+        for point in targets:
+            for radius in (5.0, 50.0):
+                want = closest_approach(track, point, radius)
+                got = closest_approach(track, point, radius, compiled=True)
+                assert got[1] == pytest.approx(want[1], abs=1e-9)
+                assert got[0] == pytest.approx(want[0], abs=1e-6)

@@ -282,3 +282,25 @@ def test_a_copy_after_the_window_is_a_new_message():
         finally:
             link.close()
     assert vehicle.duplicates_dropped == 0
+
+
+def test_the_same_bytes_from_another_address_within_the_window_are_handled():
+    """Two ground stations (two UDP ports) whose frames are byte-identical (same ids, same
+    MAVLink sequence) within DUPLICATE_WINDOW_S: both are answered; only a copy from the same
+    address is a link-level duplicate."""
+    port = free_udp_port()
+    with MockVehicle(f"udpin:127.0.0.1:{port}", flavour="px4") as vehicle:
+        first, second = _raw_peer(port), _raw_peer(port)
+        try:
+            bufs = [p.mav.mission_clear_all_encode(1, 1, 0).pack(p.mav) for p in (first, second)]
+            assert bufs[0] == bufs[1]
+            first.write_raw(bufs[0])
+            second.write_raw(bufs[1])
+            acks = [_collect(p, {"MISSION_ACK"}, 0.4) for p in (first, second)]
+        finally:
+            first.close()
+            second.close()
+    # The mock answers every peer it has heard: each hears both answers.
+    assert all(a and all(m.type == mavlink.MAV_MISSION_ACCEPTED for m in a) for a in acks)
+    assert vehicle.acks_sent.count(mavlink.MAV_MISSION_ACCEPTED) == 2
+    assert vehicle.duplicates_dropped == 0
