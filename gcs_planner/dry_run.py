@@ -34,12 +34,14 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Collection
 from dataclasses import asdict, dataclass
 
 import numpy as np
 from scipy.spatial import cKDTree
 
 from gcs_planner.core.planner import Plan
+from gcs_planner.core.probability import outcomes
 from gcs_planner.core.route import Route
 from gcs_planner.errors import LinkError
 from gcs_planner.link.connection import mavlink, open_link
@@ -50,7 +52,7 @@ from gcs_planner.mission.builder import build_mission
 from gcs_planner.mission.geo_exports import trajectory_local
 from gcs_planner.mission.items import HELIX_COMMANDS
 from gcs_planner.plan_json import plan_to_dict
-from gcs_planner.scenario.model import Scenario
+from gcs_planner.scenario.model import Parameters, Scenario
 from sim import replay as replay_mod
 from sim.faults import FaultRates
 from sim.guidance import AutopilotParams
@@ -152,8 +154,9 @@ class DryRunReport:
     autopilot: str = ""
     navigate_on_estimate: bool = False
     assumptions: tuple[str, ...] = ()
-    # Runs lost by the flight (a missed landmark, a limit passed or B missed with no failed
-    # correction before it) and by failed corrections; the seeded flight's own verdict.
+    # Runs lost by the flight (a missed landmark, or lost where the plan flown as planned
+    # with the same correction outcomes arrives: ``lost_by_the_flight``) and by failed
+    # corrections; the seeded flight's own verdict.
     flight_losses: int = 0
     correction_losses: int = 0
     runs_flown: bool = False  # each run flown on its own (wind, gusts, estimate drawn per run)
@@ -389,6 +392,12 @@ def dry_run(
     dev, dev_at = max_deviation(replayed, trajectory_local(plan_dict, step=DEVIATION_STEP_M))
     arcs = sum(s.leg.arc for s in route.stops if s.leg is not None)
     mc = replayed.monte_carlo
+    flight_losses = 0
+    if mc is not None:
+        params = plan.scenario.params
+        flight_losses = sum(
+            lost_by_the_flight(route, params, r.missed, r.failed) for r in mc.lost_runs
+        )
     return DryRunReport(
         scenario=landmarks.name,
         flavour=flavour,
@@ -443,11 +452,40 @@ def dry_run(
         autopilot=autopilot.describe(),
         navigate_on_estimate=navigate_on_estimate,
         assumptions=plan_assumptions(plan, wind),
-        flight_losses=0 if mc is None else mc.flight_losses,
-        correction_losses=0 if mc is None else mc.correction_losses,
+        flight_losses=flight_losses,
+        correction_losses=0 if mc is None else mc.runs - mc.successes - flight_losses,
         runs_flown=False if mc is None else mc.flown,
-        flight_lost=replayed.run.flight_lost,
+        flight_lost=not replayed.run.arrived
+        and lost_by_the_flight(
+            route,
+            plan.scenario.params,
+            replayed.run.missed_before_loss,
+            [c.id for c in replayed.run.corrections if c.succeeded is False],
+        ),
     )
+
+
+def lost_by_the_flight(
+    route: Route, params: Parameters, missed: bool, failed: Collection[str]
+) -> bool:
+    """Whether a lost run was lost by the flight rather than by chance: it missed a landmark of
+    its mission, or the plan, flown as planned (its legs' lengths, the aircraft's true limits:
+    no reserve) with the same correction outcomes (those at ``failed`` failing, every other
+    succeeding), arrives. A route certain to arrive is never lost by its corrections."""
+    if missed:
+        return True
+    limits = params.flown()
+    v = h = 0.0
+    for stop in route.stops[1:]:
+        assert stop.leg is not None
+        v += stop.leg.length
+        h += stop.leg.length
+        v_lim, h_lim = limits.limits_m(stop.kind)
+        if v > v_lim or h > h_lim:
+            return False  # the plan itself is lost with these outcomes
+        success, failure = outcomes(v, h, stop.kind, limits.residual_m)
+        v, h = failure if (stop.unreliable and stop.id in failed) else success
+    return True
 
 
 def as_planned(met: list[str], planned: list[str], replayed: replay_mod.ReplayReport) -> bool:

@@ -183,10 +183,24 @@ class ReplayRun:
     @property
     def flight_lost(self) -> bool:
         """Lost by the flight: a landmark of the mission missed on the way, or a limit passed
-        (or B missed) with no failed correction before it; not chance at unreliable points."""
+        (or B missed) with no failed correction before it; not chance at unreliable points.
+        The vehicle's own coarse rule: the ground station, which knows the plan, refines it
+        from ``MonteCarloSummary.lost_runs`` (a plan certain to arrive is never lost by its
+        corrections)."""
         if self.arrived:
             return False
         return self.missed_before_loss or not any(c.succeeded is False for c in self.corrections)
+
+
+@dataclass(frozen=True)
+class LostRun:
+    """A run that was lost: whether its flight had missed a landmark of the mission before, and
+    the landmarks (by id) whose correction failed before the loss. The ground station, which
+    knows the plan, tells from these whether the plan itself would have been lost with the same
+    outcomes (gcs_planner/dry_run.py): the vehicle knows only its mission."""
+
+    missed: bool
+    failed: tuple[str, ...]
 
 
 @dataclass(frozen=True)
@@ -203,6 +217,7 @@ class MonteCarloSummary:
     flight_losses: int = 0
     correction_losses: int = 0
     flown: bool = False
+    lost_runs: tuple[LostRun, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -529,6 +544,7 @@ def monte_carlo(
     h = np.zeros(runs)
     ok = np.ones(runs, dtype=bool)
     failed = np.zeros(runs, dtype=bool)  # a failed correction before the run was lost
+    failed_ids: list[list[str]] = [[] for _ in range(runs)]
     last = 0.0
     for e in encounters:
         v += e.distance - last
@@ -538,6 +554,8 @@ def monte_carlo(
         ok &= (v <= v_lim) & (h <= h_lim)
         won = rng.random(runs) < params.p_success if e.unreliable else np.ones(runs, bool)
         failed |= ok & ~won
+        for r in np.flatnonzero(ok & ~won):
+            failed_ids[r].append(e.id)
         if e.kind == Kind.V:
             v = np.where(won, 0.0, np.minimum(v, residual_m))
         else:
@@ -550,9 +568,10 @@ def monte_carlo(
     successes = int(np.count_nonzero(ok))
     low, high = wilson_interval(successes, runs, confidence)
     flight = int(np.count_nonzero(~ok & ~failed))
+    lost = tuple(LostRun(False, tuple(failed_ids[r])) for r in np.flatnonzero(~ok))
     return MonteCarloSummary(
         runs, successes, successes / runs, low, high, confidence, flight,
-        runs - successes - flight,
+        runs - successes - flight, lost_runs=lost,
     )  # fmt: skip
 
 
@@ -743,16 +762,20 @@ def monte_carlo_flights(
     if runs < 1:
         raise ValueError("runs must be >= 1")
     successes = flight_losses = 0
+    lost: list[LostRun] = []
     for k in range(runs):
         rng = np.random.default_rng([seed, k])
         model = None if wind.still else wind.draw(rng)
         run, *_ = setup.fly_once(rng, model)
         successes += run.arrived
         flight_losses += run.flight_lost
+        if not run.arrived:
+            failed = tuple(c.id for c in run.corrections if c.succeeded is False)
+            lost.append(LostRun(run.missed_before_loss, failed))
     low, high = wilson_interval(successes, runs, confidence)
     return MonteCarloSummary(
         runs, successes, successes / runs, low, high, confidence, flight_losses,
-        runs - successes - flight_losses, flown=True,
+        runs - successes - flight_losses, flown=True, lost_runs=tuple(lost),
     )  # fmt: skip
 
 
@@ -836,7 +859,10 @@ def replay(
             )
             if missed:  # one flight for every run: a landmark it missed loses them all
                 lost = runs - mc.successes
-                mc = replace(mc, flight_losses=lost, correction_losses=0)
+                mc = replace(
+                    mc, flight_losses=lost, correction_losses=0,
+                    lost_runs=tuple(replace(r, missed=True) for r in mc.lost_runs),
+                )  # fmt: skip
         else:
             mc = monte_carlo_flights(setup, wind, runs, seed + 1, confidence)
     return ReplayReport(

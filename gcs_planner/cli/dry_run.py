@@ -311,8 +311,9 @@ def render(r: DryRunReport) -> str:
             f"({(r.confidence or 0) * 100:g} % Wilson interval {low:.3f}-{high:.3f}); {said}"
         )
         out.append(
-            f"losses: {r.flight_losses} by the flight (a missed landmark or a limit passed with "
-            f"no failed correction before it), {r.correction_losses} by failed corrections"
+            f"losses: {r.flight_losses} by the flight (a missed landmark, or lost where the plan "
+            "flown as planned with the same correction outcomes arrives), "
+            f"{r.correction_losses} by failed corrections"
         )
     if r.planned_probability < 1.0:
         out.append(
