@@ -112,7 +112,7 @@ def probe(
         count += 1
         expanded.append(lab)
         legs = relaxed_legs(graph, pairs, node, labels.arc[lab])
-        first = 0
+        first = np.int64(0)  # (not a literal 0: expand would compile twice)
         while True:
             idx, length, arrive = expand(
                 graph, to_go_table, pairs, labels, nogood_head, nogoods, lab, legs, first,

@@ -216,7 +216,7 @@ def search(
         flown, heads = _flown_legs(
             legs, graph, pairs, node, labels.arc[lab], heading[lab], has_heading[lab]
         )
-        first = 0
+        first = np.int64(0)  # (not a literal 0: expand would compile twice)
         while True:
             before = len(labels.L)
             idx, length, arrive = expand(
