@@ -13,6 +13,10 @@ partial routes queued by (f, order of keeping).
 Layout (``Labels``): a partial route is a row of lists; its error states a slice of a state
 pool; its bound to go (G per further correction) an array of its own; the rows kept at a key
 (point, critical points visited) linked back from ``archive[key]`` through ``next``.
+
+numba's cache is keyed by each kernel's own source file: after editing this module (or the
+cover, dominance and nogood kernels) the cached ``probe`` and ``search`` still hold the old
+code until their own files change; clear the ``__pycache__/*.nbi``/``*.nbc`` files.
 """
 
 from __future__ import annotations

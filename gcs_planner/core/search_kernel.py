@@ -93,7 +93,16 @@ def _incumbent_tables(
     """The live found routes' probabilities, ascending, and ``cover_kernel.best_rows`` (as
     ``_Incumbents.best`` per number of routes at least so likely)."""
     a_len, a_k, a_p, _ = _found_arrays(inc_len, inc_k, inc_p, alive)
-    order = np.argsort(a_p, kind="mergesort")
+    # The order of np.argsort(a_p, kind="stable"), by insertion: the found routes are few, and
+    # numba's merge sort costs a second of compiling.
+    order = np.arange(len(a_p))
+    for i in range(1, len(a_p)):
+        x = order[i]
+        j = i
+        while j > 0 and a_p[order[j - 1]] > a_p[x]:
+            order[j] = order[j - 1]
+            j -= 1
+        order[j] = x
     return a_p[order], best_rows(a_len, a_k, order, kmax)
 
 
