@@ -14,8 +14,9 @@ import pytest
 from test_focus_turns import sparse_scenario
 from test_probes import probed_scenario
 
-from gcs_planner.core import bnb, failure_bounds, probe_kernel
+from gcs_planner.core import bnb, cover_kernel, dominance_kernel, failure_bounds, probe_kernel
 from gcs_planner.core.bnb import Options, dominance, incumbents
+from gcs_planner.core.kernel_records import NO_FAILURES
 from gcs_planner.core.reach import build_reach_graph
 from gcs_planner.scenario.generate import DATASET2
 from gcs_planner.scenario.readers import load_scenario
@@ -83,8 +84,8 @@ def test_compiled_probes_on_sparse_maps_with_contest_limits(asked) -> None:
 
 
 def test_the_kernel_shares_the_models_constants() -> None:
-    assert probe_kernel.MASS_SLACK == failure_bounds._MASS_SLACK
-    assert probe_kernel.MAX_UNIONS == dominance.MAX_UNIONS
+    assert cover_kernel.MASS_SLACK == failure_bounds._MASS_SLACK
+    assert dominance_kernel.MAX_UNIONS == dominance.MAX_UNIONS
 
 
 def _pool(states: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -112,7 +113,7 @@ def test_compiled_dominance_between_distributions_answers_as_the_python_one() ->
         }
         shift = float(rng.choice([0.0, 0.5, 1.0]))
         want = dominance._stochastically_dominates(dominance._shifted(d1, shift), d2)
-        got = probe_kernel._stochastically_dominates(
+        got = dominance_kernel.stochastically_dominates(
             *_pool(d1), 0, len(d1), shift, *_pool(d2), 0, len(d2)
         )
         assert got == want, (d1, d2, shift)
@@ -132,7 +133,7 @@ def test_compiled_bounds_per_probability_level_equal_the_python_ones(dataset_pat
     for scenario in scenarios:
         fb = failure_bounds.failure_bounds(scenario, build_reach_graph(scenario))
         assert fb is not None
-        table = (fb.G.indptr.astype(np.int64), fb.G.e_max, fb.G.table, fb.n, fb.failures)
+        record = fb.record()
         for _ in range(400):
             j = int(rng.integers(0, scenario.n))
             masses = rng.dirichlet(np.ones(int(rng.integers(1, 5)))) * rng.uniform(0.3, 1.0)
@@ -142,10 +143,7 @@ def test_compiled_bounds_per_probability_level_equal_the_python_ones(dataset_pat
             }
             gap = float(rng.choice([1e-3, 0.01, 0.05, 0.2, 0.5]))
             want = fb.bound(j, states, gap)
-            got = probe_kernel._failure_rows(
-                *table, fb.q_fail, np.asarray(fb.is_v, bool), j, *_pool(states), 0, len(states),
-                gap,
-            )  # fmt: skip
+            got = cover_kernel.failure_rows(record, j, *_pool(states), 0, len(states), gap)
             if want is None:
                 assert len(got) == 0
                 continue
@@ -162,9 +160,9 @@ def test_compiled_bounds_per_probability_level_equal_the_python_ones(dataset_pat
 
 
 def test_compiled_test_per_probability_level_answers_as_the_python_one() -> None:
-    """``_covers_by_level`` against ``_Incumbents.covers_by_level`` with random found routes,
-    ceilings and bounds to go much shorter than the corrections still allowed (where the
-    kernel decides the rest at once from ``_level_tables``)."""
+    """``cover_kernel.covers_by_level`` against ``_Incumbents.covers_by_level`` with random
+    found routes, ceilings and bounds to go much shorter than the corrections still allowed
+    (where the kernel decides the rest at once from ``level_tables``)."""
     rng = np.random.default_rng(5)
     answers: collections.Counter[bool] = collections.Counter()
     tails = 0
@@ -193,7 +191,7 @@ def test_compiled_test_per_probability_level_answers_as_the_python_one() -> None
         levels = np.array(inc.levels(), float)
         p = np.array([f.probability for f in inc.found], float)
         order = np.argsort(p, kind="stable").astype(np.int64)
-        best = probe_kernel._best_rows(
+        best = cover_kernel.best_rows(
             np.array([f.length for f in inc.found], float),
             np.array([f.corrections for f in inc.found], np.int64), order, kmax,
         )  # fmt: skip
@@ -202,12 +200,11 @@ def test_compiled_test_per_probability_level_answers_as_the_python_one() -> None
         if has_ceil:
             above = [*levels, -np.inf]
             ceil_rows = np.vstack([ceiling.least_above(float(lo)) for lo in above])
-        tables = probe_kernel._level_tables(levels, np.sort(p), best, has_ceil, ceil_rows, kmax)
+        tables = cover_kernel.level_tables(levels, np.sort(p), best, has_ceil, ceil_rows, kmax)
         one = np.zeros(1)
-        got = probe_kernel._covers_by_level(
-            length, k, mass, to_go, kmax, levels, *tables, has_ceil, ceil_rows,
-            False, np.zeros(1, np.int64), one, np.empty((0, 1)), 0, 0, 0.0, np.zeros(1, bool),
-            0, one, one, np.ones(1), 0, 1,
+        got = cover_kernel.covers_by_level(
+            length, k, mass, to_go, kmax, levels, *tables, has_ceil, ceil_rows, NO_FAILURES, 0,
+            one, one, np.ones(1), 0, 1,
         )  # fmt: skip
         assert got == want
         answers[want] += 1

@@ -4,9 +4,10 @@ cs3d legs flown from the heading, partial routes compared as if the heading did 
 
 The same search as ``bnb._search`` with ``critical`` given, outside a probe and in its plain
 order (the straight-leg search queues by least open continuation and stays in Python): the
-same best-first order, the same tests in the same order, the same error-state chain and
-dominance as the compiled probes (``probe_kernel``, whose pieces it shares), routes added to
-the found ones as ``_Incumbents.add`` does. With array legs it is the Python search exactly
+same best-first order, the same tests in the same order, the same expansion of a partial
+route as the compiled probes (``expand_kernel``), routes added to the found ones as
+``_Incumbents.add`` does; what is its own is where the legs come from (``_flown_legs``) and
+what it does at B. With array legs it is the Python search exactly
 (tested: fronts, labels, open partial routes); with airplane or cs3d legs it flies
 ``airplane_kernel``'s or ``dubins_kernel``'s legs, within a few ulp of numpy's. Every 64
 labels it asks the plan's budget (through ``objmode``) whether the time limit has passed and
@@ -22,19 +23,10 @@ import numpy as np
 from numba import njit, objmode, types
 from numba.typed import Dict
 
-from gcs_planner.core.kernel_records import Graph, Legs, Pairs, Seeds, ToGo
-from gcs_planner.core.probe_kernel import (
-    _KEY,
-    PROB_EPS,
-    _best_rows,
-    _covers,
-    _first,
-    _keep,
-    _kept_dominates,
-    _likely,
-    _propagate,
-    _to_go_after,
-)
+from gcs_planner.core.cover_kernel import best_rows, covers, likely
+from gcs_planner.core.expand_kernel import KEY, expand, new_labels, relaxed_legs
+from gcs_planner.core.kernel_records import Graph, Legs, Nogoods, Pairs, Partial, Seeds, ToGo
+from gcs_planner.core.probability import PROB_EPS
 from gcs_planner.geometry.airplane_kernel import airplane_lengths, free_airplane_lengths
 from gcs_planner.geometry.dubins_kernel import cs_lengths
 
@@ -98,11 +90,61 @@ def _found_arrays(
 def _incumbent_tables(
     inc_len: list, inc_k: list, inc_p: list, alive: list, kmax: int
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The live found routes' probabilities, ascending, and ``_best_rows`` (as
+    """The live found routes' probabilities, ascending, and ``cover_kernel.best_rows`` (as
     ``_Incumbents.best`` per number of routes at least so likely)."""
     a_len, a_k, a_p, _ = _found_arrays(inc_len, inc_k, inc_p, alive)
-    order = np.argsort(a_p, kind="mergesort")
-    return a_p[order], _best_rows(a_len, a_k, order, kmax)
+    # The order of np.argsort(a_p, kind="stable"), by insertion: the found routes are few, and
+    # numba's merge sort costs a second of compiling.
+    order = np.arange(len(a_p))
+    for i in range(1, len(a_p)):
+        x = order[i]
+        j = i
+        while j > 0 and a_p[order[j - 1]] > a_p[x]:
+            order[j] = order[j - 1]
+            j -= 1
+        order[j] = x
+    return a_p[order], best_rows(a_len, a_k, order, kmax)
+
+
+@njit(cache=True)
+def _flown_legs(
+    legs: Legs, graph: Graph, pairs: Pairs, node: int, arc: int, heading: np.ndarray,
+    has_heading: bool,
+) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """The legs out of ``node`` in the graph's order as the search flies them (``legs.mode``),
+    and for airplane or cs3d legs the heading each ends with."""
+    lo = graph.indptr[node]
+    hi = graph.indptr[node + 1]
+    if legs.mode != LEGS_AIRPLANE and legs.mode != LEGS_CS3D:
+        return relaxed_legs(graph, pairs, node, arc), np.empty((0, 3))
+    xyz = legs.xyz
+    ends = np.empty((hi - lo, 3))
+    for idx in range(hi - lo):
+        t = graph.target[lo + idx]
+        ends[idx, 0], ends[idx, 1], ends[idx, 2] = xyz[t, 0], xyz[t, 1], xyz[t, 2]
+    if legs.mode == LEGS_AIRPLANE:
+        if has_heading:
+            return airplane_lengths(
+                xyz[node], heading, ends, legs.radius, legs.tan_climb, legs.tan_descent,
+                legs.run_in, legs.run_out,
+            )  # fmt: skip
+        return free_airplane_lengths(
+            xyz[node], ends, legs.radius, legs.tan_climb, legs.tan_descent, legs.run_in
+        )
+    if has_heading:
+        return cs_lengths(xyz[node], heading, ends, legs.radius)
+    # A free heading at A: the chord (``CS3DLegs.lengths``).
+    flown = np.empty(hi - lo)
+    heads = np.empty((hi - lo, 3))
+    for idx in range(hi - lo):
+        wx = ends[idx, 0] - xyz[node, 0]
+        wy = ends[idx, 1] - xyz[node, 1]
+        wz = ends[idx, 2] - xyz[node, 2]
+        chord = math.sqrt(wx * wx + wy * wy + wz * wz)
+        flown[idx] = chord
+        div = chord if chord > 0 else 1.0
+        heads[idx, 0], heads[idx, 1], heads[idx, 2] = wx / div, wy / div, wz / div
+    return flown, heads
 
 
 @njit(cache=True)
@@ -115,26 +157,12 @@ def search(
     max_labels: int,
 ):  # noqa: ANN201  (see ``bnb._compiled_search``)
     """One search from A over ``graph`` (legs flown as ``legs`` says, ``pairs``' when
-    ``legs.mode`` is ``LEGS_PAIRS``), bounded by ``to_go_table``, starting with the ``seeds``
-    found: (labels, stopped: 0 exhausted, 1 by labels, 2 by time, the found routes (lengths,
-    corrections, probabilities, points as CSR) and the partial routes still queued (f, L, k,
-    mass, bounds to go as CSR))."""
-    indptr, target, glen, lim_v, lim_h = (
-        graph.indptr, graph.target, graph.length, graph.lim_v, graph.lim_h
-    )  # fmt: skip
-    start, end, to_end_start = graph.start, graph.end, graph.to_end_start
-    kind, unreliable, crit_bit = graph.kind, graph.unreliable, graph.crit_bit
-    p_success, residual_m, kmax = graph.p_success, graph.residual_m, graph.kmax
-    g_ptr, g_emax, g_table = to_go_table
-    node_of_arc, pair_ptr, pair_length = pairs.node_of_arc, pairs.pair_ptr, pairs.length
-    p_ptr, p_emax, p_table = pairs.to_go
-    legs_mode, xyz, radius, tan_climb, tan_descent = (
-        legs.mode, legs.xyz, legs.radius, legs.tan_climb, legs.tan_descent
-    )  # fmt: skip
-    has_heading_a, heading_a = legs.has_heading_a, legs.heading_a
-    run_in, run_out = legs.run_in, legs.run_out
+    ``legs.mode`` is ``LEGS_PAIRS``: ``pairs.present`` then, and only then), bounded by
+    ``to_go_table``, starting with the ``seeds`` found: (labels, stopped: 0 exhausted, 1 by
+    labels, 2 by time, the found routes (lengths, corrections, probabilities, points as CSR)
+    and the partial routes still queued (f, L, k, mass, bounds to go as CSR))."""
+    kmax = graph.kmax
     seed_len, seed_k, seed_p, seed_ptr, seed_points = seeds
-    has_pairs = legs_mode == LEGS_PAIRS
     # The routes found: the seeds first.
     inc_len = [0.0]
     inc_k = [0]
@@ -152,200 +180,87 @@ def search(
         inc_p.append(seed_p[s])
         inc_path.append(seed_points[seed_ptr[s] : seed_ptr[s + 1]].copy())
         alive.append(True)
-    changed = True
-    best_rows = np.empty((1, kmax + 1))
-    probs_sorted = np.empty(0)
+    probs_sorted, rows = _incumbent_tables(inc_len, inc_k, inc_p, alive, kmax)
 
-    lab_L = [0.0]
-    lab_k = [0]
-    lab_node = [np.int64(start)]
-    lab_arc = [np.int64(-1)]
-    lab_parent = [np.int64(-1)]
-    lab_mask = [np.int64(0)]
-    lab_ss = [0]
-    lab_sn = [1]
-    lab_mass = [1.0]
-    lab_vmin = [0.0]
-    lab_hmin = [0.0]
-    lab_to_go = [np.array([to_end_start])]
-    lab_head = [heading_a.copy()]
-    lab_has_head = [has_heading_a]
-    archive_next = [np.int64(-1)]
-    store = (lab_L, lab_k, lab_node, lab_arc, lab_parent, lab_mask, lab_ss, lab_sn, lab_mass,
-             lab_vmin, lab_hmin, lab_to_go, archive_next)  # fmt: skip
-    archive = Dict.empty(key_type=_KEY, value_type=types.int64)
-    sv = np.zeros(256)
-    sh = np.zeros(256)
-    sm = np.zeros(256)
-    sm[0] = 1.0
-    used = 1
-
-    heap = [(to_end_start, np.int64(0), np.int64(0))]
-    counter = 1
-    labels = 0
+    # Row 0: A, no correction yet, one error state (0, 0) of mass 1.
+    root = Partial(
+        0.0, graph.start, np.int64(0), np.zeros(1), np.zeros(1), np.ones(1), np.int64(-1),
+        np.int64(0), np.int64(0), np.array([graph.to_end_start]),
+    )  # fmt: skip
+    labels = new_labels(root, graph.to_end_start)
+    heap = labels.heap
+    heading = [legs.heading_a.copy()]  # per row: the heading it ends with, when it has one
+    has_heading = [legs.has_heading_a]
+    # A search keeps no nogoods (the probes' store, empty).
+    no_head = Dict.empty(key_type=KEY, value_type=types.int64)
+    empty_i = np.empty(0, np.int64)
+    empty_f = np.empty(0)
+    no_nogoods = Nogoods(
+        empty_i, empty_f, empty_i, empty_f, empty_i, empty_f, empty_f, empty_i, empty_i,
+        empty_f, empty_f, empty_f,
+    )  # fmt: skip
+    count = 0
     stopped = 0
-    new_v = np.empty(64)
-    new_h = np.empty(64)
-    new_m = np.empty(64)
     while len(heap) > 0:
-        if changed:
-            probs_sorted, best_rows = _incumbent_tables(inc_len, inc_k, inc_p, alive, kmax)
-            changed = False
         f, _, lab = heapq.heappop(heap)
-        L = lab_L[lab]
-        k = lab_k[lab]
-        node = lab_node[lab]
-        mass = lab_mass[lab]
-        s = lab_ss[lab]
-        n = lab_sn[lab]
-        if _covers(L, k, lab_to_go[lab], best_rows[_likely(probs_sorted, mass)], kmax):
+        L = labels.L[lab]
+        k = labels.k[lab]
+        node = labels.node[lab]
+        if covers(L, k, labels.to_go[lab], rows[likely(probs_sorted, labels.mass[lab])], kmax):
             continue
-        if max_labels >= 0 and labels >= max_labels:
+        if max_labels >= 0 and count >= max_labels:
             heapq.heappush(heap, (f, np.int64(-1), lab))
             stopped = 1
             break
-        if labels % TICK == 0:
+        if count % TICK == 0:
             queued = len(heap)
             found = 0
             for g in range(len(alive)):
                 found += alive[g]
             with objmode(late="boolean"):
-                late = tick(labels, queued, found, f)
+                late = tick(count, queued, found, f)
             if late:
                 heapq.heappush(heap, (f, np.int64(-1), lab))
                 stopped = 2
                 break
-        labels += 1
-        lo = indptr[node]
-        hi = indptr[node + 1]
-        deg = hi - lo
-        if legs_mode == LEGS_AIRPLANE or legs_mode == LEGS_CS3D:
-            ends = np.empty((deg, 3))
-            for idx in range(deg):
-                t = target[lo + idx]
-                ends[idx, 0], ends[idx, 1], ends[idx, 2] = xyz[t, 0], xyz[t, 1], xyz[t, 2]
-        if legs_mode == LEGS_AIRPLANE:
-            if lab_has_head[lab]:
-                flown, heads = airplane_lengths(
-                    xyz[node], lab_head[lab], ends, radius, tan_climb, tan_descent,
-                    run_in, run_out,
-                )  # fmt: skip
-            else:
-                flown, heads = free_airplane_lengths(
-                    xyz[node], ends, radius, tan_climb, tan_descent, run_in
-                )
-        elif legs_mode == LEGS_CS3D:
-            if lab_has_head[lab]:
-                flown, heads = cs_lengths(xyz[node], lab_head[lab], ends, radius)
-            else:  # a free heading at A: the chord (``CS3DLegs.lengths``)
-                flown = np.empty(deg)
-                heads = np.empty((deg, 3))
-                for idx in range(deg):
-                    wx = ends[idx, 0] - xyz[node, 0]
-                    wy = ends[idx, 1] - xyz[node, 1]
-                    wz = ends[idx, 2] - xyz[node, 2]
-                    chord = math.sqrt(wx * wx + wy * wy + wz * wz)
-                    flown[idx] = chord
-                    div = chord if chord > 0 else 1.0
-                    heads[idx, 0], heads[idx, 1], heads[idx, 2] = wx / div, wy / div, wz / div
-        elif has_pairs and lab_arc[lab] >= 0:
-            a0 = pair_ptr[node_of_arc[lab_arc[lab]]]
-            flown = pair_length[a0 : a0 + deg]
-            heads = np.empty((0, 3))
-        else:
-            flown = glen[lo:hi]
-            heads = np.empty((0, 3))
-        v_min = lab_vmin[lab]
-        h_min = lab_hmin[lab]
-        mask = lab_mask[lab]
-        for idx in range(deg):
-            j = np.int64(target[lo + idx])
-            d = flown[idx]
-            if not (v_min + d <= lim_v[j] and h_min + d <= lim_h[j]):
-                continue
-            bit = crit_bit[j]
-            if bit >= 0 and (mask >> bit) & 1:
-                continue
-            is_end = j == end
-            if not is_end and k + 1 > kmax:
-                continue
-            # The error-state chain (probability.propagate), states in order of appearance.
-            if len(new_v) < 2 * n:
-                new_v, new_h, new_m = np.empty(2 * n), np.empty(2 * n), np.empty(2 * n)
-            kj = kind[j]
-            count = _propagate(
-                sv, sh, sm, s, n, d, kj, unreliable[j], p_success, residual_m, lim_v[j],
-                lim_h[j], new_v, new_h, new_m,
+        count += 1
+        lo = graph.indptr[node]
+        flown, heads = _flown_legs(
+            legs, graph, pairs, node, labels.arc[lab], heading[lab], has_heading[lab]
+        )
+        first = np.int64(0)  # (not a literal 0: expand would compile twice)
+        while True:
+            before = len(labels.L)
+            idx, length, arrive = expand(
+                graph, to_go_table, pairs, labels, no_head, no_nogoods, lab, flown, first,
+                probs_sorted, rows,
             )  # fmt: skip
-            if count == 0:
-                continue
-            new_mass = 0.0
-            for c in range(count):
-                new_mass += new_m[c]
-            nL = L + d
-            if is_end:
-                arrive = min(1.0, new_mass)
-                least = np.inf
-                for g in range(len(inc_len)):
-                    if (
-                        alive[g]
-                        and inc_k[g] <= k
-                        and inc_p[g] >= arrive - PROB_EPS
-                        and inc_len[g] < least
-                    ):
-                        least = inc_len[g]
-                if not least <= nL:
-                    points = [j]
-                    back = lab
-                    while back >= 0:
-                        points.append(lab_node[back])
-                        back = lab_parent[back]
-                    path = np.empty(len(points), np.int64)
-                    for i in range(len(points)):
-                        path[i] = points[len(points) - 1 - i]
-                    _add_found(inc_len, inc_k, inc_p, inc_path, alive, nL, k, arrive, path)
-                    probs_sorted, best_rows = _incumbent_tables(
-                        inc_len, inc_k, inc_p, alive, kmax
-                    )
-                continue
-            arc_in = lo + idx
-            g_to = _to_go_after(
-                new_v, new_h, count, kj, j, arc_in, g_ptr, g_emax, g_table, has_pairs,
-                node_of_arc, p_ptr, p_emax, p_table,
-            )  # fmt: skip
-            if len(g_to) == 0:
-                continue
-            if _covers(nL, k + 1, g_to, best_rows[_likely(probs_sorted, new_mass)], kmax):
-                continue
-            nv = np.inf
-            nh = np.inf
-            for c in range(count):
-                nv = min(nv, new_v[c])
-                nh = min(nh, new_h[c])
-            key = (j, mask)
-            head = _first(archive, key)
-            if head >= 0 and _kept_dominates(  # (asked only where something is kept)
-                head, archive_next, lab_L, lab_k, lab_mass, lab_arc, lab_vmin, lab_hmin,
-                lab_ss, lab_sn, sv, sh, sm,
-                nL, k + 1, new_mass, arc_in, nv, nh, new_v, new_h, new_m, 0, count,
-                has_pairs, node_of_arc, pair_ptr, pair_length,
-            ):  # fmt: skip
-                continue
-            child = len(lab_L)
-            (sv, sh, sm), used = _keep(
-                store, (sv, sh, sm), used, new_v, new_h, new_m, count, nL, k + 1, j, arc_in,
-                lab, mask | (np.int64(1) << bit) if bit >= 0 else mask, new_mass, nv, nh, g_to,
-                head,
-            )  # fmt: skip
-            if legs_mode == LEGS_AIRPLANE or legs_mode == LEGS_CS3D:
-                lab_head.append(heads[idx].copy())
-                lab_has_head.append(True)
-            else:
-                lab_head.append(heading_a)
-                lab_has_head.append(False)
-            archive[key] = child
-            heapq.heappush(heap, (nL + g_to[len(g_to) - 1], np.int64(counter), np.int64(child)))
-            counter += 1
+            for child in range(before, len(labels.L)):  # the heading each new row ends with
+                if len(heads) > 0:
+                    heading.append(heads[labels.arc[child] - lo].copy())
+                    has_heading.append(True)
+                else:
+                    heading.append(legs.heading_a)
+                    has_heading.append(False)
+            if idx < 0:
+                break
+            # At B: a route, added unless a found one dominates it.
+            least = np.inf
+            for g in range(len(inc_len)):
+                if alive[g] and inc_k[g] <= k and inc_p[g] >= arrive - PROB_EPS:
+                    least = min(least, inc_len[g])
+            if not least <= length:
+                points = [np.int64(graph.end)]
+                back = lab
+                while back >= 0:
+                    points.append(labels.node[back])
+                    back = labels.parent[back]
+                path = np.empty(len(points), np.int64)
+                for i in range(len(points)):
+                    path[i] = points[len(points) - 1 - i]
+                _add_found(inc_len, inc_k, inc_p, inc_path, alive, length, k, arrive, path)
+                probs_sorted, rows = _incumbent_tables(inc_len, inc_k, inc_p, alive, kmax)
+            first = idx + 1
     # What is left: the found routes and the partial routes still queued.
     f_len, f_k, f_p, index = _found_arrays(inc_len, inc_k, inc_p, alive)
     F = len(f_len)
@@ -363,9 +278,10 @@ def search(
     o_ptr = np.zeros(Q + 1, np.int64)
     for x in range(Q):
         lab = heap[x][2]
-        o_f[x], o_L[x], o_k[x], o_mass[x] = heap[x][0], lab_L[lab], lab_k[lab], lab_mass[lab]
-        o_ptr[x + 1] = o_ptr[x] + len(lab_to_go[lab])
+        o_f[x], o_L[x], o_k[x] = heap[x][0], labels.L[lab], labels.k[lab]
+        o_mass[x] = labels.mass[lab]
+        o_ptr[x + 1] = o_ptr[x] + len(labels.to_go[lab])
     o_to_go = np.empty(o_ptr[Q])
     for x in range(Q):
-        o_to_go[o_ptr[x] : o_ptr[x + 1]] = lab_to_go[heap[x][2]]
-    return labels, stopped, f_len, f_k, f_p, f_ptr, f_points, o_f, o_L, o_k, o_mass, o_ptr, o_to_go
+        o_to_go[o_ptr[x] : o_ptr[x + 1]] = labels.to_go[heap[x][2]]
+    return count, stopped, f_len, f_k, f_p, f_ptr, f_points, o_f, o_L, o_k, o_mass, o_ptr, o_to_go
