@@ -132,10 +132,12 @@ def _listen(notice: _Notice) -> None:
 
 class _WhenNumbaLoads(importlib.abc.MetaPathFinder):
     """Runs ``then`` once numba is imported: the notice must not import numba itself (a plan
-    that needs no kernel never loads it, and the planner picks paths by whether it is loaded)."""
+    that needs no kernel never loads it, and the planner picks paths by whether it is loaded).
+    ``tag`` names what it is for (one pending hook per tag)."""
 
-    def __init__(self, then: Callable[[], None]) -> None:
+    def __init__(self, then: Callable[[], None], tag: str = "notice") -> None:
         self.then = then
+        self.tag = tag
 
     def find_spec(self, name: str, path: Any = None, target: Any = None) -> Any:
         if name != "numba":
@@ -169,10 +171,19 @@ def maybe_notify(stream: TextIO | None = None, *, quiet: bool = False) -> bool:
     if seconds <= 0:
         return False
     notice = _Notice(stream, seconds)
-    if "numba" in sys.modules:
-        _listen(notice)
-    else:
-        # One pending hook at a time (a second plan in the same process replaces the first's).
-        sys.meta_path[:] = [f for f in sys.meta_path if not isinstance(f, _WhenNumbaLoads)]
-        sys.meta_path.insert(0, _WhenNumbaLoads(lambda: _listen(notice)))
+    # One pending hook at a time (a second plan in the same process replaces the first's).
+    when_numba_loads(lambda: _listen(notice), "notice")
     return True
+
+
+def when_numba_loads(then: Callable[[], None], tag: str) -> None:
+    """Run ``then`` now if numba is loaded, else once it is imported (replacing a pending
+    ``then`` of the same ``tag``), without importing it."""
+    if "numba" in sys.modules:
+        with contextlib.suppress(Exception):  # numba's event API moved
+            then()
+        return
+    sys.meta_path[:] = [
+        f for f in sys.meta_path if not (isinstance(f, _WhenNumbaLoads) and f.tag == tag)
+    ]
+    sys.meta_path.insert(0, _WhenNumbaLoads(then, tag))

@@ -17,11 +17,10 @@ console's callback is :class:`gcs_planner.progress.SearchProgress`).
 from __future__ import annotations
 
 import math
-import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from gcs_planner import interrupt
+from gcs_planner import interrupt, work_clock
 
 # The defaults of the CLI, plan() and sweeps: a time limit, no label limit. A label count
 # means nothing to a user and stops hard scenarios far short of what a minute proves (issue
@@ -71,7 +70,7 @@ class Budget:
         self.time_limit = time_limit
         self.progress = progress
         self.every = every
-        self.start = time.monotonic()
+        self.start = work_clock.now()
         self.deadline = None if time_limit is None else self.start + time_limit
         self.spent = 0
         # Labels of every search of this plan (kept on the root: each search's share has its
@@ -92,7 +91,7 @@ class Budget:
         child._next_report = self._next_report
         child.time_limit = self.time_limit
         if self.deadline is not None:
-            now = time.monotonic()
+            now = work_clock.now()
             child.deadline = min(self.deadline, now + fraction * max(0.0, self.deadline - now))
         child.stage = stage
         return child
@@ -105,7 +104,7 @@ class Budget:
         return child
 
     def elapsed(self) -> float:
-        return time.monotonic() - self.start
+        return work_clock.now() - self.start
 
     def expired(self) -> bool:
         """Whether the time limit has passed (a limit of 0 always has): the set-up before a
@@ -118,7 +117,7 @@ class Budget:
         if interrupt.requested():
             return True
         return self.deadline is not None and (
-            self.time_limit == 0 or time.monotonic() >= self.deadline
+            self.time_limit == 0 or work_clock.now() >= self.deadline
         )
 
     def take(self) -> bool:
@@ -154,7 +153,7 @@ class Budget:
         """Whether a progress report is due (cheap: called once per label)."""
         if self.progress is None:
             return False
-        now = time.monotonic()
+        now = work_clock.now()
         if now < self._next_report:
             return False
         self._next_report = now + self.every

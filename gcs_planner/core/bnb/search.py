@@ -14,6 +14,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from gcs_planner import work_clock
 from gcs_planner.core.bnb.context import _Context
 from gcs_planner.core.bnb.dominance import _dominated_by, _kept, _key, _larger
 from gcs_planner.core.bnb.incumbents import BnbResult, Found, _dominated, _Incumbents
@@ -313,7 +314,7 @@ def _search(
         return (e.f, e.length, e.corrections, e.to_go, sum(e.states.values()))
 
     for at, e in enumerate(heap):
-        if stop_at is not None and at % 1024 == 0 and time.monotonic() > stop_at:
+        if stop_at is not None and at % 1024 == 0 and work_clock.now() > stop_at:
             live.extend(map(still_open, heap[at:]))
             break
         row = still_open(e)
