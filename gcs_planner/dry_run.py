@@ -46,8 +46,9 @@ from gcs_planner.core.route import Route
 from gcs_planner.errors import LinkError
 from gcs_planner.link.connection import mavlink, open_link
 from gcs_planner.link.mission_client import MissionClient
-from gcs_planner.link.params import set_parameter
+from gcs_planner.link.params import read_parameter, set_parameter
 from gcs_planner.link.protocol import DEFAULT_RETRIES, DEFAULT_TIMEOUT_S
+from gcs_planner.link.vehicle_check import Shortfall, check_vehicle
 from gcs_planner.mission.builder import build_mission
 from gcs_planner.mission.geo_exports import trajectory_local
 from gcs_planner.mission.items import HELIX_COMMANDS
@@ -259,6 +260,7 @@ def dry_run(
     navigate_on_estimate: bool = True,
     error_unit: float = DEFAULT_ERROR_UNIT_M,
     set_params: dict[str, float] | None = None,
+    set_plan_params: bool = False,
 ) -> DryRunReport:
     """Fly ``plan``'s chosen route on a mock vehicle whose landmark database is ``landmarks``.
 
@@ -289,7 +291,11 @@ def dry_run(
     directions, outcomes) unless nothing in the flight is drawn. ``set_params``: autopilot
     parameters (the vehicle's own names, e.g. TECS_CLMB_MAX, NAVL1_LIM_BANK, FW_T_CLMB_R_SP)
     the ground station sets over the link after the upload, as a user configures the aircraft;
-    a parameter the vehicle does not confirm is an upload error.
+    a parameter the vehicle does not confirm is an upload error. As ``upload`` does, the vehicle's
+    parameters are first checked against what the plan's derived envelope needs (climb and sink
+    rates, roll limit, ArduPlane's NAVL1_LIM_BANK: ``link.vehicle_check``): with
+    ``set_plan_params`` they are set (``set_params`` wins where both name one), otherwise the
+    upload is refused and the report says which and why.
     """
     if flavour not in FLAVOURS:
         raise ValueError(f"flavour must be one of {FLAVOURS}, got {flavour!r}")
@@ -327,10 +333,20 @@ def dry_run(
         client = MissionClient(link, timeout=timeout, retries=retries, transfer="mission")
         try:
             client.connect(timeout=connect_timeout)
+            # What the plan's envelope needs of the vehicle, as ``upload`` checks it: set with
+            # ``set_plan_params`` (the user's own --param values win), else refused.
+            needed = plan_parameters(link, client, plan_dict, flavour, timeout, retries)
+            if needed and not set_plan_params:
+                raise LinkError(
+                    "the vehicle is not set up to fly this plan: "
+                    + "; ".join(s.describe() for s in needed)
+                    + ". Nothing was uploaded: set them with --set-params"
+                )
             for _ in range(attempts):
                 try:
                     client.upload_verified(mission.items, loiter_radius=loiter)
-                    settings = dict(set_params or {})
+                    settings = {s.need.name: s.need.set_to for s in needed}
+                    settings.update(set_params or {})
                     if flavour == "px4":
                         settings = {PX4_ACCEPTANCE_PARAM: float(acceptance_radius), **settings}
                     for name, value in settings.items():
@@ -463,6 +479,19 @@ def dry_run(
             [c.id for c in replayed.run.corrections if c.succeeded is False],
         ),
     )
+
+
+def plan_parameters(
+    link: object, client: MissionClient, plan_dict: dict, firmware: str, timeout: float,
+    retries: int,
+) -> list[Shortfall]:
+    """The vehicle's parameters that fall short of what the plan's envelope needs
+    (``link.vehicle_check``), read from the vehicle."""
+
+    def read(name: str) -> float:
+        return read_parameter(link, client._target(), name, timeout=timeout, retries=retries)
+
+    return check_vehicle(plan_dict, firmware, read)[1]
 
 
 def lost_by_the_flight(

@@ -1,7 +1,7 @@
 """The design wind in the dry run (issue 32): by default the plan is made for the wind flown
 (``--wind``); ``--design-wind`` sets it apart, so a still-air plan can be flown in wind. On
-dataset 1 (Table 2, ArduPlane's 5 m/s TECS rates, 45 deg bank, 12 m/s EAS) in a 5 m/s wind from
-drawn directions, the still-air plan is lost in some runs and the plan for the 5 m/s design wind
+dataset 1 (Table 2, ArduPlane's 5 m/s TECS rates, 45 deg bank, 12 m/s EAS) in a 10 m/s wind from
+drawn directions, the still-air plan is lost in some runs and the plan for the 10 m/s design wind
 in none."""
 
 from __future__ import annotations
@@ -17,8 +17,9 @@ DS1 = ["--alpha1", "25", "--alpha2", "15", "--beta1", "20", "--beta2", "25", "--
 
 
 def fly(capsys, dataset_paths, *extra):
-    rc = main(["dry-run", str(dataset_paths[1]), *DS1, "--wind", "5", "--runs", "4", "--json",
-               "--quiet", *extra])  # fmt: skip
+    # --set-params: the vehicle set up for the plan (ArduPlane's NAVL1_LIM_BANK), as upload would
+    rc = main(["dry-run", str(dataset_paths[1]), *DS1, "--wind", "10", "--runs", "10", "--json",
+               "--quiet", "--set-params", *extra])  # fmt: skip
     out, err = capsys.readouterr()
     return rc, json.loads(out), err
 
@@ -28,15 +29,15 @@ def test_a_plan_for_the_wind_flown_is_lost_less_than_the_still_air_plan(capsys, 
     rc5, windy, _ = fly(capsys, dataset_paths)  # design wind: the 5 m/s flown
     assert still["verified"] and windy["verified"]
     assert any("the plan assumed still air" in a for a in still["assumptions"])
-    assert any("design wind of 5 m/s from any direction" in a for a in windy["assumptions"])
+    assert any("design wind of 10 m/s from any direction" in a for a in windy["assumptions"])
     assert still["route"] != windy["route"]
     # The still-air plan climbs too steeply for a tailwind: runs are lost and the verdict fails.
     # A route certain to arrive is never lost by its corrections: these are the flight's.
     assert rc0 == EXIT_LOST and still["success_rate"] < 1.0 and still["flight_losses"] >= 1
     assert still["correction_losses"] == 0
     # The plan for the wind, flown at its own cruise airspeed with a straight run-in and run-out
-    # at every landmark, arrives every time (it missed V369 by 180 m when the mission flew
-    # 25 m/s whatever the plan's airspeed).
+    # at every landmark by a vehicle set up for it, arrives every time (it missed V369 by 180 m
+    # in a 5 m/s wind when the mission flew 25 m/s whatever the plan's airspeed).
     assert rc5 == 0 and windy["flight_losses"] == 0 and windy["success_rate"] == 1.0
 
 
@@ -45,3 +46,11 @@ def test_a_bad_design_wind_names_its_flag(capsys, dataset_paths):
         rc = main(["dry-run", str(dataset_paths[1]), *DS1, "--design-wind", bad, "--quiet"])
         err = capsys.readouterr().err
         assert rc == 2 and "--design-wind" in err and "Traceback" not in err
+
+
+def test_a_vehicle_not_set_up_for_the_plan_is_refused_by_the_dry_run(capsys, dataset_paths):
+    """As upload: ArduPlane's shipped NAVL1_LIM_BANK 0 would widen every loiter by EAS2TAS^2;
+    without --set-params the dry run names it and uploads nothing."""
+    rc = main(["dry-run", str(dataset_paths[1]), *DS1, "--wind", "0", "--quiet"])
+    err = capsys.readouterr().err
+    assert rc == 4 and "NAVL1_LIM_BANK is 0" in err and "--set-params" in err

@@ -82,6 +82,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "TECS_CLMB_MAX=8 or NAVL1_LIM_BANK=45",
     )
     g.add_argument(
+        "--set-params",
+        action="store_true",
+        help="set the parameters the plan's derived envelope needs and the vehicle lacks, as "
+        "upload --set-params does (otherwise such a vehicle is refused, exit 4)",
+    )
+    g.add_argument(
         "--navigate-on-truth",
         action="store_true",
         help="the aircraft flies its true position instead of its INS estimate (comparison)",
@@ -197,6 +203,7 @@ def run(args: argparse.Namespace) -> int:
         wind=wind,
         navigate_on_estimate=not args.navigate_on_truth,
         set_params=settings,
+        set_plan_params=args.set_params,
     )
     if track_out is not None and flown:
         try:
