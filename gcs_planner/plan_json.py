@@ -69,7 +69,9 @@ def capture_of(plan: Plan) -> dict[str, Any]:
     """The capture check of the chosen route (:func:`gcs_planner.vehicle.capture_check`), with
     its warning (None when every correction point fits its capture radius)."""
     s = plan.scenario
-    check = capture_check(plan.route.stops, s.error_unit, s.capture_radius, TRACKING_ALLOWANCE_M)
+    check = capture_check(
+        plan.route.stops, s.error_unit, s.capture_radius, TRACKING_ALLOWANCE_M, s.params
+    )
     return {**check, "warning": capture_warning(check)}
 
 

@@ -413,19 +413,47 @@ def parse_wind(text: str) -> tuple[float, float | None]:
 
 
 def capture_check(
-    stops: object, error_unit: float, capture_radius: float, allowance: float
+    stops: object,
+    error_unit: float,
+    capture_radius: float,
+    allowance: float,
+    params: object | None = None,
 ) -> dict[str, object]:
-    """Point by point along a route's ``stops`` (objects with ``id``, ``kind.name``,
-    ``v_arrival``, ``h_arrival`` in error units): the position error on arrival in metres,
-    sqrt(v^2 + h^2) * ``error_unit`` (vertical and horizontal errors are orthogonal), plus the
-    autopilot's tracking ``allowance`` must fit the landmark's ``capture_radius`` (3D), or the
-    true track may pass the landmark outside it and the correction is not made. Returns the
-    worst point, its need, and the first point that does not fit (None when all do)."""
+    """Point by point along a route's ``stops`` (objects with ``id``, ``kind``, ``leg``,
+    ``unreliable``, ``v_arrival``, ``h_arrival`` in error units): the position error on arrival in
+    metres, sqrt(v^2 + h^2) * ``error_unit`` (vertical and horizontal errors are orthogonal), plus
+    the autopilot's tracking ``allowance`` must fit the landmark's ``capture_radius`` (3D), or the
+    true track may pass the landmark outside it and the correction is not made.
+
+    With ``params`` (the scenario's Parameters) the error on arrival is the WORST over the
+    correction outcomes the plan allows: a failed correction at an unreliable point leaves
+    min(error, r) (core/probability.py outcomes), so the errors after it exceed the all-success
+    figures the route table shows; outcomes that arrive beyond a point's limits are lost there
+    (counted in the probability) and not carried on. Without ``params``: the all-success errors.
+    Returns the worst point, its need, and the first point that does not fit (None when all do)."""
+    from gcs_planner.core.probability import outcomes
+
     first, worst, worst_need = None, None, -math.inf
+    states: set[tuple[float, float]] = {(0.0, 0.0)}  # metres flown since each error's reset
     for stop in stops:  # type: ignore[attr-defined]
+        if params is None:
+            arrivals = [(float(stop.v_arrival), float(stop.h_arrival))]
+        else:
+            leg = 0.0 if stop.leg is None else stop.leg.length
+            v_lim, h_lim = params.limits_m(stop.kind)  # type: ignore[attr-defined]
+            reached = {(v + leg, h + leg) for v, h in states}
+            reached = {(v, h) for v, h in reached if v <= v_lim and h <= h_lim} or reached
+            units = params.delta  # type: ignore[attr-defined]
+            arrivals = [(v * units, h * units) for v, h in reached]
+            states = set()
+            for v, h in reached:
+                ok, failed = outcomes(v, h, stop.kind, params.residual_m)  # type: ignore[attr-defined]
+                states.add(ok)
+                if stop.unreliable:
+                    states.add(failed)
         if stop.kind.name not in ("V", "H"):
             continue
-        need = math.hypot(stop.v_arrival, stop.h_arrival) * error_unit + allowance
+        need = max(math.hypot(v, h) for v, h in arrivals) * error_unit + allowance
         if need > worst_need:
             worst, worst_need = stop.id, need
         if first is None and need > capture_radius:
@@ -434,6 +462,7 @@ def capture_check(
         "error_unit_m": error_unit,
         "capture_radius_m": capture_radius,
         "tracking_allowance_m": allowance,
+        "over_outcomes": params is not None,
         "worst_point": worst,
         "worst_need_m": None if worst is None else worst_need,
         "first_not_captured": first,
@@ -449,6 +478,7 @@ def capture_warning(check: dict) -> str | None:
         f"point {first['point']} is likely missed: its error on arrival plus the tracking "
         f"allowance is {first['need_m']:.2f} m, beyond the capture radius "
         f"{check['capture_radius_m']:g} m ({check['error_unit_m']:g} m per error unit, "
-        f"allowance {check['tracking_allowance_m']:g} m); the correction there, and those "
-        "after it, may not be made"
+        f"allowance {check['tracking_allowance_m']:g} m"
+        + (", worst over the correction outcomes" if check.get("over_outcomes") else "")
+        + "); the correction there, and those after it, may not be made"
     )

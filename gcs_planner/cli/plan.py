@@ -192,8 +192,8 @@ def _capture_lines(result: Plan) -> list[str]:
         return []
     return [
         f"capture: every correction point fits its {c['capture_radius_m']:g} m capture radius "
-        f"(worst {c['worst_point']}: {c['worst_need_m']:.2f} m of error on arrival and tracking "
-        f"allowance, {c['error_unit_m']:g} m per error unit)"
+        f"(worst {c['worst_point']}: {c['worst_need_m']:.2f} m of error on arrival, the worst over "
+        f"the correction outcomes, and tracking allowance, {c['error_unit_m']:g} m per error unit)"
     ]
 
 
