@@ -297,7 +297,8 @@ def fly_plain(
                 target = az + (cz - az) * progress
                 alt_error = target - ez
                 slope = (cz - az) / span
-                ff = vg * slope if progress < 1.0 else 0.0
+                # Navigator.glide: no feed-forward before the ramp starts
+                ff = vg * slope if 0.0 < progress < 1.0 else 0.0
                 climb = ff + (target - ez) / max(ALTITUDE_TIME_CONSTANT_S * 0.2, dt0)
             # Navigator.l1_line on prev -> c.
             abx, aby = cx - ax, cy - ay

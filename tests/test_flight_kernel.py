@@ -63,7 +63,10 @@ kernel_decisions: list[int] = []
 
 def both(items, scenario, flavour, autopilot, wind, runs=0, estimate=True):
     kw = dict(home_at_seq0=flavour == "ardupilot", flavour=flavour, autopilot=autopilot,
-              wind=wind, navigate_on_estimate=estimate, runs=runs, seed=3)  # fmt: skip
+              wind=wind, navigate_on_estimate=estimate, runs=runs, seed=4)  # fmt: skip
+    # (seed 3 flew PX4 to one waypoint of the helix mission exactly 10 m off its altitude, its
+    # altitude acceptance: the two flights' sub-millimetre differences decided either way there,
+    # a knife edge rather than a different flight)
     return replay(items, scenario, compiled=False, **kw), replay(items, scenario, **kw)
 
 

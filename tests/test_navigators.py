@@ -45,6 +45,21 @@ def test_px4_accepts_a_fixed_wing_waypoint_at_the_npfg_switch_distance():
     assert math.hypot(4000.0 - x, y) < 1.5
 
 
+@pytest.mark.parametrize("compiled", [False, True], ids=["python", "compiled"])
+def test_px4_passes_an_early_accepted_waypoint_at_its_altitude(compiled):
+    """PX4 accepts the waypoint at (4000, 0) about 56 m early, then the leg to (8000, 0) climbs
+    600 m: its altitude setpoint holds the waypoint's altitude until abeam of it (the altitude
+    first-order hold), so the aircraft passes it level, not already climbing."""
+    items = mission((16, (0, 0, 1000)), (16, (4000, 0, 1000)), (16, (8000, 0, 1600)))
+    f = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour="px4",
+            params=AutopilotParams("px4", acceptance_radius=1.0), compiled=compiled)  # fmt: skip
+    x, _, _ = f.xyz[reached(f, 1).sample]
+    assert x < 4000.0 - 40.0  # accepted early
+    at = int(np.argmin(np.abs(f.xyz[:, 0] - 4000.0)))
+    assert f.xyz[at, 2] == pytest.approx(1000.0, abs=0.5)
+    assert f.xyz[-1, 2] > 1500.0  # and it does climb afterwards
+
+
 def test_px4_altitude_ramp_ends_nav_loiter_rad_before_the_waypoint():
     items = mission((16, (0, 0, 0)), (16, (4000, 0, 100)), (16, (8000, 0, 100)))
     ap = AutopilotParams("px4", acceptance_radius=1.0, loiter_radius=400.0)

@@ -373,7 +373,13 @@ class Navigator:
         target = a[2] + (b[2] - a[2]) * progress
         self.alt_error = target - z
         slope = (b[2] - a[2]) / span
-        ff = self.ground_speed() * slope if progress < 1.0 else 0.0
+        # No feed-forward before the ramp starts: the target holds the previous waypoint's
+        # altitude until the aircraft is abeam of it (PX4 FixedwingPositionControl
+        # control_auto_position, the altitude first-order hold on _min_current_sp_distance_xy;
+        # ArduPlane's glide slope at line_path_proportion 0), and a constant target gives TECS
+        # no rate to feed forward. (A PX4 that switched 56 m early used to start the next
+        # climb before the landmark and pass it 4-6 m high.)
+        ff = self.ground_speed() * slope if 0.0 < progress < 1.0 else 0.0
         return self.climb_to(target, ff)
 
     # One step -----------------------------------------------------------------------------
