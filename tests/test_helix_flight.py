@@ -128,7 +128,8 @@ def test_dataset2_helix_legs_are_overflown_when_arduplane_climbs_at_the_true_air
     angles at the top's true airspeed, ArduPlane overflies every correction point; its straight
     legs come out within tens of metres, its helices longer (it climbs steeper than planned low
     down, then circles level: measured 110 m for 1 turn, 323 m for 4, since the glide slope
-    gives no climb feed-forward before its ramp starts), never more than about 120 m per turn. At the plan's rates as EAS angles it arrives low (next test)."""
+    gives no climb feed-forward before its ramp starts), never more than about 120 m per turn.
+    At the plan's rates as EAS angles it arrives low (next test)."""
     scenario, route, plan_dict = ds2_route
     flavour = "ardupilot"
     m = build_mission(plan_dict, firmware=flavour, acceptance_radius=1)
