@@ -46,9 +46,9 @@ from gcs_planner.core.route import Route
 from gcs_planner.errors import LinkError
 from gcs_planner.link.connection import mavlink, open_link
 from gcs_planner.link.mission_client import MissionClient
-from gcs_planner.link.params import read_parameter, set_parameter
+from gcs_planner.link.params import set_parameter
 from gcs_planner.link.protocol import DEFAULT_RETRIES, DEFAULT_TIMEOUT_S
-from gcs_planner.link.vehicle_check import Shortfall, check_vehicle
+from gcs_planner.link.vehicle_check import refusal, vehicle_shortfalls
 from gcs_planner.mission.builder import build_mission
 from gcs_planner.mission.geo_exports import trajectory_local
 from gcs_planner.mission.items import HELIX_COMMANDS
@@ -335,13 +335,11 @@ def dry_run(
             client.connect(timeout=connect_timeout)
             # What the plan's envelope needs of the vehicle, as ``upload`` checks it: set with
             # ``set_plan_params`` (the user's own --param values win), else refused.
-            needed = plan_parameters(link, client, plan_dict, flavour, timeout, retries)
+            needed = vehicle_shortfalls(
+                link, client._target(), plan_dict, flavour, timeout=timeout, retries=retries
+            )
             if needed and not set_plan_params:
-                raise LinkError(
-                    "the vehicle is not set up to fly this plan: "
-                    + "; ".join(s.describe() for s in needed)
-                    + ". Nothing was uploaded: set them with --set-params"
-                )
+                raise LinkError(refusal(needed, "set them with --set-params"))
             for _ in range(attempts):
                 try:
                     client.upload_verified(mission.items, loiter_radius=loiter)
@@ -479,19 +477,6 @@ def dry_run(
             [c.id for c in replayed.run.corrections if c.succeeded is False],
         ),
     )
-
-
-def plan_parameters(
-    link: object, client: MissionClient, plan_dict: dict, firmware: str, timeout: float,
-    retries: int,
-) -> list[Shortfall]:
-    """The vehicle's parameters that fall short of what the plan's envelope needs
-    (``link.vehicle_check``), read from the vehicle."""
-
-    def read(name: str) -> float:
-        return read_parameter(link, client._target(), name, timeout=timeout, retries=retries)
-
-    return check_vehicle(plan_dict, firmware, read)[1]
 
 
 def lost_by_the_flight(

@@ -10,12 +10,13 @@ import math
 from pathlib import Path
 from typing import Any
 
+from gcs_planner.core.capture import capture_check, capture_warning
 from gcs_planner.core.planner import Plan
 from gcs_planner.core.route import Route
 from gcs_planner.errors import InputError
 from gcs_planner.geometry.trajectory import leg_to_dict, scenario_trajectory
 from gcs_planner.scenario.model import Kind, Scenario
-from gcs_planner.vehicle import TRACKING_ALLOWANCE_M, capture_check, capture_warning
+from gcs_planner.vehicle import TRACKING_ALLOWANCE_M
 
 FORMAT = "gcs-planner-plan"
 VERSION = 1
@@ -66,7 +67,7 @@ def route_to_dict(
 
 
 def capture_of(plan: Plan) -> dict[str, Any]:
-    """The capture check of the chosen route (:func:`gcs_planner.vehicle.capture_check`), with
+    """The capture check of the chosen route (:func:`gcs_planner.core.capture.capture_check`), with
     its warning (None when every correction point fits its capture radius)."""
     s = plan.scenario
     check = capture_check(

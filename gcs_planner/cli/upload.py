@@ -13,10 +13,10 @@ from gcs_planner.errors import LinkError
 from gcs_planner.link.connection import open_link
 from gcs_planner.link.mission_client import FIRMWARES, TRANSFERS, VERIFIES, MissionClient
 from gcs_planner.link.mission_file import load_mission_file
-from gcs_planner.link.params import read_parameter, set_parameter
+from gcs_planner.link.params import set_parameter
 from gcs_planner.link.progress import Progress
 from gcs_planner.link.signing import key_from_passphrase
-from gcs_planner.link.vehicle_check import check_vehicle
+from gcs_planner.link.vehicle_check import refusal, vehicle_shortfalls
 
 
 def add_link_arguments(p: argparse.ArgumentParser) -> None:
@@ -192,21 +192,17 @@ def _check_parameters(client: MissionClient, args: argparse.Namespace, firmware:
         return
     plan = load_plan(args.file)
     target = client._target()
-
-    def read(name: str) -> float:
-        return read_parameter(
-            client.link, target, name, timeout=client.timeout, retries=client.retries
-        )
-
-    _, short = check_vehicle(plan, firmware, read)
+    short = vehicle_shortfalls(
+        client.link, target, plan, firmware, timeout=client.timeout, retries=client.retries
+    )
     if not short:
         return
     if not args.set_params:
         raise LinkError(
-            "the vehicle is not set up to fly this plan: "
-            + "; ".join(s.describe() for s in short)
-            + ". Nothing was uploaded: set them with --set-params, or plan for this vehicle "
-            "(plan --vehicle-from CONN)"
+            refusal(
+                short,
+                "set them with --set-params, or plan for this vehicle (plan --vehicle-from CONN)",
+            )
         )
     ap = autopilot_for(firmware)
     for s in short:  # listed before anything is written

@@ -14,20 +14,22 @@ roll limit it names. The aircraft flies it only if its autopilot is set up for t
   helix at 10 km becomes 80 m), and max(radius, EAS^2 / (g tan(NAVL1_LIM_BANK)) x EAS2TAS^2)
   otherwise, which is the radius itself once TAS^2 / (g tan(NAVL1_LIM_BANK)) <= R.
 
-:func:`needs` lists them for a plan and a firmware; :func:`check_vehicle` reads the vehicle's
-values and returns what falls short; with ``set_params`` the upload sets each to what the plan
-needs (listed before anything is written) and reads it back. A plan whose envelope was stated
-directly (angles and a radius) names no rates, and nothing is checked beyond the loiter radius
-the upload sets anyway.
+:func:`needs` lists them for a plan and a firmware; :func:`vehicle_shortfalls` reads the
+vehicle's values and returns what falls short; with ``--set-params`` the upload sets each to
+what the plan needs (listed before anything is written) and reads it back. A plan whose
+envelope was stated directly (angles and a radius) names no rates, and nothing is checked
+beyond the loiter radius the upload sets anyway.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 from gcs_planner.autopilot import autopilot_for
+from gcs_planner.link.connection import Link
+from gcs_planner.link.params import read_parameter
 from gcs_planner.vehicle import G
 
 # Slack for rates and angles written and read back as float32.
@@ -111,15 +113,34 @@ class Shortfall:
         )
 
 
-def check_vehicle(
-    plan: dict, firmware: str, read: Callable[[str], float]
-) -> tuple[list[ParameterNeed], list[Shortfall]]:
-    """(the plan's needs, those the vehicle's values fall short of), reading each parameter
-    with ``read(name)``."""
-    wanted = needs(plan, firmware)
-    short = []
-    for need in wanted:
+def shortfalls(plan: dict, firmware: str, read: Callable[[str], float]) -> list[Shortfall]:
+    """What the vehicle falls short of among ``plan``'s needs, reading each parameter with
+    ``read(name)``."""
+    out = []
+    for need in needs(plan, firmware):
         value = read(need.name)
         if not need.met_by(value):
-            short.append(Shortfall(need, value))
-    return wanted, short
+            out.append(Shortfall(need, value))
+    return out
+
+
+def vehicle_shortfalls(
+    link: Link, target: tuple[int, int], plan: dict, firmware: str, *, timeout: float,
+    retries: int,
+) -> list[Shortfall]:
+    """:func:`shortfalls` read over ``link`` from the vehicle at ``target`` (upload and the dry
+    run ask it the same way)."""
+
+    def read(name: str) -> float:
+        return read_parameter(link, target, name, timeout=timeout, retries=retries)
+
+    return shortfalls(plan, firmware, read)
+
+
+def refusal(short: Sequence[Shortfall], advice: str) -> str:
+    """The one line that refuses a vehicle not set up for the plan, each shortfall named."""
+    return (
+        "the vehicle is not set up to fly this plan: "
+        + "; ".join(s.describe() for s in short)
+        + f". Nothing was uploaded: {advice}"
+    )
