@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 from gcs_planner.core.bnb import flown_route, flown_route_legs
-from gcs_planner.core.contingency import Policy, evaluate, replan_on_failure
+from gcs_planner.core.contingency import Policy, evaluate
+from gcs_planner.core.replan import brute_continuation, replan_on_failure, search_continuation
 from gcs_planner.core.probability import success_probability
 from gcs_planner.errors import GcsPlannerError
 from gcs_planner.scenario.generate import random_scenario
@@ -210,9 +211,20 @@ def test_replan_never_worse(radius: float) -> None:
         points = (sc.start, *[int(j) for j in rng.permutation(corr)[:k]], sc.end)
         route = flown_route(sc, points)
         base = evaluate(sc, Policy.from_route(sc, route))
-        replanned = evaluate(sc, replan_on_failure(sc, route))
+        brute = replan_on_failure(sc, route, continuation=brute_continuation(sc))
+        replanned = evaluate(sc, brute.policy)
         assert replanned.probability >= base.probability - 1e-12
         better += replanned.probability > base.probability + 1e-9
+        # The planner's continuations (the most reliable from each state) are as good as
+        # brute force's: the same probability and worst-case length.
+        searched = replan_on_failure(sc, route, continuation=search_continuation(sc))
+        assert searched.plans == brute.plans
+        got = evaluate(sc, searched.policy)
+        assert got.probability == pytest.approx(replanned.probability, abs=1e-9), seed
+        assert got.length == pytest.approx(replanned.length, rel=1e-9), seed
+        # Two levels: the branches replanned again are never worse.
+        deeper = evaluate(sc, replan_on_failure(sc, route, levels=2).policy)
+        assert deeper.probability >= got.probability - 1e-12
     if radius == 0.0:
         assert better >= 1  # (seen: 4 of 60 straight-leg cases improve)
 
@@ -239,7 +251,7 @@ def test_replan_strictly_better_on_constructed_case() -> None:
     route = (0, 1, 2, 4)
     base = evaluate(sc, Policy.from_route(sc, route))
     assert base.probability == pytest.approx(0.8)
-    pol = replan_on_failure(sc, route)
+    pol = replan_on_failure(sc, route).policy
     assert pol.on_failure is not None and pol.on_failure.points == (2, 3, 4)
     assert pol.on_success is not None and pol.on_success.points == (2, 4)
     val = evaluate(sc, pol)
@@ -264,4 +276,4 @@ def test_revisiting_policy_raises() -> None:
 def test_replan_refuses_large_scenarios() -> None:
     sc = random_scenario(13, 1)
     with pytest.raises(GcsPlannerError, match="stops at 12 correction points"):
-        replan_on_failure(sc, (sc.start, sc.end))
+        replan_on_failure(sc, (sc.start, sc.end), continuation=brute_continuation(sc))

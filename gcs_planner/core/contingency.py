@@ -10,10 +10,8 @@ with the scenario's own leg model exactly as a route is flown (``route_trajector
 carried from the previous leg), so a fixed route converted with :meth:`Policy.from_route` gets
 the very probability :func:`gcs_planner.core.probability.success_probability` gives it.
 
-:func:`replan_on_failure` puts, at each failure of a route, the best simple continuation found
-by brute force. This is the first piece of issue 27; a later piece puts planning from a state
-(point, heading, errors, visited points) into the branch and bound, so that larger scenarios can
-be replanned too.
+:mod:`gcs_planner.core.replan` makes policies from routes: at each failed fix, the best
+continuation from the state reached.
 """
 
 from __future__ import annotations
@@ -24,16 +22,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gcs_planner.core.probability import PROB_EPS, outcomes, propagate
+from gcs_planner.core.probability import outcomes
 from gcs_planner.core.route import Route
 from gcs_planner.errors import GcsPlannerError
 from gcs_planner.geometry.legs import LegModel, scenario_leg_model
 from gcs_planner.geometry.trajectory import route_trajectory
 from gcs_planner.scenario.model import Kind, Scenario
-
-# Brute force over simple continuations grows factorially; beyond this many correction points
-# replanning waits for the branch and bound (issue 27, later piece).
-BRUTE_FORCE_MAX_POINTS = 12
 
 Heading = np.ndarray | None
 
@@ -274,125 +268,3 @@ def evaluate(scenario: Scenario, policy: Policy) -> PolicyValue:
     prob = min(1.0, prob)  # p*m + (1-p)*m may exceed m by an ulp
     arrived = e_arr / prob if prob > 0.0 else math.nan
     return PolicyValue(length, corr, prob, arrived, e_flown)
-
-
-def _best_continuation(
-    scenario: Scenario,
-    model: LegModel,
-    start: int,
-    v: float,
-    h: float,
-    heading: np.ndarray,
-    visited: frozenset[int],
-) -> tuple[list[int] | None, float, float]:
-    """Brute force over simple fixed continuations from ``start`` to B: the most likely to
-    arrive, then the shortest. Returns (points or None, probability, length)."""
-    params = scenario.params
-    xyz = scenario.xyz
-    end = scenario.end
-    free = [
-        j for j in range(scenario.n)
-        if int(scenario.kind[j]) in (Kind.V, Kind.H) and j not in visited
-    ]  # fmt: skip
-    best: list = [None, 0.0, math.inf]
-
-    def dfs(at, states, heading, length, path, used):
-        for j in [*free, end]:
-            if j in used:
-                continue
-            leg = model.leg(xyz[at], heading, xyz[j])
-            d = float(leg.length)
-            if not (leg.reachable and math.isfinite(d)):
-                continue
-            kind = Kind(int(scenario.kind[j]))
-            new, mass = propagate(states, d, kind, _unreliable(scenario, j), params)
-            total = length + d
-            # Mass only falls and length only grows along a path: prune what cannot beat best.
-            if mass <= 0.0 or mass < best[1] - PROB_EPS:
-                continue
-            if mass <= best[1] + PROB_EPS and total >= best[2]:
-                continue
-            if j == end:
-                if mass > best[1] + PROB_EPS or total < best[2]:
-                    best[:] = [[*path, j], mass, total]
-                continue
-            dfs(j, new, np.asarray(leg.heading_out, float), total, [*path, j], used | {j})
-
-    dfs(start, {(v, h): 1.0}, heading, 0.0, [start], frozenset())
-    return best[0], best[1], best[2]
-
-
-def replan_on_failure(
-    scenario: Scenario,
-    route: Route | Sequence[int],
-    *,
-    max_points: int = BRUTE_FORCE_MAX_POINTS,
-) -> Policy:
-    """The route as a policy whose failure branches are replanned.
-
-    At each unreliable point of the route (on every outcome path, each with its own state), the
-    failure branch is the best simple continuation from the state after the failed fix: position
-    that point, heading the arrival heading, errors after the failure, every point already
-    visited excluded. The best is found by brute force over simple continuations (highest F3,
-    then shortest), and taken only if it beats the route's own continuation (itself replanned
-    further down) in F3, or ties it and is shorter; so the policy is never worse than the route.
-    Success branches follow the route. A replanned branch is a fixed continuation (it is not
-    replanned again at its own unreliable points).
-
-    Brute force only: refuses scenarios with more than ``max_points`` correction points. A later
-    piece of issue 27 puts planning from a state into the branch and bound.
-    """
-    points = [int(p) for p in (route.points if isinstance(route, Route) else route)]
-    corrections = int(np.count_nonzero(np.isin(scenario.kind, (Kind.V, Kind.H))))
-    if corrections > max_points:
-        raise GcsPlannerError(
-            f"replanning on failure enumerates continuations and stops at {max_points} "
-            f"correction points; this scenario has {corrections}"
-        )
-    base = Policy.from_route(scenario, points)
-    validate(scenario, base)
-    model = scenario_leg_model(scenario)
-    ev = _Evaluator(scenario)
-    params = scenario.params
-
-    def better(a: Policy, b: Policy, v: float, h: float, heading: np.ndarray) -> bool:
-        pa, pb = ev.value(a, v, h, heading)[0], ev.value(b, v, h, heading)[0]
-        if pa > pb + PROB_EPS:
-            return True
-        return pa >= pb - PROB_EPS and ev.shape(a, heading)[0] < ev.shape(b, heading)[0]
-
-    def build(node: Policy, v: float, h: float, heading: Heading, visited: frozenset[int]):
-        legs, out = ev.legs(node, heading)
-        visited = visited | set(node.points)
-        if node.leaf:
-            return node
-        for j, leg in zip(node.points[1:], legs, strict=True):
-            v += leg
-            h += leg
-            kind = Kind(int(scenario.kind[j]))
-            v_lim, h_lim = params.limits_m(kind)
-            if not (math.isfinite(leg) and v <= v_lim and h <= h_lim):
-                return node  # lost before the branch: no outcome below matters
-            if j != node.points[-1]:
-                if kind == Kind.V:
-                    v = 0.0
-                elif kind == Kind.H:
-                    h = 0.0
-        ok_state, fail_state = outcomes(
-            v, h, Kind(int(scenario.kind[node.points[-1]])), params.residual_m
-        )
-        on_success = build(node.on_success, *ok_state, out, visited)
-        own = build(node.on_failure, *fail_state, out, visited)
-        found, _, _ = _best_continuation(
-            scenario, model, node.points[-1], *fail_state, out, visited
-        )
-        on_failure = own
-        if found is not None:
-            candidate = _chain(scenario, found)
-            if better(candidate, own, *fail_state, out):
-                on_failure = candidate
-        return Policy(node.points, on_success, on_failure)
-
-    policy = build(base, 0.0, 0.0, _start_heading(scenario), frozenset())
-    validate(scenario, policy)
-    return policy

@@ -36,6 +36,8 @@ class Graph(NamedTuple):
     start: int
     end: int
     to_end_start: float  # the straight distance from A to B
+    start_v: float  # the errors at A (``Scenario.initial_errors``), metres since the last reset
+    start_h: float
     kind: np.ndarray  # int64, per point (scenario.Kind)
     unreliable: np.ndarray  # bool, per point
     p_success: float

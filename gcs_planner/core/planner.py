@@ -137,7 +137,9 @@ def plan(
         if o not in OBJECTIVES:
             raise ValueError(f"unknown objective {o!r}")
     use_probability = "probability" in objectives
-    if use_probability or scenario_leg_model(scenario).carries_heading:
+    # The layered straight search starts from rest; a state mid-flight (errors at A, see
+    # core/from_state.py) is planned by the branch and bound, whose first label carries them.
+    if use_probability or scenario_leg_model(scenario).carries_heading or not scenario.from_rest:
         budget = Budget(max_labels, time_limit, progress)
         result = _branch_and_bound(scenario, use_probability, max_corrections, budget)
     else:

@@ -163,7 +163,7 @@ def success_probability(
     points = _check_route(scenario, points)
     legs = _leg_lengths(scenario, points, leg_lengths)
     params = scenario.params
-    states: dict[State, float] = {(0.0, 0.0): 1.0}
+    states: dict[State, float] = {scenario.initial_errors: 1.0}
     per_stop = [1.0]
     largest = 1
     for j, leg in zip(points[1:], legs, strict=True):
@@ -199,8 +199,8 @@ def monte_carlo_success(
     params = scenario.params
     residual_m = params.residual_m
     rng = np.random.default_rng(seed)
-    v = np.zeros(runs)
-    h = np.zeros(runs)
+    v = np.full(runs, scenario.initial_errors[0])
+    h = np.full(runs, scenario.initial_errors[1])
     ok = np.ones(runs, dtype=bool)
     for j, leg in zip(points[1:], legs, strict=True):
         kind = Kind(int(scenario.kind[j]))
@@ -251,7 +251,7 @@ def brute_force_success(
         weight = 1.0
         for ok in outcome:
             weight *= p if ok else 1.0 - p
-        v = h = 0.0
+        v, h = scenario.initial_errors
         feasible = True
         for i, leg in enumerate(legs, start=1):
             v += leg

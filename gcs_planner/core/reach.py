@@ -86,6 +86,8 @@ class ReachGraph:
             int(self.start),
             int(self.end),
             float(self.to_end[self.start]),
+            float(scenario.initial_errors[0]),
+            float(scenario.initial_errors[1]),
             np.asarray(scenario.kind, np.int64),
             np.asarray(unreliable, bool),
             float(p_success),

@@ -131,10 +131,16 @@ def evaluate_route(
         raise ValueError("one leg per consecutive pair of points")
     p = scenario.params
     # Distances flown since the last vertical / horizontal reset, in metres.
-    dv = dh = 0.0
+    # (At A: none at a mission's start; the state reached when planning from a failed fix.)
+    dv, dh = scenario.initial_errors
     cumulative = 0.0
     a = points[0]
-    stops = [Stop(a, scenario.ids[a], Kind.A, None, 0.0, 0.0, 0.0, float("inf"), float("inf"))]
+    stops = [
+        Stop(
+            a, scenario.ids[a], Kind.A, None, 0.0, dv * p.delta, dh * p.delta, float("inf"),
+            float("inf"), v_flown=dv, h_flown=dh,
+        )
+    ]  # fmt: skip
     for j, leg in zip(points[1:], legs):
         kind = Kind(int(scenario.kind[j]))
         dv += leg.length

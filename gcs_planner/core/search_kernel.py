@@ -182,9 +182,10 @@ def search(
         alive.append(True)
     probs_sorted, rows = _incumbent_tables(inc_len, inc_k, inc_p, alive, kmax)
 
-    # Row 0: A, no correction yet, one error state (0, 0) of mass 1.
+    # Row 0: A, no correction yet, one error state of mass 1: (0, 0) at a mission's start.
     root = Partial(
-        0.0, graph.start, np.int64(0), np.zeros(1), np.zeros(1), np.ones(1), np.int64(-1),
+        0.0, graph.start, np.int64(0), np.full(1, graph.start_v), np.full(1, graph.start_h),
+        np.ones(1), np.int64(-1),
         np.int64(0), np.int64(0), np.array([graph.to_end_start]),
     )  # fmt: skip
     labels = new_labels(root, graph.to_end_start)

@@ -184,10 +184,23 @@ class Scenario:
     # capture radius (3D, metres): the planner's capture check reads them.
     error_unit: float = DEFAULT_ERROR_UNIT_M
     capture_radius: float = DEFAULT_CAPTURE_RADIUS_M
+    # The errors the aircraft carries at A, as metres flown since the last vertical and
+    # horizontal reset (the probability model's units): (0, 0) at a mission's start; a state
+    # after a failed fix when planning from it (docs/model.md, "Contingency policies").
+    initial_errors: tuple[float, float] = (0.0, 0.0)
     _index: dict[str, int] = field(default_factory=dict, repr=False)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "_index", {pid: i for i, pid in enumerate(self.ids)})
+        v0, h0 = (float(e) for e in self.initial_errors)
+        if not (math.isfinite(v0) and math.isfinite(h0) and v0 >= 0.0 and h0 >= 0.0):
+            raise ValueError(f"initial errors must be finite and >= 0 m, not {self.initial_errors}")
+        object.__setattr__(self, "initial_errors", (v0, h0))
+
+    @property
+    def from_rest(self) -> bool:
+        """Whether the aircraft starts with no error (a mission's start, not a state mid-way)."""
+        return self.initial_errors == (0.0, 0.0)
 
     @property
     def vehicle(self) -> VehicleProfile:

@@ -167,7 +167,7 @@ def _search(
             0.0,
             start,
             0,
-            {(0.0, 0.0): 1.0},
+            {scenario.initial_errors: 1.0},
             heading_a if pair_floor is None else None,  # the pair relaxation: no arc flown yet
             (start,),
             np.array([graph.to_end[start]]),
