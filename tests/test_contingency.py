@@ -11,8 +11,8 @@ import pytest
 
 from gcs_planner.core.bnb import flown_route, flown_route_legs
 from gcs_planner.core.contingency import Policy, evaluate
-from gcs_planner.core.replan import brute_continuation, replan_on_failure, search_continuation
 from gcs_planner.core.probability import success_probability
+from gcs_planner.core.replan import brute_continuation, replan_on_failure, search_continuation
 from gcs_planner.errors import GcsPlannerError
 from gcs_planner.scenario.generate import random_scenario
 from gcs_planner.scenario.model import Kind, Parameters, Scenario
