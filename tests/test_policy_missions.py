@@ -361,3 +361,34 @@ def test_plan_policy_too_large_writes_nothing(tmp_path, capsys) -> None:
     assert [p.name for p in out.iterdir()] == ["plan.json"]
     assert (out / "plan.json").read_text() == "earlier"
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".out")]
+
+
+def test_branch_missions_get_the_capture_check() -> None:
+    from gcs_planner.mission.policy_export import _capture_warning
+
+    sc, _, policy = _replanned(167)
+    branch = (0, 2, 5, 1, 8, 3, 9)  # branch-5's path
+    assert _capture_warning(sc, branch) is None  # 3.4 m of the 5 m radius at worst
+    tight = dataclasses.replace(sc, capture_radius=2.0)
+    warning = _capture_warning(tight, branch)
+    assert warning is not None and "is likely missed" in warning
+
+
+def test_a_branch_likely_missed_is_exported_only_when_asked(tmp_path, capsys, monkeypatch) -> None:
+    from gcs_planner.mission import policy_export
+
+    sc, _, _ = _replanned(167)
+    csv = write_scenario_csv(sc, tmp_path / "sc.csv")
+    out = tmp_path / "out"
+    missed = "point 8 is likely missed"
+    monkeypatch.setattr(
+        policy_export, "_capture_warning", lambda s, pts: missed if 8 in pts else None
+    )
+    args = ["plan", str(csv), *_flags(sc), "--out", str(out), "--policy"]
+    assert main(args) == 3
+    err = capsys.readouterr().err
+    assert f"mission branch-5: {missed}" in err and "--allow-risky" in err
+    assert not out.exists()
+    assert main([*args, "--allow-risky"]) == 0
+    assert f"mission branch-5: {missed}" in capsys.readouterr().err
+    assert (out / "branch-5.plan").exists()

@@ -107,6 +107,9 @@ def run(args: argparse.Namespace) -> int:
 
         warning = check_policy_exportable(policy, result.min_probability, args.allow_risky)
     capture = plan_dict["capture"]["warning"]
+    if policy is not None and policy.capture_warnings:
+        branches = "; ".join(policy.capture_warnings)
+        capture = f"{capture}; {branches}" if capture else branches
     if capture and not args.allow_risky:
         # A correction point the true track may pass outside its capture radius: the mission is
         # likely lost there, so it is not handed out without being asked for.

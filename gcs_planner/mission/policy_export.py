@@ -29,6 +29,7 @@ from gcs_planner.mission.waypoints import dumps_waypoints
 
 if TYPE_CHECKING:
     from gcs_planner.core.planner import Plan
+    from gcs_planner.scenario.model import Scenario
 
 POLICY_FILE = "policy.json"
 TREE_PNG = "policy_tree.png"
@@ -50,6 +51,9 @@ class PolicyExport:
     switches: list[PathSwitch]
     # (front index, route value, policy value) for every route of the front
     front: list[tuple[int, PolicyValue, PolicyValue]]
+    # "mission <name>: point <id> is likely missed ..." for each branch that fails the capture
+    # check (the primary is the chosen route, which the plan checks)
+    capture_warnings: tuple[str, ...] = ()
 
 
 def replaceable(out: str | os.PathLike[str], route_files: tuple[str, ...]) -> list[str]:
@@ -82,7 +86,27 @@ def make_policy(result: Plan, plan: dict, **mission_options: Any) -> PolicyExpor
     policy, value, route_value = chosen
     paths, switches = policy_mission_plans(scenario, policy, plan)
     missions = assemble(scenario, paths, switches, **mission_options)
-    return PolicyExport(result.chosen, policy, value, route_value, missions, paths, switches, front)
+    warnings = tuple(
+        f"mission {p.name}: {w}"
+        for p, _ in paths[1:]
+        if (w := _capture_warning(scenario, p.points)) is not None
+    )
+    return PolicyExport(
+        result.chosen, policy, value, route_value, missions, paths, switches, front, warnings
+    )
+
+
+def _capture_warning(scenario: Scenario, points: tuple[int, ...]) -> str | None:
+    """The plan's capture check (core/capture.py) over a branch mission's whole path: the
+    worst error on arrival over its correction outcomes against the capture radius."""
+    from gcs_planner.core.bnb.flown import flown_route
+    from gcs_planner.core.capture import capture_check, capture_warning
+    from gcs_planner.vehicle import TRACKING_ALLOWANCE_M
+
+    s = scenario
+    stops = flown_route(s, points).stops
+    check = capture_check(stops, s.error_unit, s.capture_radius, TRACKING_ALLOWANCE_M, s.params)
+    return capture_warning(check)
 
 
 def render_policy_files(result: Plan, plan: dict, exp: PolicyExport) -> list[tuple[str, Any]]:
