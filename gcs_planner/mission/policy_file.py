@@ -70,8 +70,11 @@ def tree_to_dict(scenario: Scenario, policy: Policy) -> dict[str, Any]:
     """The tree as a table of nodes (point ids; children by index), equal subtrees once."""
     nodes: list[dict[str, Any]] = []
     index: dict[tuple, int] = {}
+    seen: dict[int, int] = {}  # id(node) -> index: a shared node is walked once
 
     def add(node: Policy) -> int:
+        if id(node) in seen:
+            return seen[id(node)]
         kids = None if node.leaf else (add(node.on_success), add(node.on_failure))
         key = (node.points, kids)
         if key not in index:
@@ -80,6 +83,7 @@ def tree_to_dict(scenario: Scenario, policy: Policy) -> dict[str, Any]:
             if kids is not None:
                 entry["on_success"], entry["on_failure"] = kids
             nodes.append(entry)
+        seen[id(node)] = index[key]
         return index[key]
 
     return {"root": add(policy), "nodes": nodes}
