@@ -101,16 +101,20 @@ def tree_png(
             color="0.2",
             ha="right",
         )
-    for s in switches:
-        x, y = xyz[s.failed, 0], xyz[s.failed, 1]
+    by_point: dict[int, list[str]] = {}
+    for s in switches:  # one label per point, a line per context it fails in
+        by_point.setdefault(s.failed, []).append(f"{s.mission} \u2192 {s.to}")
+    for j, lines in by_point.items():
+        x, y = xyz[j, 0], xyz[j, 1]
         ax.scatter([x], [y], s=220, marker="X", c=UNRELIABLE, ec="k", zorder=5)
         ax.annotate(
-            f"{ids[s.failed]} fails: {s.mission} \u2192 {s.to}",
+            f"{ids[j]} fails: " + "\n".join(lines),
             (x, y),
             xytext=(8, -14),
             textcoords="offset points",
             fontsize=9,
             color=UNRELIABLE,
+            va="top",
         )
     start = missions[0][0].points
     for j, marker, colour, size in (
