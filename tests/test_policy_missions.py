@@ -392,3 +392,12 @@ def test_a_branch_likely_missed_is_exported_only_when_asked(tmp_path, capsys, mo
     assert main([*args, "--allow-risky"]) == 0
     assert f"mission branch-5: {missed}" in capsys.readouterr().err
     assert (out / "branch-5.plan").exists()
+
+
+def test_px4_policy_round_trips(tmp_path) -> None:
+    sc, result, policy = _replanned(167)
+    pm = policy_missions(sc, policy, plan_to_dict(result), firmware="px4")
+    _check(sc, policy, pm)
+    assert pm.missions["primary"].items[0].note == "cruise speed"  # no home item on PX4
+    path = write_policy(tmp_path / "policy.json", sc, policy, pm, evaluate(sc, policy))
+    assert read_policy(path, scenario=sc) == pm

@@ -152,9 +152,18 @@ def dumps_policy(data: dict[str, Any]) -> str:
     return json.dumps(data, indent=1, allow_nan=False) + "\n"
 
 
-def write_policy(path: str | os.PathLike[str], *args: Any, **kwargs: Any) -> Path:
-    """Write policy.json atomically; the arguments are :func:`policy_to_dict`'s."""
-    return write_atomic(path, dumps_policy(policy_to_dict(*args, **kwargs)))
+def write_policy(
+    path: str | os.PathLike[str],
+    scenario: Scenario,
+    policy: Policy,
+    missions: PolicyMissions,
+    value: PolicyValue,
+    files: dict[str, dict[str, str]] | None = None,
+    route: dict[str, Any] | None = None,
+) -> Path:
+    """Write policy.json atomically (see :func:`policy_to_dict`)."""
+    data = policy_to_dict(scenario, policy, missions, value, files=files, route=route)
+    return write_atomic(path, dumps_policy(data))
 
 
 # ---------------------------------------------------------------------------------------------
