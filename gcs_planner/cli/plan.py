@@ -49,6 +49,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         help="with --out, write the mission even when the chosen route is less likely to arrive "
         "than --min-probability (a warning names its probability)",
     )
+    p.add_argument(
+        "--policy",
+        action="store_true",
+        help="with --out, replan the chosen route at each failed fix and write the contingency "
+        "policy: primary.plan and one branch-<point>.plan per failure branch, policy.json (the "
+        "switches between them) and pictures of it",
+    )
     p.set_defaults(func=run)
 
 
@@ -56,10 +63,19 @@ def run(args: argparse.Namespace) -> int:
     from gcs_planner import plan_json
     from gcs_planner.policy import check_exportable
 
+    if args.policy and not args.out:
+        from gcs_planner.errors import InputError
+
+        raise InputError("--policy writes missions: give --out DIR", field="--policy")
     if args.out:
         from gcs_planner.mission.export import ALL_FILES
 
-        check_output_dir(args.out, replaceable=ALL_FILES)  # before the search, not after it
+        names: tuple[str, ...] | list[str] = ALL_FILES
+        if args.policy:
+            from gcs_planner.mission.policy_export import replaceable
+
+            names = replaceable(args.out, ALL_FILES)
+        check_output_dir(args.out, replaceable=names)  # before the search, not after it
     apply_vehicle_from(args)
     scenario = load_scenario_from_args(args)
     scenario = derive_envelope(args, scenario, wind_text=args.wind)
@@ -72,11 +88,28 @@ def run(args: argparse.Namespace) -> int:
         print(render(result))
     if not args.out:
         return 0
+    policy = None
+    if args.policy:
+        from gcs_planner.mission.policy_export import make_policy
+
+        policy = make_policy(result, plan_dict)
+        if not args.json:
+            from gcs_planner.mission.policy_export import summary
+
+            print("\n" + summary(result, policy))
     # Refused after the front is shown, so the user sees what else there is to choose from.
-    warning = check_exportable(
-        result.route.probability, result.chosen, result.min_probability, args.allow_risky
-    )
+    if policy is None:
+        warning = check_exportable(
+            result.route.probability, result.chosen, result.min_probability, args.allow_risky
+        )
+    else:  # what is flown is the policy: its probability is the one checked
+        from gcs_planner.mission.policy_export import check_policy_exportable
+
+        warning = check_policy_exportable(policy, result.min_probability, args.allow_risky)
     capture = plan_dict["capture"]["warning"]
+    if policy is not None and policy.capture_warnings:
+        branches = "; ".join(policy.capture_warnings)
+        capture = f"{capture}; {branches}" if capture else branches
     if capture and not args.allow_risky:
         # A correction point the true track may pass outside its capture radius: the mission is
         # likely lost there, so it is not handed out without being asked for.
@@ -85,7 +118,12 @@ def run(args: argparse.Namespace) -> int:
         raise RiskyRouteError(f"{capture}; not exported: pass --allow-risky to export it anyway")
     if capture:
         warning = f"{warning}; {capture}" if warning else capture
-    written = write_outputs(result, plan_dict, text, args.out)
+    extra: list[tuple[str, str | bytes]] = []
+    if policy is not None:
+        from gcs_planner.mission.policy_export import render_policy_files
+
+        extra = render_policy_files(result, plan_dict, policy)
+    written = write_outputs(result, plan_dict, text, args.out, extra)
     if not args.json:
         print(f"\nwrote {', '.join(str(p) for p in written)}")
     if warning:
@@ -97,13 +135,15 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def write_outputs(result: Plan, plan_dict: dict, text: str, out: Path) -> list[Path]:
+def write_outputs(
+    result: Plan, plan_dict: dict, text: str, out: Path, extra: list | None = None
+) -> list[Path]:
     """plan.json beside the mission files of the chosen route (default mission options; the
     `export` command takes the others), written as one folder: all of it or none (a Ctrl-C
     part-way leaves the previous folder, or none)."""
     from gcs_planner.mission.export import write_all
 
-    return write_all(plan_dict, out, extra=(("plan.json", text),))
+    return write_all(plan_dict, out, extra=(("plan.json", text), *(extra or ())))
 
 
 COLUMNS = (

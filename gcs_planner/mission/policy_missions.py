@@ -48,3 +48,10 @@ class PolicyMissions:
             if s.mission == mission and s.point == point:
                 return s
         return None
+
+    def changes_items(self, switch: Switch) -> bool:
+        """Whether ``switch`` changes the items the vehicle flies. False when the mission it
+        switches to has the same items as the one flown (the same points after the failure;
+        only switches further on differ): the ground station then only follows the other
+        mission's switches, and the vehicle's mission needs no upload."""
+        return self.missions[switch.mission].items != self.missions[switch.to_mission].items
