@@ -21,9 +21,9 @@ from gcs_planner.core.contingency import (
     _fly,
     _start_heading,
     evaluate,
-    replan_on_failure,
 )
 from gcs_planner.core.planner import plan
+from gcs_planner.core.replan import replan_on_failure
 from gcs_planner.errors import InfeasibleError, InputError
 from gcs_planner.geometry.legs import scenario_leg_model
 from gcs_planner.mission.items import MAV_CMD_NAV_WAYPOINT
@@ -148,7 +148,7 @@ def _replanned(seed: int, departure: float = 150.0):
     sc = _scenario(seed, 300.0, n_max=10)
     sc = dataclasses.replace(sc, params=dataclasses.replace(sc.params, departure=departure))
     result = plan(sc, min_probability=0.0)
-    return sc, result, replan_on_failure(sc, result.route)
+    return sc, result, replan_on_failure(sc, result.route).policy
 
 
 def _segment_lengths(sc: Scenario, policy: Policy, outs) -> list[float]:
@@ -342,25 +342,30 @@ def test_plan_policy_needs_out(tmp_path, capsys) -> None:
     assert "--policy" in capsys.readouterr().err
 
 
-def test_plan_policy_too_large_writes_nothing(tmp_path, capsys) -> None:
+def test_plan_policy_beyond_brute_force_and_bad_levels(tmp_path, capsys) -> None:
+    """15 correction points (beyond brute force and the exact policy front): the branches are
+    planned by the planner and the policy front says it is not proven; a bad --policy-levels
+    writes nothing and leaves an earlier folder as it was."""
     from gcs_planner.scenario.generate import random_scenario
 
     params = Parameters(30, 30, 30, 30, 30, 0.001, turn_radius=0.0, p_success=0.8)
     sc = random_scenario(15, 3, params=params, box=(60_000, 20_000, 2_000))
     csv = write_scenario_csv(sc, tmp_path / "big.csv")
     out = tmp_path / "out"
-    args = ["plan", str(csv), *_flags(sc), "--out", str(out), "--policy"]
-    assert main(args) == 2
+    args = ["plan", str(csv), *_flags(sc), "--out", str(out), "--policy", "--allow-risky"]
+    assert main([*args, "--policy-levels", "2"]) == 0
+    printed = capsys.readouterr().out
+    assert "policy front (the non-dominated of the front's routes" in printed
+    assert (out / "policy.json").exists() and (out / "primary.plan").exists()
+    bad = tmp_path / "bad"
+    bad.mkdir()
+    (bad / "plan.json").write_text("earlier")
+    bad_args = ["plan", str(csv), *_flags(sc), "--out", str(bad), "--policy"]
+    assert main([*bad_args, "--policy-levels", "0"]) == 2
     err = capsys.readouterr().err
-    assert "plan --policy: replanning on failure" in err and "Traceback" not in err
-    assert not out.exists()
-    # An earlier output folder is left as it was.
-    out.mkdir()
-    (out / "plan.json").write_text("earlier")
-    assert main(args) == 2
-    assert [p.name for p in out.iterdir()] == ["plan.json"]
-    assert (out / "plan.json").read_text() == "earlier"
-    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".out")]
+    assert "--policy-levels" in err and "Traceback" not in err
+    assert [p.name for p in bad.iterdir()] == ["plan.json"]
+    assert (bad / "plan.json").read_text() == "earlier"
 
 
 def test_branch_missions_get_the_capture_check() -> None:

@@ -56,6 +56,14 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "policy: primary.plan and one branch-<point>.plan per failure branch, policy.json (the "
         "switches between them) and pictures of it",
     )
+    p.add_argument(
+        "--policy-levels",
+        type=int,
+        default=1,
+        metavar="N",
+        help="with --policy, replan failure branches again at their own unreliable points, N "
+        "levels deep (default 1: the route's own failures)",
+    )
     p.set_defaults(func=run)
 
 
@@ -63,6 +71,10 @@ def run(args: argparse.Namespace) -> int:
     from gcs_planner import plan_json
     from gcs_planner.policy import check_exportable
 
+    if args.policy_levels < 1:
+        from gcs_planner.errors import InputError
+
+        raise InputError(f"must be >= 1, not {args.policy_levels}", field="--policy-levels")
     if args.policy and not args.out:
         from gcs_planner.errors import InputError
 
@@ -92,7 +104,7 @@ def run(args: argparse.Namespace) -> int:
     if args.policy:
         from gcs_planner.mission.policy_export import make_policy
 
-        policy = make_policy(result, plan_dict)
+        policy = make_policy(result, plan_dict, levels=args.policy_levels)
         if not args.json:
             from gcs_planner.mission.policy_export import summary
 

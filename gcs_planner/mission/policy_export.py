@@ -14,7 +14,14 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from gcs_planner.core.contingency import Policy, PolicyValue, evaluate, replan_on_failure
+from gcs_planner.core.contingency import Policy, PolicyValue, evaluate
+from gcs_planner.core.policy_front import (
+    EXACT_MAX_POINTS,
+    PolicyPoint,
+    exact_policy_front,
+    replanned_front,
+)
+from gcs_planner.core.replan import replan_on_failure, search_continuation
 from gcs_planner.errors import GcsPlannerError
 from gcs_planner.mission.policy_build import (
     MissionPath,
@@ -26,6 +33,7 @@ from gcs_planner.mission.policy_file import dumps_policy, policy_to_dict, value_
 from gcs_planner.mission.policy_missions import PolicyMissions
 from gcs_planner.mission.qgc_plan import dumps_plan
 from gcs_planner.mission.waypoints import dumps_waypoints
+from gcs_planner.scenario.model import Kind
 
 if TYPE_CHECKING:
     from gcs_planner.core.planner import Plan
@@ -54,6 +62,13 @@ class PolicyExport:
     # "mission <name>: point <id> is likely missed ..." for each branch that fails the capture
     # check (the primary is the chosen route, which the plan checks)
     capture_warnings: tuple[str, ...] = ()
+    # The policy front: the non-dominated of the front's routes and their replanned policies,
+    # or, on scenarios of at most EXACT_MAX_POINTS correction points, the exact front over all
+    # policies (``exact``).
+    policy_front: tuple[PolicyPoint, ...] = ()
+    exact: bool = False
+    levels: int = 1
+    unproven_branches: tuple[str, ...] = ()  # failed points whose continuation is not proven
 
 
 def replaceable(out: str | os.PathLike[str], route_files: tuple[str, ...]) -> list[str]:
@@ -65,25 +80,43 @@ def replaceable(out: str | os.PathLike[str], route_files: tuple[str, ...]) -> li
     return names
 
 
-def make_policy(result: Plan, plan: dict, **mission_options: Any) -> PolicyExport:
-    """Replan the chosen route (and, for the picture, every route of the front) on failure,
-    and build the missions of the chosen one. Raises GcsPlannerError when replanning refuses
-    the scenario (too many correction points for it)."""
+def make_policy(
+    result: Plan, plan: dict, *, levels: int = 1, **mission_options: Any
+) -> PolicyExport:
+    """Replan the chosen route (and, for the policy front and its picture, every route of the
+    front) on failure, each failure branch the continuation the planner chooses from the state
+    reached, as this plan chose its route (``core/replan.py``, ``levels`` deep), and build the
+    missions of the chosen one."""
     scenario = result.scenario
+    find = search_continuation(
+        scenario, choice=result.choice, min_probability=result.min_probability
+    )
     front = []
+    policies: list[Policy] = []
+    unproven: list[str] = []
     chosen: tuple[Policy, PolicyValue, PolicyValue] | None = None
     for k, route in enumerate(result.routes):
         try:
-            policy = replan_on_failure(scenario, route)
+            replanned = replan_on_failure(scenario, route, continuation=find, levels=levels)
         except GcsPlannerError as exc:
             raise GcsPlannerError(f"plan --policy: {exc}") from None
+        policy = replanned.policy
+        policies.append(policy)
         pv = evaluate(scenario, policy)
         rv = evaluate(scenario, Policy.from_route(scenario, route))
         front.append((k, rv, pv))
         if k == result.chosen:
             chosen = (policy, pv, rv)
+            unproven = replanned.unproven
     assert chosen is not None
     policy, value, route_value = chosen
+    corrections = sum(1 for k in scenario.kind if Kind(int(k)) in (Kind.V, Kind.H))
+    exact = corrections <= EXACT_MAX_POINTS
+    pfront = (
+        exact_policy_front(scenario)
+        if exact
+        else replanned_front(scenario, result.routes, policies)
+    )
     paths, switches = policy_mission_plans(scenario, policy, plan)
     missions = assemble(scenario, paths, switches, **mission_options)
     warnings = tuple(
@@ -92,8 +125,9 @@ def make_policy(result: Plan, plan: dict, **mission_options: Any) -> PolicyExpor
         if (w := _capture_warning(scenario, p.points)) is not None
     )
     return PolicyExport(
-        result.chosen, policy, value, route_value, missions, paths, switches, front, warnings
-    )
+        result.chosen, policy, value, route_value, missions, paths, switches, front, warnings,
+        tuple(pfront), exact, levels, tuple(unproven),
+    )  # fmt: skip
 
 
 def _capture_warning(scenario: Scenario, points: tuple[int, ...]) -> str | None:
@@ -126,7 +160,8 @@ def render_policy_files(result: Plan, plan: dict, exp: PolicyExport) -> list[tup
     made_from = {
         "front_index": exp.route_index,
         "points": route.ids(),
-        "method": "replan_on_failure",
+        "method": f"replan_on_failure, {exp.levels} level(s), continuations planned from "
+        "each failure state and chosen as the plan chooses",
         "value": value_to_dict(exp.route_value),
     }
     data = policy_to_dict(
@@ -207,9 +242,56 @@ def summary(result: Plan, exp: PolicyExport) -> str:
         f"{exp.value.length - exp.route_value.length:+,.1f} m in its longest outcome"
         f" ({exp.value.probability - best.probability:+.4f} against the most reliable route)"
     )
+    out += _policy_front_lines(exp)
     for s in exp.missions.switches:
         out.append(
             f"  switch: {s.mission} item {s.item} (point {s.point}) fails -> "
             f"{s.to_mission} from item {s.resume_item}"
         )
     return "\n".join(out)
+
+
+def _policy_front_lines(exp: PolicyExport) -> list[str]:
+    """The policy front beside the route front, and what it proves."""
+    if exp.exact:
+        how = "exact over every policy (dynamic programming over flight states)"
+    else:
+        how = (
+            "the non-dominated of the front's routes and their replanned policies; not proven "
+            f"optimal over all policies (exact up to {EXACT_MAX_POINTS} correction points)"
+        )
+    out = [f"policy front ({how}):"]
+    out.append(f"  {'F1 worst-case m':>16} {'F2':>4} {'F3 P arrive':>12} {'expected m':>11}  kind")
+    for pt in exp.policy_front:
+        v = pt.value
+        kind = "route" if _is_route(pt.policy) else "policy"
+        out.append(
+            f"  {_m(v.length):>16} {v.corrections:>4} {v.probability:>12.4f} "
+            f"{_m(v.expected_length_arrived):>11}  {kind}"
+        )
+    if exp.unproven_branches:
+        out.append(
+            "  continuations not proven optimal within their time limit, at: "
+            + ", ".join(exp.unproven_branches)
+        )
+    return out
+
+
+def _is_route(policy: Policy) -> bool:
+    """Whether the policy never branches (both outcomes continue the same way everywhere)."""
+    node = policy
+    while node.on_success is not None:
+        if node.on_failure is not node.on_success and _path(node.on_failure) != _path(
+            node.on_success
+        ):
+            return False
+        node = node.on_success
+    return True
+
+
+def _path(node: Policy) -> tuple[int, ...]:
+    pts = node.points
+    while node.on_success is not None:
+        node = node.on_success
+        pts += node.points[1:]
+    return pts

@@ -135,7 +135,7 @@ def tree_png(
     ax.set_ylabel("y north (km)")
     ax.set_aspect("equal", adjustable="datalim")
     ax.grid(True, alpha=0.3)
-    fig.legend(loc="outside lower center", ncol=2, fontsize=9, frameon=False)
+    fig.legend(loc="outside lower center", ncol=1, fontsize=9, frameon=False)
     ax.set_title(title, fontsize=12)
     return _png(fig)
 
