@@ -94,6 +94,9 @@ def plan_to_dict(plan: Plan) -> dict[str, Any]:
             # No origin: readers place the frame at the default one (and warn); say so.
             "origin_is_default": origin is None,
             "heading_at_a": None if s.heading_at_a is None else list(s.heading_at_a),
+            # Metres flown since the last vertical / horizontal reset at A: (0, 0) at a
+            # mission's start, a state's errors for a plan made from it (plan --from-state).
+            "initial_errors": list(s.initial_errors),
         },
         "parameters": s.params.to_dict(),
         "vehicle": {

@@ -15,6 +15,7 @@ from gcs_planner.cli.common import (
     load_scenario_from_args,
     plan_from_args,
 )
+from gcs_planner.cli.from_state import add_from_state_arguments, apply_from_state
 from gcs_planner.cli.vehicle_from import (
     add_envelope_arguments,
     add_vehicle_from_argument,
@@ -37,6 +38,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     add_plan_arguments(p)
     add_vehicle_from_argument(p)
     add_envelope_arguments(p)
+    add_from_state_arguments(p)
     p.add_argument("--json", action="store_true", help="print one JSON object, nothing else")
     p.add_argument(
         "--out",
@@ -91,6 +93,7 @@ def run(args: argparse.Namespace) -> int:
     apply_vehicle_from(args)
     scenario = load_scenario_from_args(args)
     scenario = derive_envelope(args, scenario, wind_text=args.wind)
+    scenario = apply_from_state(args, scenario)
     result = plan_from_args(args, scenario)
     plan_dict = plan_json.plan_to_dict(result)
     text = plan_json.dumps_dict(plan_dict)
