@@ -147,15 +147,21 @@ def dumps(plan: Plan) -> str:
     return dumps_dict(plan_to_dict(plan))
 
 
-def load_plan(path: str | Path) -> dict[str, Any]:
-    """Read a plan JSON file, checking that it is one (clear error otherwise)."""
+def read_json(path: str | Path, what: str) -> Any:
+    """The JSON value in ``path``; InputError naming the file when it is missing or not JSON
+    (``what``: "plan JSON", "policy JSON", for the message)."""
     path = Path(path)
     try:
-        data = json.loads(path.read_text(encoding="utf-8"))
+        return json.loads(path.read_text(encoding="utf-8"))
     except FileNotFoundError:
         raise InputError("no such file", file=str(path)) from None
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise InputError(f"not a readable plan JSON ({exc})", file=str(path)) from None
+        raise InputError(f"not a readable {what} ({exc})", file=str(path)) from None
+
+
+def load_plan(path: str | Path) -> dict[str, Any]:
+    """Read a plan JSON file, checking that it is one (clear error otherwise)."""
+    data = read_json(path, "plan JSON")
     if not isinstance(data, dict) or data.get("format") != FORMAT:
         raise InputError(
             f'not a gcs-planner plan (expected "format": "{FORMAT}")',

@@ -309,13 +309,9 @@ def _switch(r: _Reader, d: Any, field: str, missions: dict[str, Mission]) -> Swi
 
 def load_policy_dict(path: str | os.PathLike[str]) -> dict[str, Any]:
     """The JSON object of a policy file, its format and version checked."""
-    path = Path(path)
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise InputError("no such file", file=str(path)) from None
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise InputError(f"not a readable policy JSON ({exc})", file=str(path)) from None
+    from gcs_planner.plan_json import read_json
+
+    data = read_json(path, "policy JSON")
     r = _Reader(str(path))
     if not isinstance(data, dict) or data.get("format") != FORMAT:
         raise r.bad("format", f'not a gcs-planner policy (expected "format": "{FORMAT}")')
