@@ -25,12 +25,13 @@ import heapq
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit, types
+from numba import types
 from numba.typed import Dict
 
 from gcs_planner.core.cover_kernel import covers, larger, likely, row
 from gcs_planner.core.dominance_kernel import kept_dominates
 from gcs_planner.core.kernel_records import Graph, Nogoods, Pairs, Partial, ToGo
+from gcs_planner.jit import inner
 
 KIND_V, KIND_H = 2, 3
 
@@ -67,7 +68,7 @@ class Labels(NamedTuple):
     heap: list  # (f, order of keeping, row)
 
 
-@njit(cache=True)
+@inner
 def new_labels(route: Partial, f: float) -> Labels:
     """The labels of a search or probe from ``route`` (row 0), queued with ``f``."""
     n0 = len(route.sv)
@@ -94,7 +95,7 @@ def new_labels(route: Partial, f: float) -> Labels:
     )  # fmt: skip
 
 
-@njit(cache=True)
+@inner
 def grown(a: np.ndarray, need: int) -> np.ndarray:
     """``a``, or a copy with room for ``need`` (at least twice as long) when it has less."""
     if need <= len(a):
@@ -104,7 +105,7 @@ def grown(a: np.ndarray, need: int) -> np.ndarray:
     return out
 
 
-@njit(cache=True)
+@inner
 def kept_at(links: Dict, key: tuple) -> int:
     """The last entry kept at ``key`` (-1: none); entries link back from there."""
     if key in links:
@@ -112,7 +113,7 @@ def kept_at(links: Dict, key: tuple) -> int:
     return -1
 
 
-@njit(cache=True)
+@inner
 def propagate(
     sv: np.ndarray,
     sh: np.ndarray,
@@ -181,7 +182,7 @@ def propagate(
 
 
 
-@njit(cache=True)
+@inner
 def to_go_after(
     new_v: np.ndarray,
     new_h: np.ndarray,
@@ -214,7 +215,7 @@ def to_go_after(
     return larger(to_go.table[r], pairs.to_go.table[r2])
 
 
-@njit(cache=True)
+@inner
 def relaxed_legs(graph: Graph, pairs: Pairs, node: int, arc: int) -> np.ndarray:
     """The legs out of ``node`` after ``arc`` in the relaxation, in the graph's order: the
     pair relaxation's lb(i, j, t) when present (and an arc was flown), else the heading-free
@@ -227,7 +228,7 @@ def relaxed_legs(graph: Graph, pairs: Pairs, node: int, arc: int) -> np.ndarray:
     return graph.length[lo:hi]
 
 
-@njit(cache=True)
+@inner
 def keep(
     labels: Labels,
     count: int,
@@ -275,7 +276,7 @@ def keep(
     return child
 
 
-@njit(cache=True)
+@inner
 def expand(
     graph: Graph,
     to_go: ToGo,

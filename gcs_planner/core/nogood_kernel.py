@@ -9,14 +9,14 @@ back per key (point, critical points visited before it) from a typed dict beside
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 from numba.typed import Dict
 
 from gcs_planner.core.expand_kernel import Labels, new_key_dict
 from gcs_planner.core.kernel_records import Nogoods, empty_nogoods
+from gcs_planner.jit import inner, kernel
 
 
-@njit(cache=True)
+@kernel
 def link(head: Dict, nxt: np.ndarray, node: np.ndarray, mask: np.ndarray, base: int) -> None:
     """Link entries base .. base + len(node) - 1 of the nogood store into ``head``."""
     for x in range(len(node)):
@@ -25,7 +25,7 @@ def link(head: Dict, nxt: np.ndarray, node: np.ndarray, mask: np.ndarray, base: 
         head[key] = base + x
 
 
-@njit(cache=True)
+@inner
 def expanded_rows(labels: Labels, expanded: list) -> tuple:
     """The rows ``expanded`` of ``labels`` as the nogoods take them: (point, key mask, L, k,
     mass, arc, least v, least h, first state, states, and the states v, h, mass)."""

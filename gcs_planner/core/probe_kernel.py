@@ -20,7 +20,6 @@ from __future__ import annotations
 import heapq
 
 import numpy as np
-from numba import njit
 from numba.typed import Dict
 
 from gcs_planner.core.cover_kernel import (
@@ -45,9 +44,10 @@ from gcs_planner.core.kernel_records import (
     ToGo,
 )
 from gcs_planner.core.nogood_kernel import NogoodStore, expanded_rows
+from gcs_planner.jit import kernel
 
 
-@njit(cache=True)
+@kernel
 def probe(
     graph: Graph,
     to_go_table: ToGo,

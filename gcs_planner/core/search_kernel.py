@@ -20,7 +20,7 @@ import heapq
 import math
 
 import numpy as np
-from numba import njit, objmode, types
+from numba import objmode, types
 from numba.typed import Dict
 
 from gcs_planner.core.cover_kernel import best_rows, covers, likely
@@ -29,6 +29,7 @@ from gcs_planner.core.kernel_records import Graph, Legs, Nogoods, Pairs, Partial
 from gcs_planner.core.probability import PROB_EPS
 from gcs_planner.geometry.airplane_kernel import airplane_lengths, free_airplane_lengths
 from gcs_planner.geometry.dubins_kernel import cs_lengths
+from gcs_planner.jit import inner, kernel
 
 LEGS_ARRAYS, LEGS_PAIRS, LEGS_AIRPLANE, LEGS_CS3D = 0, 1, 2, 3
 # Labels between two looks at the budget (time limit, progress).
@@ -47,7 +48,7 @@ def tick(labels: int, queued: int, found: int, bound: float) -> bool:
     return budget.expired()
 
 
-@njit(cache=True)
+@inner
 def _add_found(
     inc_len: list, inc_k: list, inc_p: list, inc_path: list, alive: list, L: float, k: int,
     p: float, path: np.ndarray,
@@ -65,7 +66,7 @@ def _add_found(
     alive.append(True)
 
 
-@njit(cache=True)
+@inner
 def _found_arrays(
     inc_len: list, inc_k: list, inc_p: list, alive: list
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -86,7 +87,7 @@ def _found_arrays(
     return a_len, a_k, a_p, index
 
 
-@njit(cache=True)
+@inner
 def _incumbent_tables(
     inc_len: list, inc_k: list, inc_p: list, alive: list, kmax: int
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -106,7 +107,7 @@ def _incumbent_tables(
     return a_p[order], best_rows(a_len, a_k, order, kmax)
 
 
-@njit(cache=True)
+@inner
 def _flown_legs(
     legs: Legs, graph: Graph, pairs: Pairs, node: int, arc: int, heading: np.ndarray,
     has_heading: bool,
@@ -147,7 +148,7 @@ def _flown_legs(
     return flown, heads
 
 
-@njit(cache=True)
+@kernel
 def search(
     graph: Graph,
     to_go_table: ToGo,
