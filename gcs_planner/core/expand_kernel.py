@@ -25,23 +25,14 @@ import heapq
 from typing import NamedTuple
 
 import numpy as np
-from numba import types
-from numba.typed import Dict
 
 from gcs_planner.core.cover_kernel import covers, larger, likely, row
 from gcs_planner.core.dominance_kernel import kept_dominates
 from gcs_planner.core.kernel_records import Graph, Nogoods, Pairs, Partial, ToGo
+from gcs_planner.core.key_table_kernel import KeyTable, empty_table, kept_at, put, with_room
 from gcs_planner.jit import inner
 
 KIND_V, KIND_H = 2, 3
-
-KEY = types.UniTuple(types.int64, 2)  # (point, critical points visited, a bit each)
-
-
-def new_key_dict() -> Dict:
-    """An empty (point, critical-points mask) -> last entry kept dict."""
-    return Dict.empty(key_type=KEY, value_type=types.int64)
-
 
 class Labels(NamedTuple):
     """The partial routes of one search or probe, a row each (lists, appended by ``keep``),
@@ -64,7 +55,7 @@ class Labels(NamedTuple):
     next: list  # int64: the row kept before it at its key (-1: none)
     pool: list  # the error states: [v, h, mass] arrays, replaced when grown
     scratch: list  # [v, h, mass] arrays: the states of a leg being tried, replaced when grown
-    archive: Dict  # key -> the last row kept there
+    archive: list  # [KeyTable]: key -> the last row kept there (replaced when grown)
     heap: list  # (f, order of keeping, row)
 
 
@@ -90,7 +81,7 @@ def new_labels(route: Partial, f: float) -> Labels:
         [route.L], [route.k], [route.node], [route.arc], [np.int64(-1)], [route.mask],
         [route.mask_before], [np.int64(0)], [np.int64(n0)], [mass], [vmin], [hmin],
         [route.to_go.copy()], [np.int64(-1)], [sv, sh, sm], [np.empty(64), np.empty(64),
-        np.empty(64)], Dict.empty(key_type=KEY, value_type=types.int64),
+        np.empty(64)], [empty_table(64)],
         [(f, np.int64(-1), np.int64(0))],
     )  # fmt: skip
 
@@ -103,14 +94,6 @@ def grown(a: np.ndarray, need: int) -> np.ndarray:
     out = np.empty(max(need, 2 * len(a)), a.dtype)
     out[: len(a)] = a
     return out
-
-
-@inner
-def kept_at(links: Dict, key: tuple) -> int:
-    """The last entry kept at ``key`` (-1: none); entries link back from there."""
-    if key in links:
-        return links[key]
-    return -1
 
 
 @inner
@@ -255,7 +238,6 @@ def keep(
         pool[x][used : used + count] = scratch[x][:count]
     child = len(labels.L)
     key_mask = labels.mask[parent]
-    key = (np.int64(node), key_mask)
     labels.L.append(L)
     labels.k.append(k)
     labels.node.append(node)
@@ -270,7 +252,9 @@ def keep(
     labels.hmin.append(hmin)
     labels.to_go.append(to_go)
     labels.next.append(link)
-    labels.archive[key] = child
+    archive = with_room(labels.archive[0], 1)
+    labels.archive[0] = archive
+    put(archive, node, key_mask, child)
     # Queued by f, then the order of keeping (that of the Python search's pushes).
     heapq.heappush(labels.heap, (L + to_go[len(to_go) - 1], np.int64(child), np.int64(child)))
     return child
@@ -282,7 +266,7 @@ def expand(
     to_go: ToGo,
     pairs: Pairs,
     labels: Labels,
-    nogood_head: Dict,
+    nogood_head: KeyTable,
     nogoods: Nogoods,
     lab: int,
     legs: np.ndarray,
@@ -351,17 +335,16 @@ def expand(
         for c in range(count):
             nv = min(nv, new_v[c])
             nh = min(nh, new_h[c])
-        key = (j, mask)
         # (Each dominance test is asked only where something is kept: a call with arrays
         # costs an atomic reference count per array.)
-        head = kept_at(archive, key)
+        head = kept_at(archive[0], j, mask)
         if head >= 0 and kept_dominates(
             labels, sv, sh, sm, head, nL, k + 1, new_mass, arc_in, nv, nh, new_v, new_h,
             new_m, 0, count, pairs,
         ):  # fmt: skip
             continue
-        if len(nogood_head) > 0:
-            first_ng = kept_at(nogood_head, key)
+        if nogood_head.size[0] > 0:
+            first_ng = kept_at(nogood_head, j, mask)
             if first_ng >= 0 and kept_dominates(
                 nogoods, nogoods.sv, nogoods.sh, nogoods.sm, first_ng, nL, k + 1, new_mass,
                 arc_in, nv, nh, new_v, new_h, new_m, 0, count, pairs,

@@ -20,12 +20,12 @@ import heapq
 import math
 
 import numpy as np
-from numba import objmode, types
-from numba.typed import Dict
+from numba import objmode
 
 from gcs_planner.core.cover_kernel import best_rows, covers, likely
-from gcs_planner.core.expand_kernel import KEY, expand, new_labels, relaxed_legs
+from gcs_planner.core.expand_kernel import expand, new_labels, relaxed_legs
 from gcs_planner.core.kernel_records import Graph, Legs, Nogoods, Pairs, Partial, Seeds, ToGo
+from gcs_planner.core.key_table_kernel import empty_table
 from gcs_planner.core.probability import PROB_EPS
 from gcs_planner.geometry.airplane_kernel import airplane_lengths, free_airplane_lengths
 from gcs_planner.geometry.dubins_kernel import cs_lengths
@@ -193,7 +193,7 @@ def search(
     heading = [legs.heading_a.copy()]  # per row: the heading it ends with, when it has one
     has_heading = [legs.has_heading_a]
     # A search keeps no nogoods (the probes' store, empty).
-    no_head = Dict.empty(key_type=KEY, value_type=types.int64)
+    no_head = empty_table(1)
     empty_i = np.empty(0, np.int64)
     empty_f = np.empty(0)
     no_nogoods = Nogoods(
