@@ -158,7 +158,9 @@ def level_tables(
     next_bad = np.empty((nlev + 1, kmax + 2), np.int64)
     for i in range(nlev + 1):
         if i > 0:
-            level_best[i] = best_rows[likely(probs_sorted, levels[i - 1])]
+            best = best_rows[likely(probs_sorted, levels[i - 1])]
+            for c in range(kmax + 1):  # (not a row assignment: see expand_kernel.new_labels)
+                level_best[i, c] = best[c]
         next_bad[i, kmax + 1] = kmax + 1
         for c in range(kmax, -1, -1):
             bad = not has_ceil or ceil_rows[i, c] < level_best[i, c]

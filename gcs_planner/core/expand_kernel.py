@@ -67,13 +67,15 @@ def new_labels(route: Partial, f: float) -> Labels:
     sv = np.empty(size)
     sh = np.empty(size)
     sm = np.empty(size)
-    sv[:n0] = route.sv
-    sh[:n0] = route.sh
-    sm[:n0] = route.sm
     mass = 0.0
     vmin = np.inf
     hmin = np.inf
+    # The states copied element by element: numba compiles a slice assignment with its
+    # shape-mismatch message, some 2 s of string formatting on the first plan.
     for i in range(n0):
+        sv[i] = route.sv[i]
+        sh[i] = route.sh[i]
+        sm[i] = route.sm[i]
         mass += route.sm[i]
         vmin = min(vmin, route.sv[i])
         hmin = min(hmin, route.sh[i])
@@ -92,7 +94,8 @@ def grown(a: np.ndarray, need: int) -> np.ndarray:
     if need <= len(a):
         return a
     out = np.empty(max(need, 2 * len(a)), a.dtype)
-    out[: len(a)] = a
+    for i in range(len(a)):  # (not a slice assignment: see new_labels)
+        out[i] = a[i]
     return out
 
 
@@ -235,7 +238,9 @@ def keep(
     for x in range(3):
         if used + count > len(pool[x]):
             pool[x] = grown(pool[x], used + count)
-        pool[x][used : used + count] = scratch[x][:count]
+        into, states = pool[x], scratch[x]
+        for c in range(count):  # (not a slice assignment: see new_labels)
+            into[used + c] = states[c]
     child = len(labels.L)
     key_mask = labels.mask[parent]
     labels.L.append(L)

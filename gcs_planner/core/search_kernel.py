@@ -270,7 +270,9 @@ def search(
         f_ptr[g + 1] = f_ptr[g] + len(inc_path[index[g]])
     f_points = np.empty(f_ptr[F], np.int64)
     for g in range(F):
-        f_points[f_ptr[g] : f_ptr[g + 1]] = inc_path[index[g]]
+        found_path = inc_path[index[g]]
+        for i in range(len(found_path)):  # (not a slice assignment: expand_kernel.new_labels)
+            f_points[f_ptr[g] + i] = found_path[i]
     Q = len(heap)
     o_f = np.empty(Q)
     o_L = np.empty(Q)
@@ -284,5 +286,7 @@ def search(
         o_ptr[x + 1] = o_ptr[x] + len(labels.to_go[lab])
     o_to_go = np.empty(o_ptr[Q])
     for x in range(Q):
-        o_to_go[o_ptr[x] : o_ptr[x + 1]] = labels.to_go[heap[x][2]]
+        bound = labels.to_go[heap[x][2]]
+        for m in range(len(bound)):
+            o_to_go[o_ptr[x] + m] = bound[m]
     return count, stopped, f_len, f_k, f_p, f_ptr, f_points, o_f, o_L, o_k, o_mass, o_ptr, o_to_go
