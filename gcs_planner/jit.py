@@ -5,10 +5,10 @@ loads numba).
 numba gives every compiled function two wrappers besides its code: one converting Python
 objects to its arguments and back (for records of arrays and lists, the largest code of a
 small function) and one for passing it as a first-class function value. Each is lowered,
-optimised and turned into machine code once for the function and again inside every kernel
-it is linked into. The kernels never pass functions as values, and an ``inner`` function is
-never called from Python, so neither gets the wrappers it does not use: a third less
-compiling for the first plan (dataset 2, turns, three objectives: 34 to 27 s of CPU in numba).
+optimised and turned into machine code with the function, and carried into every kernel it is
+linked into. The kernels never pass functions as values, and an ``inner`` function is never
+called from Python, so neither gets the wrappers it does not use: a fifth less compiling for
+the first plan (dataset 2, turns, three objectives: 34.5 to 28.2 s of CPU in numba).
 Both are cached (``cache=True``) as before. An ``inner`` function called from Python raises
 numba's "no CPython wrapper" error; tests reach one through a kernel of their own.
 """
