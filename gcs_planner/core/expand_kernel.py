@@ -15,8 +15,8 @@ pool; its bound to go (G per further correction) an array of its own; the rows k
 (point, critical points visited) linked back from ``archive[key]`` through ``next``.
 
 numba's cache is keyed by each kernel's own source file: after editing this module (or the
-cover, dominance and nogood kernels) the cached ``probe`` and ``search`` still hold the old
-code until their own files change; clear the ``__pycache__/*.nbi``/``*.nbc`` files.
+cover, dominance, nogood and key-table kernels) the cached ``probe`` and ``search`` still hold
+the old code until their own files change; clear the ``__pycache__/*.nbi``/``*.nbc`` files.
 """
 
 from __future__ import annotations
