@@ -11,6 +11,7 @@ import collections
 
 import numpy as np
 import pytest
+from numba import njit
 from test_focus_turns import sparse_scenario
 from test_probes import probed_scenario
 
@@ -88,6 +89,33 @@ def test_the_kernel_shares_the_models_constants() -> None:
     assert dominance_kernel.MAX_UNIONS == dominance.MAX_UNIONS
 
 
+# The kernels' inner functions have no wrapper for Python callers (``gcs_planner.jit.inner``):
+# the tests call each through a compiled function of their own.
+@njit
+def stochastically_dominates(*args):  # noqa: ANN002, ANN201
+    return dominance_kernel.stochastically_dominates(*args)
+
+
+@njit
+def failure_rows(*args):  # noqa: ANN002, ANN201
+    return cover_kernel.failure_rows(*args)
+
+
+@njit
+def best_rows(*args):  # noqa: ANN002, ANN201
+    return cover_kernel.best_rows(*args)
+
+
+@njit
+def level_tables(*args):  # noqa: ANN002, ANN201
+    return cover_kernel.level_tables(*args)
+
+
+@njit
+def covers_by_level(*args):  # noqa: ANN002, ANN201
+    return cover_kernel.covers_by_level(*args)
+
+
 def _pool(states: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return (
         np.array([s[0] for s in states], float),
@@ -113,7 +141,7 @@ def test_compiled_dominance_between_distributions_answers_as_the_python_one() ->
         }
         shift = float(rng.choice([0.0, 0.5, 1.0]))
         want = dominance._stochastically_dominates(dominance._shifted(d1, shift), d2)
-        got = dominance_kernel.stochastically_dominates(
+        got = stochastically_dominates(
             *_pool(d1), 0, len(d1), shift, *_pool(d2), 0, len(d2)
         )
         assert got == want, (d1, d2, shift)
@@ -143,7 +171,7 @@ def test_compiled_bounds_per_probability_level_equal_the_python_ones(dataset_pat
             }
             gap = float(rng.choice([1e-3, 0.01, 0.05, 0.2, 0.5]))
             want = fb.bound(j, states, gap)
-            got = cover_kernel.failure_rows(record, j, *_pool(states), 0, len(states), gap)
+            got = failure_rows(record, j, *_pool(states), 0, len(states), gap)
             if want is None:
                 assert len(got) == 0
                 continue
@@ -191,7 +219,7 @@ def test_compiled_test_per_probability_level_answers_as_the_python_one() -> None
         levels = np.array(inc.levels(), float)
         p = np.array([f.probability for f in inc.found], float)
         order = np.argsort(p, kind="stable").astype(np.int64)
-        best = cover_kernel.best_rows(
+        best = best_rows(
             np.array([f.length for f in inc.found], float),
             np.array([f.corrections for f in inc.found], np.int64), order, kmax,
         )  # fmt: skip
@@ -200,9 +228,9 @@ def test_compiled_test_per_probability_level_answers_as_the_python_one() -> None
         if has_ceil:
             above = [*levels, -np.inf]
             ceil_rows = np.vstack([ceiling.least_above(float(lo)) for lo in above])
-        tables = cover_kernel.level_tables(levels, np.sort(p), best, has_ceil, ceil_rows, kmax)
+        tables = level_tables(levels, np.sort(p), best, has_ceil, ceil_rows, kmax)
         one = np.zeros(1)
-        got = cover_kernel.covers_by_level(
+        got = covers_by_level(
             length, k, mass, to_go, kmax, levels, *tables, has_ceil, ceil_rows, NO_FAILURES, 0,
             one, one, np.ones(1), 0, 1,
         )  # fmt: skip

@@ -8,15 +8,15 @@ Shared by the compiled probes (``probe_kernel``) and searches (``search_kernel``
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
 from gcs_planner.core.kernel_records import Failures
 from gcs_planner.core.probability import PROB_EPS
+from gcs_planner.jit import inner
 
 MASS_SLACK = 1e-13  # as failure_bounds._MASS_SLACK
 
 
-@njit(cache=True)
+@inner
 def row(indptr: np.ndarray, e_max: np.ndarray, j: int, e: float) -> int:
     """CostToGo._row: the first row of node j whose E is >= e, -1 when none."""
     lo = indptr[j]
@@ -25,7 +25,7 @@ def row(indptr: np.ndarray, e_max: np.ndarray, j: int, e: float) -> int:
     return i if i < hi else -1
 
 
-@njit(cache=True)
+@inner
 def larger(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """bnb._larger: the pointwise larger of two bounds per m, each carried on with its last."""
     width = max(len(a), len(b))
@@ -39,7 +39,7 @@ def larger(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return out
 
 
-@njit(cache=True)
+@inner
 def best_rows(inc_len: np.ndarray, inc_k: np.ndarray, order: np.ndarray, kmax: int) -> np.ndarray:
     """_Incumbents.best per number of found routes counted (the likeliest ``c`` of them, by
     ``order``, ascending probability): row c, best[c][k] the least length with <= k
@@ -57,13 +57,13 @@ def best_rows(inc_len: np.ndarray, inc_k: np.ndarray, order: np.ndarray, kmax: i
     return rows
 
 
-@njit(cache=True)
+@inner
 def likely(probs_sorted: np.ndarray, mass: float) -> int:
     """How many found routes are at least ``mass`` likely (within PROB_EPS)."""
     return len(probs_sorted) - np.searchsorted(probs_sorted, mass - PROB_EPS)
 
 
-@njit(cache=True)
+@inner
 def covers(length: float, k: int, to_go: np.ndarray, best: np.ndarray, kmax: int) -> bool:
     """_Incumbents.covers with ``best`` the row for the partial route's mass."""
     m = min(len(to_go), kmax - k + 1)
@@ -75,7 +75,7 @@ def covers(length: float, k: int, to_go: np.ndarray, best: np.ndarray, kmax: int
     return True
 
 
-@njit(cache=True)
+@inner
 def dominated_end(
     inc_len: np.ndarray, inc_k: np.ndarray, inc_p: np.ndarray, length: float, k: int, p: float
 ) -> bool:
@@ -87,7 +87,7 @@ def dominated_end(
     return least <= length
 
 
-@njit(cache=True)
+@inner
 def forced(weight: float, gap: float, failures: int, q_fail: float) -> int:
     """FailureBounds.forced: the first failures a state of mass ``weight`` must survive in a
     continuation that loses less than ``gap`` (-1: none, the state may die whole)."""
@@ -99,7 +99,7 @@ def forced(weight: float, gap: float, failures: int, q_fail: float) -> int:
     return q
 
 
-@njit(cache=True)
+@inner
 def failure_rows(
     failures: Failures,
     at: int,
@@ -139,7 +139,7 @@ def failure_rows(
     return out
 
 
-@njit(cache=True)
+@inner
 def level_tables(
     levels: np.ndarray,
     probs_sorted: np.ndarray,
@@ -158,7 +158,9 @@ def level_tables(
     next_bad = np.empty((nlev + 1, kmax + 2), np.int64)
     for i in range(nlev + 1):
         if i > 0:
-            level_best[i] = best_rows[likely(probs_sorted, levels[i - 1])]
+            best = best_rows[likely(probs_sorted, levels[i - 1])]
+            for c in range(kmax + 1):  # (not a row assignment: see expand_kernel.new_labels)
+                level_best[i, c] = best[c]
         next_bad[i, kmax + 1] = kmax + 1
         for c in range(kmax, -1, -1):
             bad = not has_ceil or ceil_rows[i, c] < level_best[i, c]
@@ -166,7 +168,7 @@ def level_tables(
     return level_best, next_bad
 
 
-@njit(cache=True)
+@inner
 def covers_by_level(
     length: float,
     k: int,

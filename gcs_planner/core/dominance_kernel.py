@@ -7,15 +7,15 @@ relaxation's margin between arcs and Hall's condition between error-state distri
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
 from gcs_planner.core.kernel_records import Pairs
 from gcs_planner.core.probability import PROB_EPS
+from gcs_planner.jit import inner
 
 MAX_UNIONS = 256  # as bnb.MAX_UNIONS
 
 
-@njit(cache=True)
+@inner
 def margin(pairs: Pairs, kept: int, new: int) -> float:
     """PairBounds.margin (0 without pairs or for the same arc)."""
     if not pairs.present or kept == new:
@@ -34,7 +34,7 @@ def margin(pairs: Pairs, kept: int, new: int) -> float:
     return m
 
 
-@njit(cache=True)
+@inner
 def stochastically_dominates(
     v1: np.ndarray,
     h1: np.ndarray,
@@ -124,7 +124,7 @@ def stochastically_dominates(
     return True
 
 
-@njit(cache=True)
+@inner
 def kept_dominates(
     kept,  # noqa: ANN001 (a Nogoods record, or a search's Labels: the fields read are the same)
     kept_v: np.ndarray,

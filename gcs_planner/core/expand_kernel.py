@@ -15,8 +15,8 @@ pool; its bound to go (G per further correction) an array of its own; the rows k
 (point, critical points visited) linked back from ``archive[key]`` through ``next``.
 
 numba's cache is keyed by each kernel's own source file: after editing this module (or the
-cover, dominance and nogood kernels) the cached ``probe`` and ``search`` still hold the old
-code until their own files change; clear the ``__pycache__/*.nbi``/``*.nbc`` files.
+cover, dominance, nogood and key-table kernels) the cached ``probe`` and ``search`` still hold
+the old code until their own files change; clear the ``__pycache__/*.nbi``/``*.nbc`` files.
 """
 
 from __future__ import annotations
@@ -25,22 +25,14 @@ import heapq
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit, types
-from numba.typed import Dict
 
 from gcs_planner.core.cover_kernel import covers, larger, likely, row
 from gcs_planner.core.dominance_kernel import kept_dominates
 from gcs_planner.core.kernel_records import Graph, Nogoods, Pairs, Partial, ToGo
+from gcs_planner.core.key_table_kernel import KeyTable, empty_table, kept_at, put, with_room
+from gcs_planner.jit import inner
 
 KIND_V, KIND_H = 2, 3
-
-KEY = types.UniTuple(types.int64, 2)  # (point, critical points visited, a bit each)
-
-
-def new_key_dict() -> Dict:
-    """An empty (point, critical-points mask) -> last entry kept dict."""
-    return Dict.empty(key_type=KEY, value_type=types.int64)
-
 
 class Labels(NamedTuple):
     """The partial routes of one search or probe, a row each (lists, appended by ``keep``),
@@ -63,11 +55,11 @@ class Labels(NamedTuple):
     next: list  # int64: the row kept before it at its key (-1: none)
     pool: list  # the error states: [v, h, mass] arrays, replaced when grown
     scratch: list  # [v, h, mass] arrays: the states of a leg being tried, replaced when grown
-    archive: Dict  # key -> the last row kept there
+    archive: list  # [KeyTable]: key -> the last row kept there (replaced when grown)
     heap: list  # (f, order of keeping, row)
 
 
-@njit(cache=True)
+@inner
 def new_labels(route: Partial, f: float) -> Labels:
     """The labels of a search or probe from ``route`` (row 0), queued with ``f``."""
     n0 = len(route.sv)
@@ -75,13 +67,15 @@ def new_labels(route: Partial, f: float) -> Labels:
     sv = np.empty(size)
     sh = np.empty(size)
     sm = np.empty(size)
-    sv[:n0] = route.sv
-    sh[:n0] = route.sh
-    sm[:n0] = route.sm
     mass = 0.0
     vmin = np.inf
     hmin = np.inf
+    # The states copied element by element: numba compiles a slice assignment with its
+    # shape-mismatch message, some 2 s of string formatting on the first plan.
     for i in range(n0):
+        sv[i] = route.sv[i]
+        sh[i] = route.sh[i]
+        sm[i] = route.sm[i]
         mass += route.sm[i]
         vmin = min(vmin, route.sv[i])
         hmin = min(hmin, route.sh[i])
@@ -89,30 +83,23 @@ def new_labels(route: Partial, f: float) -> Labels:
         [route.L], [route.k], [route.node], [route.arc], [np.int64(-1)], [route.mask],
         [route.mask_before], [np.int64(0)], [np.int64(n0)], [mass], [vmin], [hmin],
         [route.to_go.copy()], [np.int64(-1)], [sv, sh, sm], [np.empty(64), np.empty(64),
-        np.empty(64)], Dict.empty(key_type=KEY, value_type=types.int64),
+        np.empty(64)], [empty_table(64)],
         [(f, np.int64(-1), np.int64(0))],
     )  # fmt: skip
 
 
-@njit(cache=True)
+@inner
 def grown(a: np.ndarray, need: int) -> np.ndarray:
     """``a``, or a copy with room for ``need`` (at least twice as long) when it has less."""
     if need <= len(a):
         return a
     out = np.empty(max(need, 2 * len(a)), a.dtype)
-    out[: len(a)] = a
+    for i in range(len(a)):  # (not a slice assignment: see new_labels)
+        out[i] = a[i]
     return out
 
 
-@njit(cache=True)
-def kept_at(links: Dict, key: tuple) -> int:
-    """The last entry kept at ``key`` (-1: none); entries link back from there."""
-    if key in links:
-        return links[key]
-    return -1
-
-
-@njit(cache=True)
+@inner
 def propagate(
     sv: np.ndarray,
     sh: np.ndarray,
@@ -181,7 +168,7 @@ def propagate(
 
 
 
-@njit(cache=True)
+@inner
 def to_go_after(
     new_v: np.ndarray,
     new_h: np.ndarray,
@@ -214,7 +201,7 @@ def to_go_after(
     return larger(to_go.table[r], pairs.to_go.table[r2])
 
 
-@njit(cache=True)
+@inner
 def relaxed_legs(graph: Graph, pairs: Pairs, node: int, arc: int) -> np.ndarray:
     """The legs out of ``node`` after ``arc`` in the relaxation, in the graph's order: the
     pair relaxation's lb(i, j, t) when present (and an arc was flown), else the heading-free
@@ -227,7 +214,7 @@ def relaxed_legs(graph: Graph, pairs: Pairs, node: int, arc: int) -> np.ndarray:
     return graph.length[lo:hi]
 
 
-@njit(cache=True)
+@inner
 def keep(
     labels: Labels,
     count: int,
@@ -251,10 +238,11 @@ def keep(
     for x in range(3):
         if used + count > len(pool[x]):
             pool[x] = grown(pool[x], used + count)
-        pool[x][used : used + count] = scratch[x][:count]
+        into, states = pool[x], scratch[x]
+        for c in range(count):  # (not a slice assignment: see new_labels)
+            into[used + c] = states[c]
     child = len(labels.L)
     key_mask = labels.mask[parent]
-    key = (np.int64(node), key_mask)
     labels.L.append(L)
     labels.k.append(k)
     labels.node.append(node)
@@ -269,19 +257,21 @@ def keep(
     labels.hmin.append(hmin)
     labels.to_go.append(to_go)
     labels.next.append(link)
-    labels.archive[key] = child
+    archive = with_room(labels.archive[0], 1)
+    labels.archive[0] = archive
+    put(archive, node, key_mask, child)
     # Queued by f, then the order of keeping (that of the Python search's pushes).
     heapq.heappush(labels.heap, (L + to_go[len(to_go) - 1], np.int64(child), np.int64(child)))
     return child
 
 
-@njit(cache=True)
+@inner
 def expand(
     graph: Graph,
     to_go: ToGo,
     pairs: Pairs,
     labels: Labels,
-    nogood_head: Dict,
+    nogood_head: KeyTable,
     nogoods: Nogoods,
     lab: int,
     legs: np.ndarray,
@@ -350,17 +340,16 @@ def expand(
         for c in range(count):
             nv = min(nv, new_v[c])
             nh = min(nh, new_h[c])
-        key = (j, mask)
         # (Each dominance test is asked only where something is kept: a call with arrays
         # costs an atomic reference count per array.)
-        head = kept_at(archive, key)
+        head = kept_at(archive[0], j, mask)
         if head >= 0 and kept_dominates(
             labels, sv, sh, sm, head, nL, k + 1, new_mass, arc_in, nv, nh, new_v, new_h,
             new_m, 0, count, pairs,
         ):  # fmt: skip
             continue
-        if len(nogood_head) > 0:
-            first_ng = kept_at(nogood_head, key)
+        if nogood_head.size[0] > 0:
+            first_ng = kept_at(nogood_head, j, mask)
             if first_ng >= 0 and kept_dominates(
                 nogoods, nogoods.sv, nogoods.sh, nogoods.sm, first_ng, nL, k + 1, new_mass,
                 arc_in, nv, nh, new_v, new_h, new_m, 0, count, pairs,

@@ -3,29 +3,34 @@ probe proved covered, kept across probes (the found routes only grow, so they st
 and asked by every later probe (``expand_kernel.expand``) as its own kept partial routes are.
 
 Entries live in the arrays of a ``kernel_records.Nogoods`` record, grown when full, linked
-back per key (point, critical points visited before it) from a typed dict beside it.
+back per key (point, critical points visited before it) from a ``key_table_kernel.KeyTable``
+beside it.
 """
 
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
-from numba.typed import Dict
 
-from gcs_planner.core.expand_kernel import Labels, new_key_dict
+from gcs_planner.core.expand_kernel import Labels
 from gcs_planner.core.kernel_records import Nogoods, empty_nogoods
+from gcs_planner.core.key_table_kernel import KeyTable, kept_at, key_table, put, with_room
+from gcs_planner.jit import inner, kernel
 
 
-@njit(cache=True)
-def link(head: Dict, nxt: np.ndarray, node: np.ndarray, mask: np.ndarray, base: int) -> None:
-    """Link entries base .. base + len(node) - 1 of the nogood store into ``head``."""
+@kernel
+def link(
+    head: KeyTable, nxt: np.ndarray, node: np.ndarray, mask: np.ndarray, base: int
+) -> KeyTable:
+    """Link entries base .. base + len(node) - 1 of the nogood store into ``head`` (or a larger
+    copy of it, returned)."""
+    head = with_room(head, len(node))
     for x in range(len(node)):
-        key = (node[x], mask[x])
-        nxt[base + x] = head.get(key, -1)
-        head[key] = base + x
+        nxt[base + x] = kept_at(head, node[x], mask[x])
+        put(head, node[x], mask[x], base + x)
+    return head
 
 
-@njit(cache=True)
+@inner
 def expanded_rows(labels: Labels, expanded: list) -> tuple:
     """The rows ``expanded`` of ``labels`` as the nogoods take them: (point, key mask, L, k,
     mass, arc, least v, least h, first state, states, and the states v, h, mass)."""
@@ -74,7 +79,7 @@ class NogoodStore:
     arrays, the first ``entries`` of them and ``states`` of their states in use)."""
 
     def __init__(self) -> None:
-        self.head = new_key_dict()
+        self.head = key_table()
         self.entries = 0
         self.states = 0
         self.store: Nogoods = empty_nogoods(256, 1024)
@@ -93,5 +98,5 @@ class NogoodStore:
         sL[e0:e1], sk[e0:e1], smass[e0:e1], sarc[e0:e1] = L, k, mass, arc
         svmin[e0:e1], shmin[e0:e1], sss[e0:e1], ssn[e0:e1] = vmin, hmin, ss + s0, sn
         ssv[s0:s1], ssh[s0:s1], ssm[s0:s1] = sv, sh, sm
-        link(self.head, nxt, node, mask, e0)
+        self.head = link(self.head, nxt, node, mask, e0)
         self.entries, self.states = e1, s1

@@ -20,8 +20,6 @@ from __future__ import annotations
 import heapq
 
 import numpy as np
-from numba import njit
-from numba.typed import Dict
 
 from gcs_planner.core.cover_kernel import (
     best_rows,
@@ -32,7 +30,7 @@ from gcs_planner.core.cover_kernel import (
     likely,
 )
 from gcs_planner.core.dominance_kernel import kept_dominates
-from gcs_planner.core.expand_kernel import expand, kept_at, new_labels, relaxed_legs
+from gcs_planner.core.expand_kernel import expand, new_labels, relaxed_legs
 from gcs_planner.core.kernel_records import (
     NO_FAILURES,
     NO_PAIRS,
@@ -44,10 +42,12 @@ from gcs_planner.core.kernel_records import (
     Partial,
     ToGo,
 )
+from gcs_planner.core.key_table_kernel import KeyTable, kept_at
 from gcs_planner.core.nogood_kernel import NogoodStore, expanded_rows
+from gcs_planner.jit import kernel
 
 
-@njit(cache=True)
+@kernel
 def probe(
     graph: Graph,
     to_go_table: ToGo,
@@ -55,7 +55,7 @@ def probe(
     failures: Failures,
     found: Incumbents,
     route: Partial,
-    nogood_head: Dict,
+    nogood_head: KeyTable,
     nogoods: Nogoods,
     max_labels: int,
 ):  # noqa: ANN201  (a tuple of many arrays; see the Python side, ``CompiledProbes``)
@@ -77,7 +77,7 @@ def probe(
                empty_i, empty_i, empty_f, empty_f, empty_f)  # fmt: skip
 
     # The partial route itself may be covered by a nogood already.
-    first_ng = kept_at(nogood_head, (route.node, route.mask_before))
+    first_ng = kept_at(nogood_head, route.node, route.mask_before)
     pool = labels.pool
     if first_ng >= 0 and kept_dominates(
         nogoods, nogoods.sv, nogoods.sh, nogoods.sm, first_ng, route.L, route.k,

@@ -20,15 +20,16 @@ import heapq
 import math
 
 import numpy as np
-from numba import njit, objmode, types
-from numba.typed import Dict
+from numba import objmode
 
 from gcs_planner.core.cover_kernel import best_rows, covers, likely
-from gcs_planner.core.expand_kernel import KEY, expand, new_labels, relaxed_legs
+from gcs_planner.core.expand_kernel import expand, new_labels, relaxed_legs
 from gcs_planner.core.kernel_records import Graph, Legs, Nogoods, Pairs, Partial, Seeds, ToGo
+from gcs_planner.core.key_table_kernel import empty_table
 from gcs_planner.core.probability import PROB_EPS
 from gcs_planner.geometry.airplane_kernel import airplane_lengths, free_airplane_lengths
 from gcs_planner.geometry.dubins_kernel import cs_lengths
+from gcs_planner.jit import inner, kernel
 
 LEGS_ARRAYS, LEGS_PAIRS, LEGS_AIRPLANE, LEGS_CS3D = 0, 1, 2, 3
 # Labels between two looks at the budget (time limit, progress).
@@ -47,7 +48,7 @@ def tick(labels: int, queued: int, found: int, bound: float) -> bool:
     return budget.expired()
 
 
-@njit(cache=True)
+@inner
 def _add_found(
     inc_len: list, inc_k: list, inc_p: list, inc_path: list, alive: list, L: float, k: int,
     p: float, path: np.ndarray,
@@ -65,7 +66,7 @@ def _add_found(
     alive.append(True)
 
 
-@njit(cache=True)
+@inner
 def _found_arrays(
     inc_len: list, inc_k: list, inc_p: list, alive: list
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -86,7 +87,7 @@ def _found_arrays(
     return a_len, a_k, a_p, index
 
 
-@njit(cache=True)
+@inner
 def _incumbent_tables(
     inc_len: list, inc_k: list, inc_p: list, alive: list, kmax: int
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -106,7 +107,7 @@ def _incumbent_tables(
     return a_p[order], best_rows(a_len, a_k, order, kmax)
 
 
-@njit(cache=True)
+@inner
 def _flown_legs(
     legs: Legs, graph: Graph, pairs: Pairs, node: int, arc: int, heading: np.ndarray,
     has_heading: bool,
@@ -147,7 +148,7 @@ def _flown_legs(
     return flown, heads
 
 
-@njit(cache=True)
+@kernel
 def search(
     graph: Graph,
     to_go_table: ToGo,
@@ -193,7 +194,7 @@ def search(
     heading = [legs.heading_a.copy()]  # per row: the heading it ends with, when it has one
     has_heading = [legs.has_heading_a]
     # A search keeps no nogoods (the probes' store, empty).
-    no_head = Dict.empty(key_type=KEY, value_type=types.int64)
+    no_head = empty_table(1)
     empty_i = np.empty(0, np.int64)
     empty_f = np.empty(0)
     no_nogoods = Nogoods(
@@ -270,7 +271,9 @@ def search(
         f_ptr[g + 1] = f_ptr[g] + len(inc_path[index[g]])
     f_points = np.empty(f_ptr[F], np.int64)
     for g in range(F):
-        f_points[f_ptr[g] : f_ptr[g + 1]] = inc_path[index[g]]
+        found_path = inc_path[index[g]]
+        for i in range(len(found_path)):  # (not a slice assignment: expand_kernel.new_labels)
+            f_points[f_ptr[g] + i] = found_path[i]
     Q = len(heap)
     o_f = np.empty(Q)
     o_L = np.empty(Q)
@@ -284,5 +287,7 @@ def search(
         o_ptr[x + 1] = o_ptr[x] + len(labels.to_go[lab])
     o_to_go = np.empty(o_ptr[Q])
     for x in range(Q):
-        o_to_go[o_ptr[x] : o_ptr[x + 1]] = labels.to_go[heap[x][2]]
+        bound = labels.to_go[heap[x][2]]
+        for m in range(len(bound)):
+            o_to_go[o_ptr[x] + m] = bound[m]
     return count, stopped, f_len, f_k, f_p, f_ptr, f_points, o_f, o_L, o_k, o_mass, o_ptr, o_to_go

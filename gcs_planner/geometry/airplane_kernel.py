@@ -13,14 +13,14 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
 from gcs_planner.geometry.airplane import STEEP_SLACK_M
 from gcs_planner.geometry.dubins import COINCIDENT_M, TWO_PI
 from gcs_planner.geometry.dubins_kernel import cs_core
+from gcs_planner.jit import inner, kernel
 
 
-@njit(cache=True)
+@kernel
 def airplane_lengths(
     start: np.ndarray,
     heading: np.ndarray,
@@ -66,7 +66,7 @@ def airplane_lengths(
     return length, head
 
 
-@njit(cache=True)
+@inner
 def free_airplane_lengths(
     start: np.ndarray,
     ends: np.ndarray,
@@ -96,7 +96,7 @@ def free_airplane_lengths(
     return length, head
 
 
-@njit(cache=True)
+@inner
 def _flown(
     horizontal: float, dz: float, radius: float, tan_climb: float, tan_descent: float
 ) -> float:

@@ -8,12 +8,12 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
 from gcs_planner.geometry.dubins import COINCIDENT_M, STRAIGHT_TOL, TWO_PI
+from gcs_planner.jit import inner, kernel
 
 
-@njit(cache=True)
+@inner
 def cs_core(
     ux: float, uy: float, uz: float, wx: float, wy: float, wz: float, radius: float
 ) -> tuple[bool, float, float, float, float]:
@@ -74,7 +74,7 @@ def cs_core(
     return True, R * phi + t, hx / hn, hy / hn, hz / hn
 
 
-@njit(cache=True)
+@kernel
 def cs_lengths(
     start: np.ndarray, heading: np.ndarray, ends: np.ndarray, radius: float
 ) -> tuple[np.ndarray, np.ndarray]:

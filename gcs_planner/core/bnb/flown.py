@@ -53,7 +53,9 @@ def _compiled_flight(
     first = flown_route_legs(scenario, points[:2], model)[0]
     lengths = [first.length if first.reachable else math.inf]
     # (As ``route_trajectory``: after a leg that cannot be flown, the heading it started with.)
-    heading = np.asarray(first.heading_out if first.reachable else first.heading_in, float)
+    # (A copy: the leg's heading is frozen, and a read-only array would be a second
+    # specialisation of the airplane kernel to compile, besides the search's.)
+    heading = np.array(first.heading_out if first.reachable else first.heading_in, float)
     for a, b in zip(points[1:], points[2:]):
         flown, headings = fast(xyz[a], heading, xyz[b][None, :])
         lengths.append(float(flown[0]))

@@ -69,8 +69,9 @@ class _Prober:
             return False, 0
         if self._compile:
             if self.compiled is None:
-                # Numba compiles the kernel on its first use after installing (20 to 30 s on a
-                # 2-core machine) and loads it from its cache after that.
+                # Numba compiles the kernel on its first use after installing (about 6 s of
+                # CPU on the 2-core test machine after the search's, 17 s without; README
+                # "Set-up") and loads it from its cache after that.
                 budget.setup("the compiled probes (compiled once after installing)")
                 from gcs_planner.core.probe_kernel import CompiledProbes
 
