@@ -77,6 +77,15 @@ def _cached(module: str, name: str, numba_version: str) -> bool:
     return False
 
 
+def kernel_cached(module: str, name: str) -> bool:
+    """Whether numba has ``module.name`` in its cache (True when that cannot be told: numba
+    missing or its files unreadable), read without importing numba."""
+    try:
+        return _cached(module, name, importlib.metadata.version("numba"))
+    except Exception:  # whatever goes wrong reading numba's files: as before, compile
+        return True
+
+
 def uncached_seconds() -> float:
     """The measured compile seconds of the kernels numba has no cache entry for (0 when all
     are cached, or when the cache cannot be read)."""

@@ -59,7 +59,13 @@ def test_a_fresh_cache_gets_one_notice_on_a_terminal(tmp_path: Path) -> None:
     later one."""
     assert ENTRY.exists(), f"{ENTRY} missing: install the package (pip install -e .)"
     scenario = small_scenario(tmp_path / "points.csv")
-    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba-cache")}
+    # (GCS_PLANNER_COMPILE=always: compiled at once, not planned in Python first; see
+    # tests/test_first_run.py for the default.)
+    env = {
+        **os.environ,
+        "NUMBA_CACHE_DIR": str(tmp_path / "numba-cache"),
+        "GCS_PLANNER_COMPILE": "always",
+    }
     args = [str(ENTRY), "plan", str(scenario), *PARAMS, "--time-limit", "10"]
     code, err, out = run_on_terminal(args, env)
     assert code == 0, err

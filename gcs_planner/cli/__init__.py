@@ -20,7 +20,9 @@ from gcs_planner import __version__
 from gcs_planner.errors import GcsPlannerError
 
 # Subcommand modules, in the order `--help` lists them.
-COMMANDS = ("plan", "export", "upload", "download", "mock_vehicle", "dry_run", "sweep")
+COMMANDS = (
+    "plan", "export", "upload", "download", "mock_vehicle", "dry_run", "sweep", "compile",
+)  # fmt: skip
 # What `--help` says of a command whose module is not imported. A command missing here is
 # imported whenever the parser is built (slower start, nothing else lost).
 SUMMARIES = {
@@ -31,6 +33,7 @@ SUMMARIES = {
     "mock_vehicle": "run a simulated fixed-wing autopilot for a ground station to talk to",
     "dry_run": "plan, upload to a mock vehicle over loopback, read back, replay and report",
     "sweep": "plan many scenarios x parameter values as tasks on Dask (local or a cluster)",
+    "compile": "compile the planner's kernels once (numba), so that every later plan is fast",
 }
 
 

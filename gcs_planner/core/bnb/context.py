@@ -5,12 +5,15 @@ from __future__ import annotations
 
 import copy
 import itertools
+import os
+import sys
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
 
+from gcs_planner.compile_notice import kernel_cached
 from gcs_planner.core.bnb.flown import _compiled_flight, flown_route
 from gcs_planner.core.bnb.incumbents import Ceiling, Found
 from gcs_planner.core.budget import Budget
@@ -60,9 +63,38 @@ class Options:
     # need more than ``trial`` labels; False: Python throughout.
     compiled_search: bool = True
     trial: int = 300
+    # The trial when numba has not compiled the search kernel yet (a fresh install): a search
+    # that Python proves within this many labels never compiles it, and the probes stay in
+    # Python until the search has compiled. Dataset 2's default plan proves in Python in about
+    # 7 s (6,100 labels and 13,300 probe labels); compiling the search and the probes takes
+    # about 22 s of CPU before it can start (README "Set-up"). Chosen by ``Options.first_run``.
+    uncached_trial: int = 20_000
+    probes_after_search: bool = False
     # Seconds past the time limit a stopped search may spend telling which of its open partial
     # routes a found route covers (``_search``'s ending).
     ending_grace: float = 2.0
+
+
+def first_run(options: Options) -> Options:
+    """``options`` for a process where numba has not compiled the search kernel and it is not
+    loaded: a longer Python trial and Python probes until the search compiles (see
+    ``Options.uncached_trial``); ``options`` as given otherwise, or when the environment says
+    GCS_PLANNER_COMPILE=always."""
+    if "gcs_planner.core.search_kernel" in sys.modules:
+        return options
+    # A machine that plans often compiles at the first plan that needs the kernels.
+    if os.environ.get("GCS_PLANNER_COMPILE", "").lower() == "always":
+        return options
+    if kernel_cached("gcs_planner.core.search_kernel", "search"):
+        return options
+    # (The airplane legs' kernel waits as long: importing numba for it alone costs more than
+    # it saves in a search that Python finishes.)
+    return replace(
+        options,
+        trial=max(options.trial, options.uncached_trial),
+        compiled_legs_from=max(options.compiled_legs_from, options.uncached_trial),
+        probes_after_search=True,
+    )
 
 
 class _Context:
@@ -77,7 +109,9 @@ class _Context:
         budget: Budget | None = None,
         options: Options | None = None,
     ) -> None:
-        self.options = options if options is not None else Options()
+        # The defaults, made for a first run where the kernels are not compiled yet; options
+        # given explicitly (tests, benchmarks) are taken as they are.
+        self.options = options if options is not None else first_run(Options())
         # The user's budget: once its time limit has passed, the bounds below are cut short or
         # skipped (each only speeds the proof), and ``cut`` says which; meanwhile it shows
         # what the set-up builds.

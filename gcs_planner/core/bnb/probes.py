@@ -3,6 +3,7 @@ still lead anywhere, asked of the relaxation that proved the floor."""
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
@@ -67,7 +68,11 @@ class _Prober:
         f, _, L, node, k, states, _heading, path, to_go, arc = entry
         if path in self.hopeful:
             return False, 0
-        if self._compile:
+        if self._compile and (
+            # On a first run, Python probes until the search has compiled (``first_run``).
+            not self.root.options.probes_after_search
+            or "gcs_planner.core.search_kernel" in sys.modules
+        ):
             if self.compiled is None:
                 # Numba compiles the kernel on its first use after installing (about 6 s of
                 # CPU on the 2-core test machine after the search's, 17 s without; README

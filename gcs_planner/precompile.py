@@ -1,0 +1,62 @@
+"""Compile the planner's numba kernels ahead of need (``gcs-planner compile``).
+
+numba compiles a kernel at its first use and caches it; until then a plan that Python can prove
+quickly runs in Python (``core/bnb/context.first_run``), so that a first plan after installing
+takes seconds, not the half minute of compiling. Plans that need the kernels compile them
+anyway; this command compiles them once, on purpose, so that every later plan is fast: each
+kernel is run on a small generated scenario of the same types as any plan's (the kernels are
+compiled for one signature each: see core/kernel_records.py).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+
+from gcs_planner.compile_notice import kernel_cached
+
+# (module, function, what it is for), in the order they are compiled.
+KERNELS = (
+    ("gcs_planner.core.search_kernel", "search", "the branch and bound's searches over walks"),
+    ("gcs_planner.core.probe_kernel", "probe", "the probes of the search over simple routes"),
+    ("gcs_planner.core.kernel", "fewest_corrections", "straight legs on maps of 3,000+ points"),
+    ("gcs_planner.core.kernel", "layered_search", "straight legs on maps of 3,000+ points"),
+)
+
+
+def missing() -> list[str]:
+    """The kernels numba has not cached (``module.function``)."""
+    return [f"{m}.{f}" for m, f, _ in KERNELS if not kernel_cached(m, f)]
+
+
+def compile_kernels(say: Callable[[str], None] = print) -> list[tuple[str, float]]:
+    """Compile (or load from the cache) every kernel of ``KERNELS``; returns (kernel, seconds)."""
+    from gcs_planner.core.bnb import Options, bnb_front
+    from gcs_planner.core.search import straight_front
+    from gcs_planner.scenario.generate import random_scenario
+    from gcs_planner.scenario.model import Parameters
+
+    done: list[tuple[str, float]] = []
+    # Turns and uncertain corrections, compiled from the first label: the search with the
+    # airplane legs, then the probes (this scenario's search over simple routes probes).
+    params = Parameters(25, 15, 20, 25, 30, 0.001, turn_radius=200.0, p_success=0.8)
+    box = (40_000, 10_000, 500)
+    small = random_scenario(14, 2, params=params, box=box, unreliable_fraction=0.3)
+    for name, options in (
+        ("search", Options(trial=0, compiled_legs_from=-1, probe_from=10**9)),
+        ("probe", Options(trial=0, compiled_legs_from=-1, probe_from=0)),
+    ):
+        say(f"compiling {name} ...")
+        t0 = time.perf_counter()
+        bnb_front(small, probability=True, max_labels=20_000, options=options)
+        done.append((name, time.perf_counter() - t0))
+    # Straight legs on large maps: the fewest corrections of a walk (which focuses the search)
+    # and the layered search, compiled here on a small map.
+    straight = Parameters(25, 15, 20, 25, 30, 0.001, turn_radius=0.0)
+    big = random_scenario(40, 0, params=straight, box=(60_000, 20_000, 500))
+    for name, focus in (("fewest_corrections", True), ("layered_search", False)):
+        say(f"compiling {name} ...")
+        t0 = time.perf_counter()
+        straight_front(big, compiled=True, focus=focus)
+        done.append((name, time.perf_counter() - t0))
+    return done
