@@ -95,9 +95,12 @@ class LiveFlight:
         # Flown on the truth, the in-flight INS still finds the corrections; its estimate
         # error is zero.
         self.ins = InsEstimate(
-            scenario, self.params, rng, capture_radius=capture_radius,
+            scenario,
+            self.params,
+            rng,
+            capture_radius=capture_radius,
             error_unit=error_unit if navigate_on_estimate else 0.0,
-        )  # fmt: skip
+        )
         cmds = self._commands(items)
         course = None
         if scenario.heading_at_a is not None and math.hypot(*scenario.heading_at_a[:2]) > 0:
@@ -106,11 +109,22 @@ class LiveFlight:
             course = guidance.initial_course(cmds, self.start)
         self.time_limit = guidance.default_time_limit(cmds, self.start, profile, wind)
         field = None if wind is None or wind.still else WindField(wind, profile.cruise_airspeed)
+        if profile.turn_radius <= 0:
+            # Turning on the spot, the navigator steps 4 * COARSE_STEPS times dt on a straight
+            # leg (16 s, 400 m): a correction is drawn when a step ends outside the capture
+            # radius, and told then. Here it is told as it happens, within a step of 2 s.
+            dt = dt / guidance.COARSE_STEPS
         self.pilot = NAVIGATORS[flavour](
-            cmds, profile.cruise_airspeed, autopilot, AircraftState(*self.start, course), dt,
-            free_turn=profile.turn_radius <= 0, wind=field,
-            alt_offset=float(self.frame.origin.alt), ins=self.ins,
-        )  # fmt: skip
+            cmds,
+            profile.cruise_airspeed,
+            autopilot,
+            AircraftState(*self.start, course),
+            dt,
+            free_turn=profile.turn_radius <= 0,
+            wind=field,
+            alt_offset=float(self.frame.origin.alt),
+            ins=self.ins,
+        )
         self.pilot.record()
         self.going = self.pilot.advance()
         # What the autopilot stores; the navigator's commands are these but for the one being
@@ -124,8 +138,9 @@ class LiveFlight:
 
     # The stored mission ----------------------------------------------------------------------
     def _commands(self, items: Sequence[MissionItem]) -> list[NavCommand]:
-        return guidance.mission_commands(items, self.frame, self.start,
-                                         home_at_seq0=self.home_at_seq0)  # fmt: skip
+        return guidance.mission_commands(
+            items, self.frame, self.start, home_at_seq0=self.home_at_seq0
+        )
 
     @property
     def t(self) -> float:
@@ -231,8 +246,7 @@ class LiveFlight:
         track = self.track()
         if len(track.points) < 2:
             track = FlightPath(np.vstack([track.points, track.points]), (-1, -1), (0.0, 0.0))
-        b_distance, _ = closest_approach(track, sc.xyz[sc.end], self.capture_radius,
-                                         compiled=True)  # fmt: skip
+        b_distance, _ = closest_approach(track, sc.xyz[sc.end], self.capture_radius, compiled=True)
         run, _ = _ins_run(self.ins, track.until(b_distance), sc, self.params, self.capture_radius)
         return run
 
@@ -241,8 +255,9 @@ class LiveFlight:
         return self.pilot.samples[-1]
 
 
-def passed_within(track: FlightPath, scenario: Scenario, ids: Sequence[str], radius: float
-                  ) -> dict[str, float]:  # fmt: skip
+def passed_within(
+    track: FlightPath, scenario: Scenario, ids: Sequence[str], radius: float
+) -> dict[str, float]:
     """The 3D closest approach of ``track`` to each landmark of ``ids``."""
     out = {}
     index = {pid: i for i, pid in enumerate(scenario.ids)}

@@ -35,9 +35,15 @@ from sim import telemetry
 from sim.guidance import AutopilotParams
 from sim.ins import InsCorrection
 from sim.live_flight import LiveFlight
-from sim.replay import ReplayRun, scenario_frame
+from sim.replay import FlightPath, ReplayRun, scenario_frame
 
 DEFAULT_TIME_SCALE = 20.0
+# A correction report is a STATUSTEXT, which no one acknowledges: it goes out this many times,
+# this many wall seconds apart (docs/correction-reports.md); the ground station takes the
+# first copy (a landmark is used once per flight). At 5 % loss each way one report in 8000 is
+# lost all three times.
+REPORT_COPIES = 3
+REPORT_REPEAT_S = 0.5
 
 
 @dataclass(frozen=True)
@@ -50,6 +56,7 @@ class LiveReport:
     changes: tuple[tuple[float, str], ...]
     points_met: tuple[str, ...]  # correction landmarks the flight used, in order
     final_mission: tuple[Any, ...]  # the items stored when it ended
+    track: FlightPath | None = None  # the flown track (local frame)
 
     @property
     def arrived(self) -> bool:
@@ -86,15 +93,20 @@ def fly_live(vehicle: Any, *, seed: int = 0, time_scale: float | None = None) ->
     changes: queue.SimpleQueue = queue.SimpleQueue()
     profile = replace(scenario.vehicle, cruise_airspeed=vehicle.cruise_speed)
     flight = LiveFlight(
-        vehicle.mission, scenario, flavour=vehicle.flavour,
+        vehicle.mission,
+        scenario,
+        flavour=vehicle.flavour,
         autopilot=AutopilotParams.from_parameters(vehicle.flavour, vehicle.parameters),
-        profile=profile, capture_radius=vehicle.capture_radius,
-        rng=np.random.default_rng(seed), navigate_on_estimate=vehicle.navigate_on_estimate,
+        profile=profile,
+        capture_radius=vehicle.capture_radius,
+        rng=np.random.default_rng(seed),
+        navigate_on_estimate=vehicle.navigate_on_estimate,
         wind=vehicle.wind,
-    )  # fmt: skip
+    )
     frame = scenario_frame(scenario)
     delta = flight.params.delta
     met: list[str] = []
+    repeats: list[list] = []  # [(text, severity), when next, copies left]
     server.listener = changes.put
     server.in_flight = True
     # ArduPilot writes uploaded items in place (see sim/live_flight.py); PX4 switches storage.
@@ -108,9 +120,16 @@ def fly_live(vehicle: Any, *, seed: int = 0, time_scale: float | None = None) ->
             happened = flight.fly_until((time.monotonic() - start) * scale)
             for e in happened.reached:
                 vehicle._send(vehicle.mav.mission_item_reached_encode(e.seq))
+            now = time.monotonic()
             for c in happened.corrections:
                 met.append(c.id)
-                vehicle._statustext(*report_text(c, delta))
+                text = report_text(c, delta)
+                vehicle._statustext(*text)
+                repeats.append([text, now + REPORT_REPEAT_S, REPORT_COPIES - 1])
+            for r in repeats:
+                if r[2] > 0 and now >= r[1]:
+                    vehicle._send_statustext_copy(*r[0])
+                    r[1], r[2] = now + REPORT_REPEAT_S, r[2] - 1
             while True:
                 try:
                     what, value = changes.get_nowait()
@@ -123,8 +142,9 @@ def fly_live(vehicle: Any, *, seed: int = 0, time_scale: float | None = None) ->
             if flight.current >= 0 and flight.current != last_current:
                 last_current = flight.current
                 vehicle._fly_current(last_current)
-            for msg in telemetry.position_messages(vehicle.mav, frame, _Samples(flight.sample()),
-                                                   0, boot):  # fmt: skip
+            for msg in telemetry.position_messages(
+                vehicle.mav, frame, _Samples(flight.sample()), 0, boot
+            ):
                 vehicle._send(msg)
             if not flight.going:
                 break
@@ -142,7 +162,9 @@ def fly_live(vehicle: Any, *, seed: int = 0, time_scale: float | None = None) ->
         server.in_place = False
         vehicle.flying = False
         vehicle._heartbeat()
-    report = LiveReport(run, flight.pilot.ended, flight.t, tuple(flight.changes), tuple(met),
-                        tuple(vehicle.mission))  # fmt: skip
+    report = LiveReport(
+        run, flight.pilot.ended, flight.t, tuple(flight.changes), tuple(met),
+        tuple(vehicle.mission), flight.track(),
+    )  # fmt: skip
     vehicle.last_live = report
     return report

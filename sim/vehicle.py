@@ -258,6 +258,10 @@ class MockVehicle:
         self.statustexts.append(text)
         self._send(self.mav.statustext_encode(severity, text[:50].encode("ascii", "replace")))
 
+    def _send_statustext_copy(self, text: str, severity: int = mavlink.MAV_SEVERITY_INFO) -> None:
+        """A STATUSTEXT sent again (a correction report's copies): not logged twice."""
+        self._send(self.mav.statustext_encode(severity, text[:50].encode("ascii", "replace")))
+
     def _heartbeat(self) -> None:
         fields = telemetry.heartbeat_fields(self.flavour, self.flying)
         self._send(self.mav.heartbeat_encode(*fields))

@@ -1,0 +1,201 @@
+"""The ground station in the loop flying a contingency policy (gcs_planner/policy_flight.py,
+`gcs-planner fly`, `dry-run --policy`) against the live mock vehicle (sim/live_vehicle.py) over
+UDP loopback: it switches to the branch when the fix at P fails and the vehicle overflies the
+branch's point; with every fix made it stays on the primary; under 5 % link loss; a branch that
+cannot be uploaded leaves a whole mission on the vehicle; a silent vehicle is noticed.
+
+The scenario (tests/policy_scenario.py) is 8 km of straight legs: the primary is lost when the
+fix at P fails, the branch arrives. The vehicle flies 20 simulated seconds per wall second: the
+ground station's window after the report at P is the 4 km to B, some 6 s of wall time.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import threading
+import types
+from dataclasses import replace
+
+import pytest
+from policy_scenario import policy_missions, policy_scenario, write_scenario
+
+from gcs_planner.cli import main
+from gcs_planner.link.connection import open_link
+from gcs_planner.link.correction_report import format_report, parse_report
+from gcs_planner.link.mission_client import MissionClient
+from gcs_planner.link.protocol import mission_differences
+from gcs_planner.mission.policy_missions import PolicyMissions
+from gcs_planner.policy_flight import PolicyFlight
+from sim.live_flight import passed_within
+from sim.vehicle import MockVehicle, free_udp_port
+
+SCALE = 20.0
+CAPTURE = 5.0
+
+
+@pytest.fixture
+def policy_file(monkeypatch, tmp_path):
+    """policy.json on disk and a reader for it: stands in for the exporter's
+    gcs_planner.mission.policy_file (another branch) until the lead wires it."""
+    held: dict[str, PolicyMissions] = {}
+
+    def provide(policy: PolicyMissions, probability: float | None = None):
+        path = tmp_path / "policy.json"
+        path.write_text(json.dumps({} if probability is None else {"probability": probability}))
+        held[str(path)] = policy
+        return str(path)
+
+    module = types.ModuleType("gcs_planner.mission.policy_file")
+    module.read_policy = lambda path: held[str(path)]
+    monkeypatch.setitem(sys.modules, "gcs_planner.mission.policy_file", module)
+    return provide
+
+
+def _holds(vehicle: MockVehicle, items, firmware: str) -> bool:
+    return not mission_differences(list(items), vehicle.mission, skip_home=firmware == "ardupilot")
+
+
+def _fly(p_success: float, loss: float = 0.0):
+    scenario = policy_scenario(p_success)
+    policy = policy_missions(scenario)
+    port = free_udp_port()
+    faults = None
+    if loss:
+        from sim.faults import FaultRates
+
+        faults = FaultRates(drop=loss)
+    vehicle = MockVehicle(
+        f"udpin:127.0.0.1:{port}", scenario=scenario, live=True, speedup=SCALE,
+        navigate_on_estimate=False, faults_in=faults, faults_out=faults, fault_seed=5,
+    )  # fmt: skip
+    lines: list[str] = []
+    with vehicle:
+        link = open_link(f"udpout:127.0.0.1:{port}")
+        try:
+            client = MissionClient(link, timeout=0.5, retries=5, transfer="mission")
+            client.connect(10.0)
+            outcome = PolicyFlight(client, policy, say=lines.append).run(start=True)
+        finally:
+            link.close()
+        vehicle._fly_thread.join(60.0)
+    return scenario, policy, vehicle, outcome, lines
+
+
+def test_reports_are_read_robustly():
+    text = format_report("V", "P2", "FAILED", "v20.0 h10.0")
+    assert parse_report(text) == parse_report(text.encode()) and parse_report(text).no_fix
+    assert parse_report("H fix 13 MISSED by 12.3m").no_fix  # the replayed flight's words
+    assert parse_report("V fix 7 made").took and not parse_report("V fix 7 LOST").no_fix
+    for other in ("PreArm: Bad GPS", "V fix", "V fix 12", "X fix 12 made", "V fix 12 MAYBE",
+                  "V fix 12 madeX", "V fix 1 2 made", b"V fix \xff made", None, 42, ""):
+        assert parse_report(other) is None, other  # fmt: skip
+    with pytest.raises(ValueError):
+        format_report("V", "two words", "made")
+
+
+def test_the_ground_station_switches_to_the_branch_when_the_fix_fails():
+    scenario, policy, vehicle, outcome, lines = _fly(p_success=0.0)
+    assert outcome.missions_flown == ("primary", "after-P2") and outcome.switches == 1
+    assert _holds(vehicle, policy.missions["after-P2"].items, "ardupilot")
+    live = vehicle.last_live
+    assert live.points_met == ("H1", "P2", "V3") and live.arrived
+    misses = passed_within(vehicle.last_live.track, scenario, ["V3", "B4"], CAPTURE)
+    assert max(misses.values()) <= CAPTURE
+    assert any("item 5 current (confirmed)" in line for line in lines)
+
+
+def test_with_every_fix_made_it_stays_on_the_primary():
+    scenario, policy, vehicle, outcome, _ = _fly(p_success=1.0)
+    assert outcome.missions_flown == ("primary",) and outcome.switches == 0
+    assert _holds(vehicle, policy.missions["primary"].items, "ardupilot")
+    assert vehicle.last_live.points_met == ("H1", "P2") and vehicle.last_live.arrived
+    assert passed_within(vehicle.last_live.track, scenario, ["V3"], CAPTURE)["V3"] > 250  # 300 m off the leg
+
+
+def test_dry_run_of_the_policy_under_5_percent_loss(policy_file, tmp_path, capsys):
+    toml = write_scenario(tmp_path, p_success=0.0)
+    path = policy_file(policy_missions(policy_scenario(0.0)), probability=1.0)
+    rc = main(["dry-run", str(toml), "--policy", path, "--runs", "2", "--loss", "0.05",
+               "--time-scale", str(SCALE), "--navigate-on-truth", "--json"])  # fmt: skip
+    d = json.loads(capsys.readouterr().out)
+    assert rc == 0 and d["ok"] and d["successes"] == 2 and d["probability_within_ci"]
+    assert [r["missions_flown"] for r in d["runs"]] == [["primary", "after-P2"]] * 2
+    assert all(r["points_met"] == ["H1", "P2", "V3"] for r in d["runs"])
+
+
+def _unsendable(policy: PolicyMissions, command: int) -> PolicyMissions:
+    """The policy with a branch item after the failed point that the vehicle refuses."""
+    branch = policy.missions["after-P2"]
+    items = list(branch.items)
+    items[6] = replace(items[6], command=command)
+    missions = {**policy.missions, "after-P2": replace(branch, items=tuple(items))}
+    return replace(policy, missions=missions)
+
+
+@pytest.mark.parametrize(
+    ("firmware", "refused", "said"),
+    [
+        # ArduPilot wrote items 0-5 in place before refusing item 6: the ground station finds
+        # the mix on reading back and uploads the primary again.
+        ("ardupilot", 5000, "uploaded again and verified"),
+        # PX4 refuses NAV_LOITER_TURNS and never left the mission it flies.
+        ("px4", 18, "whole (read back)"),
+    ],
+)
+def test_a_branch_that_cannot_be_uploaded_leaves_a_whole_mission(
+    policy_file, capsys, firmware, refused, said
+):
+    scenario = policy_scenario(0.0)
+    policy = _unsendable(policy_missions(scenario, firmware), refused)
+    path = policy_file(policy)
+    port = free_udp_port()
+    vehicle = MockVehicle(f"udpin:127.0.0.1:{port}", scenario=scenario, flavour=firmware,
+                          live=True, speedup=SCALE, navigate_on_estimate=False)  # fmt: skip
+    with vehicle:
+        rc = main(["fly", path, "--connect", f"udpout:127.0.0.1:{port}", "--start",
+                   "--transfer", "mission", "--timeout", "0.5", "--quiet"])  # fmt: skip
+        out, err = capsys.readouterr()
+        assert rc == 4 and vehicle.flying  # the aircraft flies on
+        assert _holds(vehicle, policy.missions["primary"].items, firmware)
+    assert "V fix P2 FAILED" in out and "Traceback" not in err
+    assert err.count("\n") == 1 and "mission 'after-P2' could not be uploaded" in err
+    assert said in err and "'primary'" in err
+
+
+def test_a_vehicle_that_stops_reporting_is_noticed(policy_file, capsys):
+    scenario = policy_scenario(0.0)
+    path = policy_file(policy_missions(scenario))
+    port = free_udp_port()
+    vehicle = MockVehicle(f"udpin:127.0.0.1:{port}", scenario=scenario, live=True,
+                          speedup=SCALE, navigate_on_estimate=False)  # fmt: skip
+
+    def fall_silent() -> None:
+        # Once the flight is under way the vehicle's loop ends: no heartbeat, no telemetry.
+        while not vehicle.flying:
+            if vehicle._stop.wait(0.05):
+                return
+        vehicle.request_stop()
+
+    with vehicle:
+        watcher = threading.Thread(target=fall_silent, daemon=True)
+        watcher.start()
+        rc = main(["fly", path, "--connect", f"udpout:127.0.0.1:{port}", "--start",
+                   "--silence", "2", "--timeout", "0.5", "--quiet"])  # fmt: skip
+        watcher.join(10.0)
+    out, err = capsys.readouterr()
+    assert rc == 4 and "the vehicle stopped reporting" in err and "Traceback" not in err
+    assert "uploaded and verified mission 'primary'" in out
+
+
+def test_a_policy_whose_branch_differs_before_the_failed_point_is_refused(policy_file, capsys):
+    policy = policy_missions(policy_scenario())
+    branch = policy.missions["after-P2"]
+    items = list(branch.items)
+    items[3] = replace(items[3], z=items[3].z + 50.0)  # H1's waypoint moved
+    bad = replace(policy, missions={**policy.missions,
+                                    "after-P2": replace(branch, items=tuple(items))})  # fmt: skip
+    rc = main(["fly", policy_file(bad), "--connect", "udpout:127.0.0.1:9"])
+    err = capsys.readouterr().err
+    assert rc == 2 and err.count("\n") == 1
+    assert "switches[0]" in err and "differs from 'primary' before the failed point" in err
