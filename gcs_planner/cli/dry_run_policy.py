@@ -128,3 +128,7 @@ def refuse_plan_flags(args: argparse.Namespace) -> None:
     for flag, value in (("--track-out", args.track_out), ("--param", args.param or None)):
         if value:
             raise InputError("not used with --policy", field=flag)
+    for flag, value in (("--wind", args.wind), ("--gust", args.gust)):
+        if value.strip() not in ("0", "0.0"):
+            raise InputError("a policy is flown in still air (wind not modelled yet with "
+                             "--policy)", field=flag)  # fmt: skip
