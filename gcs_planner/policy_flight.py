@@ -281,6 +281,10 @@ class PolicyFlight:
                 f"{why}; the vehicle still holds mission {self.flown!r}, whole "
                 "(read back), and flies it"
             )
+        if self.client.firmware == "px4":
+            # PX4 receives into the storage it is not flying: it still flies the mission it had.
+            raise LinkError(f"{why}; the vehicle (PX4) keeps mission {self.flown!r} until an "
+                            "upload completes, and flies it (not read back)")  # fmt: skip
         try:
             self._upload(self.flown, flown.items)
         except LinkError as exc:

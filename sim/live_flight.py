@@ -43,6 +43,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from gcs_planner.mission.items import MissionItem
 from gcs_planner.scenario.model import Kind, Scenario
@@ -57,13 +58,25 @@ from sim.wind import WindField, WindModel
 
 
 @dataclass(frozen=True)
+class MissedFix:
+    """A correction landmark a mission item lies on that the flight went past outside the
+    capture radius: no fix at all."""
+
+    id: str
+    kind: str  # "V" or "H"
+    seq: int  # the mission item on it
+    miss: float  # the track's 3D closest approach so far, metres
+
+
+@dataclass(frozen=True)
 class Happened:
     """What the flight did since it was last asked: corrections met (in order), items reached,
-    the item now current (-1 when the flight is over)."""
+    the item now current (-1 when the flight is over), landmarks of the mission missed."""
 
     corrections: tuple[InsCorrection, ...]
     reached: tuple[Event, ...]
     current: int
+    missed: tuple[MissedFix, ...] = ()
 
 
 class LiveFlight:
@@ -131,6 +144,11 @@ class LiveFlight:
         # flown, which on ArduPilot stays the copy it started (see stored_changed).
         self.stored: list[NavCommand] = list(cmds)
         self._cache: dict = {}  # the kernel's table of the commands: rebuilt when they change
+        marks = (scenario.kind == Kind.V) | (scenario.kind == Kind.H)
+        self._marks = np.flatnonzero(marks)
+        self._mark_tree = cKDTree(scenario.xyz[self._marks]) if self._marks.size else None
+        self._pending: list[tuple[int, int]] = []  # (landmark, seq) of items reached, unjudged
+        self._missed: set[int] = set()
         self._corrections_told = 0
         self._events_told = 0
         self.changes: list[tuple[float, str]] = []  # (simulated time, what changed), for logs
@@ -231,7 +249,38 @@ class LiveFlight:
         self._corrections_told = len(self.ins.corrections)
         reached = tuple(e for e in p.events[self._events_told :] if e.kind == "reached")
         self._events_told = len(p.events)
-        return Happened(corrections, reached, self.current)
+        missed: list[MissedFix] = []
+        for e in reached:
+            # A landmark is judged once the item after its own is reached (PX4 may count its
+            # item reached 56 m early and still pass over the landmark on the next leg).
+            missed += self._judge()
+            self._pending += self._landmarks_of(e.seq)
+        if self.finished:
+            missed += self._judge(final=True)
+        return Happened(corrections, reached, self.current, tuple(missed))
+
+    def _landmarks_of(self, seq: int) -> list[tuple[int, int]]:
+        cmd = next((c for c in self.pilot.cmds if c.seq == seq), None)
+        if cmd is None or cmd.pos is None or self._mark_tree is None:
+            return []
+        near = self._mark_tree.query_ball_point(cmd.pos, r=self.capture_radius)
+        return [(int(self._marks[j]), seq) for j in near]
+
+    def _judge(self, final: bool = False) -> list[MissedFix]:
+        out, keep = [], []
+        for li, seq in self._pending:
+            if li in self.ins._used or li in self._missed:
+                continue  # its fix was drawn (and told), or its miss told
+            if li in self.ins._passes and not final:
+                keep.append((li, seq))  # the aircraft is within the radius now
+                continue
+            _, miss = closest_approach(self.track(), self.scenario.xyz[li], self.capture_radius,
+                                       compiled=True)  # fmt: skip
+            kind = Kind(int(self.scenario.kind[li])).name
+            out.append(MissedFix(self.scenario.ids[li], kind, seq, float(miss)))
+            self._missed.add(li)  # told once
+        self._pending = keep
+        return out
 
     # The verdict -----------------------------------------------------------------------------
     def track(self) -> FlightPath:

@@ -126,6 +126,11 @@ def fly_live(vehicle: Any, *, seed: int = 0, time_scale: float | None = None) ->
                 text = report_text(c, delta)
                 vehicle._statustext(*text)
                 repeats.append([text, now + REPORT_REPEAT_S, REPORT_COPIES - 1])
+            for m in happened.missed:
+                text = (format_report(m.kind, m.id, "MISSED", f"by {m.miss:.1f}m"),
+                        mavlink.MAV_SEVERITY_WARNING)  # fmt: skip
+                vehicle._statustext(*text)
+                repeats.append([text, now + REPORT_REPEAT_S, REPORT_COPIES - 1])
             for r in repeats:
                 if r[2] > 0 and now >= r[1]:
                     vehicle._send_statustext_copy(*r[0])
@@ -149,9 +154,13 @@ def fly_live(vehicle: Any, *, seed: int = 0, time_scale: float | None = None) ->
             if not flight.going:
                 break
             vehicle._stop.wait(1.0 / telemetry.POSITION_RATE_HZ)
-        for c in flight.fly_until(flight.t).corrections:  # any told by the last step
+        last = flight.fly_until(flight.t)  # any told by the last step
+        for c in last.corrections:
             met.append(c.id)
             vehicle._statustext(*report_text(c, delta))
+        for m in last.missed:
+            vehicle._statustext(format_report(m.kind, m.id, "MISSED", f"by {m.miss:.1f}m"),
+                                mavlink.MAV_SEVERITY_WARNING)  # fmt: skip
         run = flight.run()
         if not run.arrived:
             reason = run.lost_reason or "did not arrive"

@@ -203,3 +203,32 @@ def test_a_policy_whose_branch_differs_before_the_failed_point_is_refused(policy
     err = capsys.readouterr().err
     assert rc == 2 and err.count("\n") == 1
     assert "switches[0]" in err and "differs from 'primary' before the failed point" in err
+
+
+@pytest.mark.parametrize("flavour", ["ardupilot", "px4"])
+def test_a_landmark_passed_outside_the_capture_radius_is_reported_missed(flavour):
+    """PX4 counts a waypoint reached at its switch distance (~56 m) and cuts the corner at P and
+    at V3 on the branch; ArduPilot, accepting at 1 m, overflies both."""
+    import numpy as np
+
+    from sim.guidance import AutopilotParams
+    from sim.live_flight import LiveFlight
+
+    scenario = policy_scenario(0.0)
+    items = policy_missions(scenario, flavour).missions["after-P2"].items
+    flight = LiveFlight(items, scenario, flavour=flavour, profile=scenario.vehicle,
+                        autopilot=AutopilotParams(flavour, loiter_radius=0.0),
+                        capture_radius=CAPTURE, rng=np.random.default_rng(1))  # fmt: skip
+    fixes, missed = [], []
+    t = 0.0
+    while flight.going and t < 600.0:
+        t += 5.0
+        happened = flight.fly_until(t)
+        fixes += [c.id for c in happened.corrections]
+        missed += [(m.id, m.kind, m.miss) for m in happened.missed]
+    if flavour == "ardupilot":
+        assert fixes == ["H1", "P2", "V3"] and missed == []
+    else:
+        assert fixes == ["H1"] and [m[:2] for m in missed] == [("P2", "V"), ("V3", "V")]
+        assert all(m[2] > CAPTURE for m in missed)
+        assert parse_report(format_report("V", "P2", "MISSED", f"by {missed[0][2]:.1f}m")).no_fix
