@@ -184,8 +184,10 @@ class PolicyFlight:
                 continue
             if self.current >= s.item + 2 and s.point not in self.unreported_warned:
                 self.unreported_warned.add(s.point)
-                self._line(f"WARNING: no correction report for point {s.point} (item {s.item}), "
-                           f"now at item {self.current}: the policy cannot switch there")
+                self._line(
+                    f"WARNING: no correction report for point {s.point} (item {s.item}), "
+                    f"now at item {self.current}: the policy cannot switch there"
+                )
 
     def _start(self) -> None:
         ts, tc = self.client._target()
@@ -221,8 +223,7 @@ class PolicyFlight:
         try:
             report = self._upload(to, mission.items)
         except LinkError as exc:
-            self._keep_flown(str(exc))
-            raise AssertionError("unreachable") from None
+            raise self._keep_flown(str(exc)) from None
         self._line(
             f"uploaded and verified mission {to!r} ({len(mission.items)} items) in "
             f"{report.seconds:.2f} s"
@@ -242,7 +243,9 @@ class PolicyFlight:
         )
         for _ in range(2 * (self.client.retries + 1)):
             self.client.link.send(cmd)
-            accepted = False
+            # The vehicle may say MISSION_CURRENT before its COMMAND_ACK (the mock does, as
+            # ArduPilot's handler sends it on the way): both, in either order, confirm.
+            accepted = current = False
             end = time.monotonic() + self.client.timeout
             while (left := end - time.monotonic()) > 0:
                 msg = self.client._recv(left, {"COMMAND_ACK", "MISSION_CURRENT"}, None)
@@ -258,7 +261,9 @@ class PolicyFlight:
                             f"{self.flown!r} but may fly its old item"
                         )
                     accepted = True
-                elif accepted and int(msg.seq) == seq:
+                else:
+                    current = current or int(msg.seq) == seq
+                if accepted and current:
                     return
             self._check_heard()
         raise LinkError(
@@ -266,9 +271,9 @@ class PolicyFlight:
             "confirmed: the vehicle holds that mission, whole"
         )
 
-    def _keep_flown(self, why: str) -> None:
+    def _keep_flown(self, why: str) -> LinkError:
         """After a branch upload failed: make sure the vehicle holds the mission it was flying,
-        whole (see the module docstring), then raise the error."""
+        whole (see the module docstring); the error to raise, saying what it holds."""
         flown = self.policy.missions[self.flown]
         skip_home = self.client.firmware == "ardupilot"
         try:
@@ -277,22 +282,22 @@ class PolicyFlight:
         except LinkError:
             whole = False
         if whole:
-            raise LinkError(
+            return LinkError(
                 f"{why}; the vehicle still holds mission {self.flown!r}, whole "
                 "(read back), and flies it"
             )
         if self.client.firmware == "px4":
             # PX4 receives into the storage it is not flying: it still flies the mission it had.
-            raise LinkError(f"{why}; the vehicle (PX4) keeps mission {self.flown!r} until an "
+            return LinkError(f"{why}; the vehicle (PX4) keeps mission {self.flown!r} until an "
                             "upload completes, and flies it (not read back)")  # fmt: skip
         try:
             self._upload(self.flown, flown.items)
         except LinkError as exc:
-            raise LinkError(
+            return LinkError(
                 f"{why}; restoring mission {self.flown!r} failed too ({exc}): the "
                 "vehicle may hold part of the branch: take control"
-            ) from None
-        raise LinkError(
+            )
+        return LinkError(
             f"{why}; the vehicle had stored part of it: mission {self.flown!r} "
             "uploaded again and verified, it flies that"
         )

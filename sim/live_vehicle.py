@@ -39,7 +39,7 @@ from sim.replay import FlightPath, ReplayRun, scenario_frame
 
 DEFAULT_TIME_SCALE = 20.0
 # A correction report is a STATUSTEXT, which no one acknowledges: it goes out this many times,
-# this many wall seconds apart (docs/correction-reports.md); the ground station takes the
+# this many wall seconds apart (docs/flying-policies.md); the ground station takes the
 # first copy (a landmark is used once per flight). At 5 % loss each way one report in 8000 is
 # lost all three times.
 REPORT_COPIES = 3

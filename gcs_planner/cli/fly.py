@@ -76,7 +76,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         help="fly a contingency policy: upload, watch the corrections, switch missions in flight",
         description="Upload and verify the policy's primary mission, start it (--start) or wait "
         "for the operator to, then watch the vehicle's correction reports (STATUSTEXT 'V fix "
-        "<point> FAILED', docs/correction-reports.md); when a fix fails where the policy "
+        "<point> FAILED', docs/flying-policies.md); when a fix fails where the policy "
         "branches, upload the branch's mission, verify it, set its resume item current and "
         "confirm it. One line per event.",
         epilog=EPILOG,

@@ -1,5 +1,5 @@
 """The correction report: one STATUSTEXT per correction the vehicle meets, as the mock vehicle
-sends it and as a companion computer on a real aircraft can send it (docs/correction-reports.md).
+sends it and as a companion computer on a real aircraft can send it (docs/flying-policies.md).
 
     <KIND> fix <POINT> <OUTCOME>[ <detail>]
 
