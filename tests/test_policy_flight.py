@@ -232,3 +232,25 @@ def test_a_landmark_passed_outside_the_capture_radius_is_reported_missed(flavour
         assert fixes == ["H1"] and [m[:2] for m in missed] == [("P2", "V"), ("V3", "V")]
         assert all(m[2] > CAPTURE for m in missed)
         assert parse_report(format_report("V", "P2", "MISSED", f"by {missed[0][2]:.1f}m")).no_fix
+
+
+@pytest.mark.parametrize(
+    ("change", "said"),
+    [
+        ("reliable point", "point V3 is reliable in policy: its fix cannot fail"),
+        ("moved point", "is 300 m from point P2 of policy: the policy is not for this scenario"),
+    ],
+)
+def test_dry_run_refuses_a_policy_not_for_its_scenario(policy_file, tmp_path, capsys, change,
+                                                       said):  # fmt: skip
+    toml = write_scenario(tmp_path)
+    policy = policy_missions(policy_scenario())
+    (switch,) = policy.switches
+    if change == "reliable point":
+        policy = replace(policy, switches=(replace(switch, point="V3"),))
+    else:  # the vehicle's database has P 300 m north of where the missions put it
+        rows = (tmp_path / "points.csv").read_text().replace("P2,4000.0,0.0", "P2,4000.0,300.0")
+        (tmp_path / "points.csv").write_text(rows)
+    rc = main(["dry-run", str(toml), "--policy", policy_file(policy), "--runs", "1"])
+    err = capsys.readouterr().err
+    assert rc == 2 and err.count("\n") == 1 and said in err and "switches[0]" in err
