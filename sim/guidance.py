@@ -124,6 +124,33 @@ def mission_commands(
     return nav_commands(items, frame, base_alt, home_at_seq0=home_at_seq0)
 
 
+def initial_course(cmds: Sequence[NavCommand], start: tuple[float, float, float]) -> float:
+    """The heading at the start when none is given: towards the first item that is not a
+    loiter. A loiter's position is its centre, off the path: aiming at the first other item puts
+    an aircraft that starts a helix at A on its circle's tangent (the planner's free heading at
+    A)."""
+    positions = [c.pos for c in cmds if c.pos is not None]
+    aims = [c.pos for c in cmds if c.pos is not None and c.command not in LOITERS]
+    for p in aims or positions:
+        if math.hypot(p[0] - start[0], p[1] - start[1]) > 1.0:
+            return math.atan2(p[1] - start[1], p[0] - start[0])
+    return 0.0
+
+
+def default_time_limit(
+    cmds: Sequence[NavCommand],
+    start: tuple[float, float, float],
+    profile: VehicleProfile,
+    wind: WindModel | None,
+) -> float:
+    """Three times the time to fly the items' chords plus ten minutes: stops an aircraft that
+    never finishes."""
+    pts = [start, *(c.pos for c in cmds if c.pos is not None)]
+    chords = sum(math.dist(p, q) for p, q in zip(pts, pts[1:], strict=False))
+    slowest = max(profile.cruise_airspeed - (wind.speed + 3 * wind.gust if wind else 0), 5.0)
+    return 3.0 * chords / slowest + 600.0
+
+
 def fly(
     items: Sequence[MissionItem],
     frame: LocalFrame,
@@ -164,22 +191,10 @@ def fly(
             items, frame, start, home_at_seq0=home_at_seq0, home_alt=home_alt
         )
     cmds = list(commands)
-    positions = [c.pos for c in cmds if c.pos is not None]
     if course is None:
-        # A loiter's position is its centre, off the path: aim at the first other item, so an
-        # aircraft that starts a helix at A is on its circle's tangent (the planner's free
-        # heading at A).
-        course = 0.0
-        aims = [c.pos for c in cmds if c.pos is not None and c.command not in LOITERS]
-        for p in aims or positions:
-            if math.hypot(p[0] - start[0], p[1] - start[1]) > 1.0:
-                course = math.atan2(p[1] - start[1], p[0] - start[0])
-                break
+        course = initial_course(cmds, start)
     if time_limit is None:
-        pts = [start, *positions]
-        chords = sum(math.dist(p, q) for p, q in zip(pts, pts[1:], strict=False))
-        slowest = max(profile.cruise_airspeed - (wind.speed + 3 * wind.gust if wind else 0), 5.0)
-        time_limit = 3.0 * chords / slowest + 600.0
+        time_limit = default_time_limit(cmds, start, profile, wind)
     s0 = AircraftState(float(start[0]), float(start[1]), float(start[2]), course)
     field_ = None if wind is None or wind.still else WindField(wind, profile.cruise_airspeed)
     pilot = NAVIGATORS[ap.flavour](

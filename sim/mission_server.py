@@ -253,6 +253,14 @@ class MissionServer:
         self.conflicts = 0  # uploads aborted because two senders with the same ids interleaved
         self.int_mode = flavour != "ardupilot"  # PX4 answers in the spelling it last heard
         self.request_slowdown = 0.0  # ArduPilot's stream slowdown from its radio's reports
+        # While a live flight flies the mission (sim/live_vehicle.py): ``listener`` hears every
+        # change of the stored mission ("stored", items) and every item set current by the
+        # ground station ("current", seq); ``in_flight`` keeps the current item across an
+        # upload (the autopilot flies on); ``in_place`` writes each item as it arrives, as
+        # ArduPilot does (sim/live_flight.py), instead of storing the mission when complete.
+        self.listener: Callable[[tuple[str, Any]], None] | None = None
+        self.in_flight = False
+        self.in_place = False
         self.commit([])
 
     # What it holds ----------------------------------------------------------------------------
@@ -275,7 +283,28 @@ class MissionServer:
             items = [home, *items[1:]]
         with self.lock:
             self.items = items
-            self.current_seq = 1 if self.home_at_seq0 and len(items) > 1 else 0
+            if not (self.in_flight and self.current_seq < len(items)):
+                self.current_seq = 1 if self.home_at_seq0 and len(items) > 1 else 0
+        self._tell("stored", list(items))
+
+    def _tell(self, what: str, value: Any) -> None:
+        if self.listener is not None:
+            self.listener((what, value))
+
+    def _write_in_place(self, seq: int | None, item: MissionItem | None, count: int) -> None:
+        """ArduPilot's stored mission during an upload: truncated to the new count when the
+        count arrives (``MissionItemProtocol::handle_mission_count`` calls ``truncate``), each
+        item written as it arrives (``replace_item`` / ``append_item``); home stays at 0."""
+        with self.lock:
+            items = self.items[: max(count, 1)]
+            if seq is not None and item is not None and seq > 0:
+                stored = replace(item, current=0, seq=seq)
+                if seq < len(items):
+                    items[seq] = stored
+                else:
+                    items.append(stored)
+            self.items = items
+        self._tell("stored", list(items))
 
     # Sending ----------------------------------------------------------------------------------
     def ack(self, peer: Peer, result: int, mission_type: int = MAV_MISSION_TYPE_MISSION) -> None:
@@ -371,6 +400,8 @@ class MissionServer:
             self.ack(peer, mavlink.MAV_MISSION_ACCEPTED)
             return
         self.upload = Upload(peer, address, count, now, now)
+        if self.in_place:
+            self._write_in_place(None, None, count)
         self._request(self.upload, now)
 
     def on_item(self, msg: Any, peer: Peer, address: Any) -> None:
@@ -425,6 +456,8 @@ class MissionServer:
         now = time.monotonic()
         up.items.append(item)
         up.last_receive = now
+        if self.in_place:
+            self._write_in_place(seq, item, up.count)
         if up.expected == up.count:
             self.upload = None
             self.completed = (peer, up.count)
@@ -488,6 +521,7 @@ class MissionServer:
             if ok:
                 self.current_seq = seq
         if ok:
+            self._tell("current", seq)
             self.mission_current()
         else:
             self.statustext(f"Set current item {seq} failed: no such item")

@@ -93,6 +93,9 @@ class MockVehicle:
         drop_link_duplicates: bool = True,
         baud: int = 57600,
         speedup: float | None = 100.0,
+        live: bool = False,
+        navigate_on_estimate: bool = True,
+        wind: Any = None,
     ) -> None:
         if flavour not in FLAVOURS:
             raise ValueError(f"flavour must be one of {FLAVOURS}, got {flavour!r}")
@@ -109,6 +112,13 @@ class MockVehicle:
         # Simulated seconds per wall second of a flight started by MISSION_START (1: real time,
         # None: fast-forward).
         self.speedup = speedup
+        # Live: the flight is flown as it is played and follows missions uploaded and items set
+        # current in flight (sim/live_vehicle.py), in ``wind`` (a sim.wind.WindModel), steering
+        # its INS estimate or the truth.
+        self.live = live
+        self.navigate_on_estimate = navigate_on_estimate
+        self.wind = wind
+        self.last_live: Any = None  # the last live flight's sim.live_vehicle.LiveReport
         self.link = Link(
             connection,
             baud=baud,
@@ -165,6 +175,7 @@ class MockVehicle:
         self.acks_sent = self.missions.acks_sent  # MAV_MISSION_RESULT of every MISSION_ACK
         self.last_report: replay_mod.ReplayReport | None = None
         self.flying = False  # HEARTBEAT says armed, mode AUTO while the flight plays
+        self.flight_seed = 0  # seeds a live flight's draws (error directions, outcomes)
         # MAVFTP served and advertised (MAV_PROTOCOL_CAPABILITY_FTP); off, it is an ArduPilot
         # built without AP_MAVLINK_FTP_ENABLED, which ignores FILE_TRANSFER_PROTOCOL.
         self.ftp_enabled = True
@@ -245,6 +256,10 @@ class MockVehicle:
 
     def _statustext(self, text: str, severity: int = mavlink.MAV_SEVERITY_INFO) -> None:
         self.statustexts.append(text)
+        self._send(self.mav.statustext_encode(severity, text[:50].encode("ascii", "replace")))
+
+    def _send_statustext_copy(self, text: str, severity: int = mavlink.MAV_SEVERITY_INFO) -> None:
+        """A STATUSTEXT sent again (a correction report's copies): not logged twice."""
         self._send(self.mav.statustext_encode(severity, text[:50].encode("ascii", "replace")))
 
     def _heartbeat(self) -> None:
@@ -442,7 +457,12 @@ class MockVehicle:
         """The flight thread: whatever the flight model raises ends this flight with a
         STATUSTEXT, never the vehicle (which goes on answering and can fly again)."""
         try:
-            self.fly(time_scale=self.speedup)
+            if self.live:
+                from sim.live_vehicle import fly_live
+
+                fly_live(self, seed=self.flight_seed, time_scale=self.speedup)
+            else:
+                self.fly(time_scale=self.speedup)
         except Exception as exc:
             self.flight_errors += 1
             self.flying = False

@@ -21,7 +21,8 @@ from gcs_planner.errors import GcsPlannerError
 
 # Subcommand modules, in the order `--help` lists them.
 COMMANDS = (
-    "plan", "export", "upload", "download", "mock_vehicle", "dry_run", "sweep", "compile",
+    "plan", "export", "upload", "download", "fly", "mock_vehicle", "dry_run", "sweep",
+    "compile",
 )  # fmt: skip
 # What `--help` says of a command whose module is not imported. A command missing here is
 # imported whenever the parser is built (slower start, nothing else lost).
@@ -30,6 +31,7 @@ SUMMARIES = {
     "export": "convert a plan JSON to a mission file, a map file or a picture",
     "upload": "upload a mission to a vehicle, read it back and compare",
     "download": "download the vehicle's mission to a file",
+    "fly": "fly a contingency policy: upload, watch the corrections, switch missions in flight",
     "mock_vehicle": "run a simulated fixed-wing autopilot for a ground station to talk to",
     "dry_run": "plan, upload to a mock vehicle over loopback, read back, replay and report",
     "sweep": "plan many scenarios x parameter values as tasks on Dask (local or a cluster)",

@@ -13,6 +13,7 @@ from gcs_planner.cli.common import (
     load_scenario_from_args,
     plan_from_args,
 )
+from gcs_planner.cli.dry_run_policy import add_policy_arguments, refuse_plan_flags, run_policy
 from gcs_planner.cli.vehicle_from import add_envelope_arguments, derive_envelope
 from gcs_planner.dry_run import (
     DEVIATION_STEP_M,
@@ -120,6 +121,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         help="write the flown track beside the mission's path (.geojson or .kml)",
     )
     g.add_argument("--json", action="store_true", help="print one JSON object, nothing else")
+    add_policy_arguments(g)
     p.set_defaults(func=run)
 
 
@@ -159,6 +161,9 @@ def parse_params(pairs: list[str]) -> dict[str, float]:
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.policy is not None:
+        refuse_plan_flags(args)
+        return run_policy(args, _number)
     runs = int(_number(args.runs, "--runs", int, 0))
     wind = parse_wind(args.wind, args.gust)
     settings = parse_params(args.param)

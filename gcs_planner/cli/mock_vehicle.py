@@ -118,6 +118,7 @@ def run(args: argparse.Namespace) -> int:
         capture_radius=args.capture_radius,
         baud=args.baud,
         speedup=args.speedup or None,
+        live=args.live,
     )
     vehicle.ftp_enabled = not args.no_ftp
     if args.radio is not None:
@@ -206,6 +207,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         metavar="N",
         help="a flight started by MISSION_START plays N times faster than real time "
         "(1: real time; 0: as fast as the link takes it; default 100)",
+    )
+    p.add_argument(
+        "--live",
+        action="store_true",
+        help="fly the mission as it is played, following missions uploaded and items set "
+        "current in flight (what `gcs-planner fly` needs; docs/flying-policies.md); the "
+        "speedup is then the flight's time scale (0 is taken as 20)",
     )
     p.add_argument(
         "--no-ftp",

@@ -1,0 +1,241 @@
+"""The dry run of a contingency policy: each run is a flight of the mock vehicle (a live one,
+sim/live_vehicle.py) on UDP loopback with the ground station in the loop
+(gcs_planner/policy_flight.py) switching missions in flight, through the link losses asked for.
+The success rate, with its Wilson interval, is set against the policy's exact probability.
+
+Time: the vehicle flies ``time_scale`` simulated seconds per wall second (sim/live_vehicle.py)
+and the ground station's uploads take the link's time meanwhile, so a switch is made where the
+aircraft is when the branch is verified and set current, as in the air. A run's flight lasts
+its simulated duration divided by the time scale; a larger scale is faster but shortens, in
+wall time, the window a switch must be made in (the distance from the failed fix to the next
+item, at the ground speed, divided by the scale).
+
+A run counts as arrived when the vehicle's own verdict says so (the replay's: B within the
+capture radius with both errors within theta); a run whose ground station failed (a mission not
+uploaded, a current item not confirmed, a silent vehicle) is counted as not arrived and named.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from gcs_planner.confidence import wilson_interval
+from gcs_planner.errors import InputError, LinkError
+from gcs_planner.link.connection import open_link
+from gcs_planner.link.mission_client import MissionClient
+from gcs_planner.link.params import set_parameter
+from gcs_planner.mission.policy_missions import PolicyMissions
+from gcs_planner.policy_flight import PolicyFlight
+from gcs_planner.scenario.model import Kind, Scenario
+from sim.faults import FaultRates
+from sim.guidance import nav_commands
+from sim.live_vehicle import DEFAULT_TIME_SCALE
+from sim.replay import DEFAULT_CAPTURE_RADIUS_M, scenario_frame
+from sim.vehicle import MockVehicle, free_udp_port
+
+# PX4 ignores param2 on a fixed wing: the dry run's 1 m acceptance is its parameter.
+PX4_ACCEPTANCE = ("NAV_ACC_RAD", 1.0)
+
+
+@dataclass(frozen=True)
+class PolicyRun:
+    seed: int
+    arrived: bool
+    missions_flown: tuple[str, ...]
+    points_met: tuple[str, ...]
+    why: str  # why it did not arrive, or what failed on the link ("" when it arrived)
+    link_failed: bool = False
+
+
+@dataclass(frozen=True)
+class PolicyDryRunReport:
+    flavour: str
+    runs: tuple[PolicyRun, ...]
+    loss: float
+    seed: int
+    time_scale: float
+    probability: float | None  # the policy's exact probability of arriving, when given
+    confidence: float
+
+    @property
+    def successes(self) -> int:
+        return sum(r.arrived for r in self.runs)
+
+    @property
+    def success_rate(self) -> float:
+        return self.successes / len(self.runs) if self.runs else 0.0
+
+    @property
+    def interval(self) -> tuple[float, float]:
+        return wilson_interval(self.successes, len(self.runs), self.confidence)
+
+    @property
+    def link_failures(self) -> int:
+        return sum(r.link_failed for r in self.runs)
+
+    @property
+    def probability_within_ci(self) -> bool | None:
+        if self.probability is None or not self.runs:
+            return None
+        low, high = self.interval
+        return low <= self.probability <= high
+
+    @property
+    def ok(self) -> bool:
+        return self.link_failures == 0 and self.probability_within_ci is not False
+
+
+def policy_probability(path: str) -> float | None:
+    """The policy's exact probability of arriving, as policy.json carries it
+    (``value.probability``, docs/policy-json.md), or None when the file gives none."""
+    from gcs_planner.mission.policy_file import load_policy_dict
+
+    data = load_policy_dict(path)
+    value = data.get("value")
+    value = value.get("probability") if isinstance(value, dict) else None
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, int | float) or not 0 <= value <= 1:
+        raise InputError(
+            f"must be a number in [0, 1], got {value!r}", file=path, field="value.probability"
+        )
+    return float(value)
+
+
+def check_against_scenario(
+    policy: PolicyMissions, scenario: Scenario, capture_radius: float, source: str = ""
+) -> None:
+    """Each switch's point is an unreliable correction point of the vehicle's landmark database
+    and its mission item lies on it (within the capture radius): else one line, exit 2."""
+    index = {pid: i for i, pid in enumerate(scenario.ids)}
+    frame = scenario_frame(scenario)
+    base = float(scenario.xyz[scenario.start][2] + frame.origin.alt)
+    for k, s in enumerate(policy.switches):
+        field = f"switches[{k}]"
+        i = index.get(s.point)
+        if i is None or Kind(int(scenario.kind[i])) not in (Kind.V, Kind.H):
+            raise InputError(
+                f"point {s.point} is not a correction point of {scenario.name}",
+                file=source,
+                field=field,
+            )
+        if not scenario.unreliable[i]:
+            raise InputError(
+                f"point {s.point} is reliable in {scenario.name}: its fix cannot fail",
+                file=source,
+                field=field,
+            )
+        item = policy.missions[s.mission].items[s.item]
+        cmds = nav_commands([item], frame, base, home_at_seq0=False)
+        pos = cmds[0].pos if cmds else None
+        miss = math.inf if pos is None else math.dist(pos, scenario.xyz[i])
+        if miss > capture_radius:
+            raise InputError(
+                f"item {s.item} of mission {s.mission!r} is {miss:.0f} m from point "
+                f"{s.point} of {scenario.name}: the policy is not for this "
+                "scenario",
+                file=source,
+                field=field,
+            )
+
+
+def policy_dry_run(
+    policy: PolicyMissions,
+    landmarks: Scenario,
+    *,
+    runs: int,
+    probability: float | None = None,
+    loss: float = 0.0,
+    seed: int = 0,
+    time_scale: float = DEFAULT_TIME_SCALE,
+    capture_radius: float = DEFAULT_CAPTURE_RADIUS_M,
+    timeout: float = 0.5,
+    retries: int = 5,
+    navigate_on_estimate: bool = True,
+    confidence: float = 0.99,
+    say: Callable[[str], None] | None = None,
+) -> PolicyDryRunReport:
+    """Fly ``policy`` ``runs`` times with a mock vehicle whose landmark database is
+    ``landmarks``; ``loss`` is the fraction of messages the vehicle drops both ways."""
+    if runs < 1:
+        raise ValueError("runs must be >= 1")
+    flavour = policy.missions[policy.primary].firmware
+    done = []
+    for k in range(runs):
+        done.append(
+            _one_run(
+                policy,
+                landmarks,
+                flavour,
+                seed,
+                k,
+                loss,
+                time_scale,
+                capture_radius,
+                timeout,
+                retries,
+                navigate_on_estimate,
+                say,
+            )
+        )
+    return PolicyDryRunReport(flavour, tuple(done), loss, seed, time_scale, probability, confidence)
+
+
+def _one_run(
+    policy,
+    landmarks,
+    flavour,
+    seed,
+    k,
+    loss,
+    time_scale,
+    capture_radius,
+    timeout,
+    retries,
+    estimate,
+    say,
+) -> PolicyRun:
+    port = free_udp_port()
+    faults = FaultRates(drop=loss) if loss > 0 else None
+    vehicle = MockVehicle(
+        f"udpin:127.0.0.1:{port}",
+        scenario=landmarks,
+        flavour=flavour,
+        live=True,
+        speedup=time_scale,
+        faults_in=faults,
+        faults_out=faults,
+        fault_seed=seed * 7919 + 2 * k,
+        capture_radius=capture_radius,
+        navigate_on_estimate=estimate,
+    )
+    vehicle.flight_seed = seed * 1_000_003 + k
+    flown: tuple[str, ...] = ()
+    why = ""
+    with vehicle:
+        link = open_link(f"udpout:127.0.0.1:{port}")
+        client = MissionClient(link, timeout=timeout, retries=retries, transfer="mission")
+        try:
+            client.connect(timeout=10.0)
+            if flavour == "px4":
+                set_parameter(
+                    link, client._target(), *PX4_ACCEPTANCE, timeout=timeout, retries=retries
+                )
+            flight = PolicyFlight(client, policy, say=say or (lambda _line: None))
+            try:
+                flight.run(start=True)
+            finally:
+                flown = tuple(flight.flown_names)
+        except LinkError as exc:
+            why = str(exc)
+        finally:
+            link.close()
+        if vehicle._fly_thread is not None:
+            vehicle._fly_thread.join(timeout=60.0)  # the vehicle's verdict is set at its end
+    live = vehicle.last_live
+    if why or live is None:
+        return PolicyRun(k, False, flown, (), why or "the vehicle did not fly", link_failed=True)
+    reason = "" if live.arrived else (live.run.lost_reason or "did not arrive")
+    return PolicyRun(k, live.arrived, flown, live.points_met, reason)

@@ -1,0 +1,179 @@
+"""The mock vehicle's flight when its mission may change in flight (``MockVehicle(live=True)``):
+the aircraft flies on at ``time_scale`` simulated seconds per wall second while the ground
+station talks to it, and takes what the ground station uploads and sets as a real autopilot
+does (sim/live_flight.py).
+
+Time is honest: the simulated clock is the wall clock times ``time_scale`` from the moment the
+flight starts, whatever the link does. An upload that takes 2 s of wall time at a time scale of
+20 costs 40 s of flight, about 1 km at 25 m/s: a ground station that switches missions after a
+failed fix has, as its window, the distance from that fix to the next item of the mission
+flown (the aircraft then turns to whatever it holds) divided by the ground speed and by the
+time scale. Changes are taken at the next wall tick (1/``POSITION_RATE_HZ`` s): the aircraft
+flies on up to ``time_scale`` / 10 s meanwhile, as an autopilot's 10 Hz mission loop lags by a
+cycle.
+
+The telemetry is the replayed flight's (sim/telemetry.py): HEARTBEAT armed in AUTO while
+flying, GLOBAL_POSITION_INT / ATTITUDE / VFR_HUD at 10 Hz of wall time, MISSION_CURRENT when
+the item changes, MISSION_ITEM_REACHED, and the correction reports of
+gcs_planner/link/correction_report.py the moment each correction is drawn (when the true track
+leaves the landmark's capture radius). The flight ends at the mission's end (the loiter at B),
+when the INS is lost, or at the time limit; its verdict is the replay's (``LiveFlight.run``).
+"""
+
+from __future__ import annotations
+
+import queue
+import time
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from gcs_planner.link.connection import mavlink
+from gcs_planner.link.correction_report import format_report
+from sim import telemetry
+from sim.guidance import AutopilotParams
+from sim.ins import InsCorrection
+from sim.live_flight import LiveFlight
+from sim.replay import FlightPath, ReplayRun, scenario_frame
+
+DEFAULT_TIME_SCALE = 20.0
+# A correction report is a STATUSTEXT, which no one acknowledges: it goes out this many times,
+# this many wall seconds apart (docs/flying-policies.md); the ground station takes the
+# first copy (a landmark is used once per flight). At 5 % loss each way one report in 8000 is
+# lost all three times.
+REPORT_COPIES = 3
+REPORT_REPEAT_S = 0.5
+
+
+@dataclass(frozen=True)
+class LiveReport:
+    """A flight flown live: its verdict, the missions it held, the corrections it met."""
+
+    run: ReplayRun
+    ended: str
+    flight_time_s: float
+    changes: tuple[tuple[float, str], ...]
+    points_met: tuple[str, ...]  # correction landmarks the flight used, in order
+    final_mission: tuple[Any, ...]  # the items stored when it ended
+    track: FlightPath | None = None  # the flown track (local frame)
+
+    @property
+    def arrived(self) -> bool:
+        return self.run.arrived
+
+
+class _Samples:
+    """One sample of a live flight in the shape telemetry.position_messages reads."""
+
+    def __init__(self, row: np.ndarray) -> None:
+        self.xyz = row[None, 1:4]
+        self.course, self.bank, self.climb = row[None, 4], row[None, 5], row[None, 6]
+        self.airspeed = row[None, 7]
+
+
+def report_text(c: InsCorrection, delta: float) -> tuple[str, int]:
+    """The STATUSTEXT and severity of one correction."""
+    if c.succeeded is None:
+        outcome, severity = "LOST", mavlink.MAV_SEVERITY_CRITICAL
+    elif c.succeeded:
+        outcome, severity = "made", mavlink.MAV_SEVERITY_INFO
+    else:
+        outcome, severity = "FAILED", mavlink.MAV_SEVERITY_WARNING
+    detail = f"v{c.v_before_m * delta:.1f} h{c.h_before_m * delta:.1f}"
+    return format_report(c.kind.name, c.id, outcome, detail), severity
+
+
+def fly_live(vehicle: Any, *, seed: int = 0, time_scale: float | None = None) -> LiveReport:
+    """Fly ``vehicle``'s stored mission (a sim.vehicle.MockVehicle with a scenario), taking the
+    uploads and set-current commands that arrive meanwhile."""
+    scenario = vehicle.scenario
+    scale = float(time_scale or vehicle.speedup or DEFAULT_TIME_SCALE)
+    server = vehicle.missions
+    changes: queue.SimpleQueue = queue.SimpleQueue()
+    profile = replace(scenario.vehicle, cruise_airspeed=vehicle.cruise_speed)
+    flight = LiveFlight(
+        vehicle.mission,
+        scenario,
+        flavour=vehicle.flavour,
+        autopilot=AutopilotParams.from_parameters(vehicle.flavour, vehicle.parameters),
+        profile=profile,
+        capture_radius=vehicle.capture_radius,
+        rng=np.random.default_rng(seed),
+        navigate_on_estimate=vehicle.navigate_on_estimate,
+        wind=vehicle.wind,
+    )
+    frame = scenario_frame(scenario)
+    delta = flight.params.delta
+    met: list[str] = []
+    repeats: list[list] = []  # [(text, severity), when next, copies left]
+    server.listener = changes.put
+    server.in_flight = True
+    # ArduPilot writes uploaded items in place (see sim/live_flight.py); PX4 switches storage.
+    server.in_place = vehicle.flavour == "ardupilot"
+    vehicle.flying = True
+    vehicle._heartbeat()
+    boot = start = time.monotonic()
+    last_current = -2
+    try:
+        while not vehicle._stop.is_set():
+            happened = flight.fly_until((time.monotonic() - start) * scale)
+            for e in happened.reached:
+                vehicle._send(vehicle.mav.mission_item_reached_encode(e.seq))
+            now = time.monotonic()
+            for c in happened.corrections:
+                met.append(c.id)
+                text = report_text(c, delta)
+                vehicle._statustext(*text)
+                repeats.append([text, now + REPORT_REPEAT_S, REPORT_COPIES - 1])
+            for m in happened.missed:
+                text = (format_report(m.kind, m.id, "MISSED", f"by {m.miss:.1f}m"),
+                        mavlink.MAV_SEVERITY_WARNING)  # fmt: skip
+                vehicle._statustext(*text)
+                repeats.append([text, now + REPORT_REPEAT_S, REPORT_COPIES - 1])
+            for r in repeats:
+                if r[2] > 0 and now >= r[1]:
+                    vehicle._send_statustext_copy(*r[0])
+                    r[1], r[2] = now + REPORT_REPEAT_S, r[2] - 1
+            while True:
+                try:
+                    what, value = changes.get_nowait()
+                except queue.Empty:
+                    break
+                if what == "stored":
+                    flight.stored_changed(value, keep_active=server.in_place)
+                elif what == "current":
+                    flight.set_current(value)
+            if flight.current >= 0 and flight.current != last_current:
+                last_current = flight.current
+                vehicle._fly_current(last_current)
+            for msg in telemetry.position_messages(
+                vehicle.mav, frame, _Samples(flight.sample()), 0, boot
+            ):
+                vehicle._send(msg)
+            if not flight.going:
+                break
+            vehicle._stop.wait(1.0 / telemetry.POSITION_RATE_HZ)
+        last = flight.fly_until(flight.t)  # any told by the last step
+        for c in last.corrections:
+            met.append(c.id)
+            vehicle._statustext(*report_text(c, delta))
+        for m in last.missed:
+            vehicle._statustext(format_report(m.kind, m.id, "MISSED", f"by {m.miss:.1f}m"),
+                                mavlink.MAV_SEVERITY_WARNING)  # fmt: skip
+        run = flight.run()
+        if not run.arrived:
+            reason = run.lost_reason or "did not arrive"
+            vehicle._statustext(f"INS LOST: {reason}"[:50], mavlink.MAV_SEVERITY_CRITICAL)
+    finally:
+        server.listener = None
+        server.in_flight = False
+        server.in_place = False
+        vehicle.flying = False
+        vehicle._heartbeat()
+    report = LiveReport(
+        run, flight.pilot.ended, flight.t, tuple(flight.changes), tuple(met),
+        tuple(vehicle.mission), flight.track(),
+    )  # fmt: skip
+    vehicle.last_live = report
+    return report
