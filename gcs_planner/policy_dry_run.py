@@ -150,6 +150,7 @@ def policy_dry_run(
     loss: float = 0.0,
     seed: int = 0,
     time_scale: float = DEFAULT_TIME_SCALE,
+    cruise_scale: float | None = None,
     capture_radius: float = DEFAULT_CAPTURE_RADIUS_M,
     timeout: float = 0.5,
     retries: int = 5,
@@ -172,7 +173,7 @@ def policy_dry_run(
                 seed,
                 k,
                 loss,
-                time_scale,
+                (time_scale, cruise_scale),
                 capture_radius,
                 timeout,
                 retries,
@@ -190,7 +191,7 @@ def _one_run(
     seed,
     k,
     loss,
-    time_scale,
+    scales,
     capture_radius,
     timeout,
     retries,
@@ -204,7 +205,8 @@ def _one_run(
         scenario=landmarks,
         flavour=flavour,
         live=True,
-        speedup=time_scale,
+        speedup=scales[0],
+        cruise_speedup=scales[1],
         faults_in=faults,
         faults_out=faults,
         fault_seed=seed * 7919 + 2 * k,
@@ -212,6 +214,8 @@ def _one_run(
         navigate_on_estimate=estimate,
     )
     vehicle.flight_seed = seed * 1_000_003 + k
+    # The time warp (a cruise time scale) ends only where the policy switches.
+    vehicle.watch_points = frozenset(s.point for s in policy.switches)
     flown: tuple[str, ...] = ()
     why = ""
     with vehicle:

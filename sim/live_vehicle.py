@@ -34,7 +34,7 @@ from gcs_planner.link.correction_report import format_report
 from sim import telemetry
 from sim.guidance import AutopilotParams
 from sim.ins import InsCorrection
-from sim.live_flight import LiveFlight
+from sim.live_flight import Happened, LiveFlight
 from sim.replay import FlightPath, ReplayRun, scenario_frame
 
 DEFAULT_TIME_SCALE = 20.0
@@ -70,6 +70,63 @@ class _Samples:
         self.xyz = row[None, 1:4]
         self.course, self.bank, self.climb = row[None, 4], row[None, 5], row[None, 6]
         self.airspeed = row[None, 7]
+
+
+# With a cruise time scale (``MockVehicle.cruise_speedup``), the flight advances at most this many
+# simulated seconds between looks for a failed or missed fix, so that the honest time scale
+# starts within this much flight of the fix (125 m at 25 m/s).
+CRUISE_STEP_S = 5.0
+# The honest window after a failed or missed fix closes when the ground station sets an item
+# current, at the next correction, or after this long (simulated).
+WINDOW_MAX_S = 1800.0
+
+
+@dataclass
+class _Window:
+    """After a failed or missed fix, while the ground station may act: the honest time scale."""
+
+    since: float  # simulated seconds
+
+    def over(self, flight: LiveFlight, t: float, happened: Any) -> bool:
+        return flight.current < 0 or bool(happened.corrections) or t - self.since > WINDOW_MAX_S
+
+
+def _fly_to(
+    flight: LiveFlight, t0: float, target: float, cruising: bool, watch: frozenset[str] | None
+) -> tuple[Any, float, bool]:
+    """Fly from simulated ``t0`` to ``target``: in one go at the honest scale, in steps of
+    CRUISE_STEP_S while cruising, stopping at the step where a watched fix fails or a watched
+    landmark is missed (``watch`` None: any). Returns (what happened, the time reached,
+    whether such a fix stopped it)."""
+    if not cruising:
+        happened = flight.fly_until(target)
+        return happened, target, _needs_window(happened, watch)
+    parts = []
+    t = t0
+    opened = False
+    while t < target and flight.going:
+        t = min(target, t + CRUISE_STEP_S)
+        part = flight.fly_until(t)
+        parts.append(part)
+        if _needs_window(part, watch):
+            opened = True
+            break
+    if not parts:
+        parts.append(flight.fly_until(t))
+    merged = Happened(
+        tuple(c for p in parts for c in p.corrections),
+        tuple(e for p in parts for e in p.reached),
+        parts[-1].current,
+        tuple(m for p in parts for m in p.missed),
+    )
+    return merged, t, opened
+
+
+def _needs_window(happened: Any, watch: frozenset[str] | None) -> bool:
+    """Whether a fix failed or a landmark was missed where the ground station may act."""
+    ids = [m.id for m in happened.missed]
+    ids += [c.id for c in happened.corrections if c.succeeded is False]
+    return any(watch is None or i in watch for i in ids)
 
 
 def report_text(c: InsCorrection, delta: float) -> tuple[str, int]:
@@ -113,14 +170,28 @@ def fly_live(vehicle: Any, *, seed: int = 0, time_scale: float | None = None) ->
     server.in_place = vehicle.flavour == "ardupilot"
     vehicle.flying = True
     vehicle._heartbeat()
-    boot = start = time.monotonic()
+    boot = last = time.monotonic()
     last_current = -2
+    cruise = getattr(vehicle, "cruise_speedup", None)
+    cruise = scale if cruise is None else max(float(cruise), scale)
+    # The landmarks whose failed or missed fix the ground station acts on (None: any).
+    watch = getattr(vehicle, "watch_points", None)
+    sim_t = 0.0
+    window: _Window | None = None
     try:
         while not vehicle._stop.is_set():
-            happened = flight.fly_until((time.monotonic() - start) * scale)
+            now = time.monotonic()
+            target = sim_t + (now - last) * (scale if window is not None else cruise)
+            last = now
+            happened, sim_t, opened = _fly_to(
+                flight, sim_t, target, window is None and cruise > scale, watch
+            )
+            if window is not None and window.over(flight, sim_t, happened):
+                window = None
+            if opened and window is None:
+                window = _Window(sim_t)
             for e in happened.reached:
                 vehicle._send(vehicle.mav.mission_item_reached_encode(e.seq))
-            now = time.monotonic()
             for c in happened.corrections:
                 met.append(c.id)
                 text = report_text(c, delta)
@@ -144,6 +215,7 @@ def fly_live(vehicle: Any, *, seed: int = 0, time_scale: float | None = None) ->
                     flight.stored_changed(value, keep_active=server.in_place)
                 elif what == "current":
                     flight.set_current(value)
+                    window = None  # the ground station has acted: back to the cruise scale
             if flight.current >= 0 and flight.current != last_current:
                 last_current = flight.current
                 vehicle._fly_current(last_current)

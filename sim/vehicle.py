@@ -94,6 +94,7 @@ class MockVehicle:
         baud: int = 57600,
         speedup: float | None = 100.0,
         live: bool = False,
+        cruise_speedup: float | None = None,
         navigate_on_estimate: bool = True,
         wind: Any = None,
     ) -> None:
@@ -112,6 +113,12 @@ class MockVehicle:
         # Simulated seconds per wall second of a flight started by MISSION_START (1: real time,
         # None: fast-forward).
         self.speedup = speedup
+        # Live flights: the time scale while no failed or missed fix awaits the ground station
+        # (None: ``speedup`` throughout; see sim/live_vehicle.py, "cruise").
+        self.cruise_speedup = cruise_speedup
+        # ... and the landmarks whose failed or missed fix the ground station acts on (None:
+        # every one): elsewhere the flight keeps its cruise time scale.
+        self.watch_points: frozenset[str] | None = None
         # Live: the flight is flown as it is played and follows missions uploaded and items set
         # current in flight (sim/live_vehicle.py), in ``wind`` (a sim.wind.WindModel), steering
         # its INS estimate or the truth.

@@ -38,6 +38,14 @@ def add_policy_arguments(g: argparse._ArgumentGroup) -> None:
         f"station talks to it (default {DEFAULT_TIME_SCALE:g}); the window for a switch, in "
         "wall time, is the distance to the next item over the ground speed, divided by it",
     )
+    g.add_argument(
+        "--cruise-time-scale",
+        metavar="Y",
+        help="--policy: the time scale while no failed or missed fix awaits the ground station "
+        "(default: --time-scale throughout); after such a fix the vehicle flies at --time-scale "
+        "until an item is set current or it has reached two more items, so that every switch "
+        "is flown as at --time-scale, and long flights take minutes, not hours",
+    )
 
 
 def run_policy(args: argparse.Namespace, number) -> int:  # noqa: ANN001 - cli.dry_run._number
@@ -45,6 +53,9 @@ def run_policy(args: argparse.Namespace, number) -> int:  # noqa: ANN001 - cli.d
     loss = number(args.loss, "--loss", float, 0.0, 1.0)
     seed = int(number(args.seed, "--seed", int, 0))
     scale = number(args.time_scale, "--time-scale", float, 0.01, 10_000.0)
+    cruise = None
+    if args.cruise_time_scale is not None:
+        cruise = number(args.cruise_time_scale, "--cruise-time-scale", float, scale, 100_000.0)
     landmarks = load_scenario_from_args(args)
     policy = load_policy(args.policy)
     check_against_scenario(policy, landmarks, DEFAULT_CAPTURE_RADIUS_M, args.policy)
@@ -63,6 +74,7 @@ def run_policy(args: argparse.Namespace, number) -> int:  # noqa: ANN001 - cli.d
         loss=loss,
         seed=seed,
         time_scale=scale,
+        cruise_scale=cruise,
         navigate_on_estimate=not args.navigate_on_truth,
         say=say,
     )
