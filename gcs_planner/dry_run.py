@@ -130,7 +130,7 @@ class DryRunReport:
     h_at_b: float
     theta: float
     planned_probability: float
-    flown_to_b: float = 0.0  # the flown track's length to its closest approach to B
+    flown_to_b: float = 0.0  # the flown track to its closest approach to B (or its loss before)
     flight_seconds: float = 0.0
     flight_ended: str = ""
     max_deviation: float = 0.0  # largest 3D distance of the flown track from the mission's path

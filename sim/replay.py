@@ -19,7 +19,9 @@ ACCEPTANCE radius) of a correction point of the database that has not been used 
 vehicle arrives there: the limits of that kind must hold (else the vehicle is lost), then the
 point corrects its component; an unreliable point fails with probability 1 - p, and the
 component becomes min(component, r). The vehicle must pass within ``capture_radius`` of B with
-both errors <= theta; the replay ends at its closest approach to B. Errors are kept in metres
+both errors <= theta; the replay ends at its closest approach to B, or where a flight on the
+INS estimate was lost before it came to B (its closest approach to B so far says nothing of the
+landmarks it met after it). Errors are kept in metres
 flown since the last reset, as the planner keeps them, and compared with ``Parameters.limits_m``.
 
 Flown on the truth in still air, the path and the corrections it meets do not depend on chance,
@@ -233,7 +235,7 @@ class ReplayReport:
     monte_carlo: MonteCarloSummary | None = None
     encounters: tuple[Encounter, ...] = field(default=(), repr=False)
     # The flight as flown (the whole of it), the mission's nominal path, and the flown track up
-    # to the closest approach to B: what the INS replay used.
+    # to the closest approach to B (or to where it was lost before B): what the INS replay used.
     flight: guidance.Flight | None = field(default=None, repr=False)
     nominal: FlightPath | None = field(default=None, repr=False)
     flown: FlightPath | None = field(default=None, repr=False)
@@ -635,7 +637,8 @@ def flown_path(flight: guidance.Flight) -> FlightPath:
 def _ins_run(
     ins: InsEstimate, path: FlightPath, scenario: Scenario, params: Parameters, capture: float
 ) -> tuple[ReplayRun, list[Encounter]]:
-    """The run the INS made in flight, up to the closest approach to B (``path``'s end)."""
+    """The run the INS made in flight, up to ``path``'s end: the closest approach to B, or where
+    the flight was lost before it came to B."""
     delta = params.delta
     end = path.length
     rows: list[CorrectionRow] = []
@@ -730,10 +733,18 @@ class FlightSetup:
             compiled=self.compiled, commands=self.commands,
         )  # fmt: skip
         track = flown_path(flight)
-        b_distance, _ = closest_approach(
+        b_distance, b_miss = closest_approach(
             track, sc.xyz[sc.end], self.capture_radius, compiled=self.compiled
         )
-        path = track.until(b_distance)
+        if flight.ended == "lost" and b_miss > self.capture_radius:
+            # Lost on arrival at a landmark before it came to B: the run is the flight up to
+            # its loss. Its closest approach to B so far can lie kilometres back (a route that
+            # turns away from B), and cutting there would drop the corrections after it (the
+            # failed one and the loss) and call the landmarks met after it missed: a loss by
+            # chance at unreliable points counted as lost by the flight.
+            path = track
+        else:
+            path = track.until(b_distance)
         if ins is not None:
             ins.finish()
             run, encounters = _ins_run(ins, path, sc, self.params, self.capture_radius)
