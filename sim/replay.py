@@ -203,6 +203,9 @@ class LostRun:
 
     missed: bool
     failed: tuple[str, ...]
+    run: int = -1  # its index among the runs (its draws: (seed, run))
+    reason: str = ""  # where it was lost and why (ReplayRun.lost_reason)
+    missed_ids: tuple[str, ...] = ()  # the landmarks it missed before its loss
 
 
 @dataclass(frozen=True)
@@ -547,13 +550,20 @@ def monte_carlo(
     ok = np.ones(runs, dtype=bool)
     failed = np.zeros(runs, dtype=bool)  # a failed correction before the run was lost
     failed_ids: list[list[str]] = [[] for _ in range(runs)]
+    reasons = [""] * runs  # where each run was lost, in the words of _fly
     last = 0.0
     for e in encounters:
         v += e.distance - last
         h += e.distance - last
         last = e.distance
         v_lim, h_lim = params.limits_m(e.kind)
-        ok &= (v <= v_lim) & (h <= h_lim)
+        within = (v <= v_lim) & (h <= h_lim)
+        for r in np.flatnonzero(ok & ~within):
+            what = "vertical" if v[r] > v_lim else "horizontal"
+            reasons[r] = (
+                f"lost at {e.kind.name} point {e.id}: {what} error over its limit on arrival"
+            )
+        ok &= within
         won = rng.random(runs) < params.p_success if e.unreliable else np.ones(runs, bool)
         failed |= ok & ~won
         for r in np.flatnonzero(ok & ~won):
@@ -565,12 +575,23 @@ def monte_carlo(
     v += path.length - last
     h += path.length - last
     theta_m = params.limits_m(Kind.B)[0]
-    reached = float(np.linalg.norm(path.points[-1] - scenario.xyz[scenario.end])) <= capture_radius
-    ok &= (v <= theta_m) & (h <= theta_m) & reached
+    miss_b = float(np.linalg.norm(path.points[-1] - scenario.xyz[scenario.end]))
+    reached = miss_b <= capture_radius
+    arrived = (v <= theta_m) & (h <= theta_m) & reached
+    for r in np.flatnonzero(ok & ~arrived):
+        reasons[r] = (
+            "lost at B: an error over theta on arrival"
+            if reached
+            else f"the flight passes {miss_b:.1f} m from B at its closest (3D), outside the "
+            f"capture radius {capture_radius:g} m"
+        )
+    ok &= arrived
     successes = int(np.count_nonzero(ok))
     low, high = wilson_interval(successes, runs, confidence)
     flight = int(np.count_nonzero(~ok & ~failed))
-    lost = tuple(LostRun(False, tuple(failed_ids[r])) for r in np.flatnonzero(~ok))
+    lost = tuple(
+        LostRun(False, tuple(failed_ids[r]), int(r), reasons[r]) for r in np.flatnonzero(~ok)
+    )
     return MonteCarloSummary(
         runs, successes, successes / runs, low, high, confidence, flight,
         runs - successes - flight, lost_runs=lost,
@@ -777,12 +798,13 @@ def monte_carlo_flights(
     for k in range(runs):
         rng = np.random.default_rng([seed, k])
         model = None if wind.still else wind.draw(rng)
-        run, *_ = setup.fly_once(rng, model)
+        run, _, _, _, missed = setup.fly_once(rng, model)
         successes += run.arrived
         flight_losses += run.flight_lost
         if not run.arrived:
             failed = tuple(c.id for c in run.corrections if c.succeeded is False)
-            lost.append(LostRun(run.missed_before_loss, failed))
+            before = tuple(m.id for m in missed if m.distance <= run.flown_length)
+            lost.append(LostRun(run.missed_before_loss, failed, k, run.lost_reason, before))
     low, high = wilson_interval(successes, runs, confidence)
     return MonteCarloSummary(
         runs, successes, successes / runs, low, high, confidence, flight_losses,
@@ -872,7 +894,10 @@ def replay(
                 lost = runs - mc.successes
                 mc = replace(
                     mc, flight_losses=lost, correction_losses=0,
-                    lost_runs=tuple(replace(r, missed=True) for r in mc.lost_runs),
+                    lost_runs=tuple(
+                        replace(r, missed=True, missed_ids=tuple(m.id for m in missed))
+                        for r in mc.lost_runs
+                    ),
                 )  # fmt: skip
         else:
             mc = monte_carlo_flights(setup, wind, runs, seed + 1, confidence)
