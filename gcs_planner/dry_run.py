@@ -101,6 +101,17 @@ class DryRunRow:
 
 
 @dataclass(frozen=True)
+class LostRunRow:
+    """One run of the Monte Carlo that did not arrive."""
+
+    run: int  # its index (its draws: --seed + 1 and this index)
+    reason: str  # where it was lost and why
+    missed: tuple[str, ...]  # landmarks of the mission it missed before its loss
+    failed: tuple[str, ...]  # unreliable points whose correction failed before its loss
+    by_the_flight: bool  # lost by the flight (``lost_by_the_flight``), not by chance
+
+
+@dataclass(frozen=True)
 class DryRunReport:
     scenario: str
     flavour: str
@@ -130,7 +141,7 @@ class DryRunReport:
     h_at_b: float
     theta: float
     planned_probability: float
-    flown_to_b: float = 0.0  # the flown track's length to its closest approach to B
+    flown_to_b: float = 0.0  # the flown track to its closest approach to B (or its loss before)
     flight_seconds: float = 0.0
     flight_ended: str = ""
     max_deviation: float = 0.0  # largest 3D distance of the flown track from the mission's path
@@ -162,6 +173,9 @@ class DryRunReport:
     correction_losses: int = 0
     runs_flown: bool = False  # each run flown on its own (wind, gusts, estimate drawn per run)
     flight_lost: bool = False  # the seeded flight was lost by the flight
+    # Every lost run of the Monte Carlo: where and why, what it missed and where its
+    # corrections failed before, and whether it counts as lost by the flight.
+    lost_runs: tuple[LostRunRow, ...] = ()
 
     @property
     def demonstration(self) -> bool:
@@ -406,12 +420,15 @@ def dry_run(
     dev, dev_at = max_deviation(replayed, trajectory_local(plan_dict, step=DEVIATION_STEP_M))
     arcs = sum(s.leg.arc for s in route.stops if s.leg is not None)
     mc = replayed.monte_carlo
-    flight_losses = 0
+    lost_runs: list[LostRunRow] = []
     if mc is not None:
         params = plan.scenario.params
-        flight_losses = sum(
-            lost_by_the_flight(route, params, r.missed, r.failed) for r in mc.lost_runs
-        )
+        lost_runs = [
+            LostRunRow(r.run, r.reason, r.missed_ids, r.failed,
+                       lost_by_the_flight(route, params, r.missed, r.failed))
+            for r in mc.lost_runs
+        ]  # fmt: skip
+    flight_losses = sum(r.by_the_flight for r in lost_runs)
     return DryRunReport(
         scenario=landmarks.name,
         flavour=flavour,
@@ -476,6 +493,7 @@ def dry_run(
             replayed.run.missed_before_loss,
             [c.id for c in replayed.run.corrections if c.succeeded is False],
         ),
+        lost_runs=tuple(lost_runs),
     )
 
 

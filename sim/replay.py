@@ -19,7 +19,9 @@ ACCEPTANCE radius) of a correction point of the database that has not been used 
 vehicle arrives there: the limits of that kind must hold (else the vehicle is lost), then the
 point corrects its component; an unreliable point fails with probability 1 - p, and the
 component becomes min(component, r). The vehicle must pass within ``capture_radius`` of B with
-both errors <= theta; the replay ends at its closest approach to B. Errors are kept in metres
+both errors <= theta; the replay ends at its closest approach to B, or where a flight on the
+INS estimate was lost before it came to B (its closest approach to B so far says nothing of the
+landmarks it met after it). Errors are kept in metres
 flown since the last reset, as the planner keeps them, and compared with ``Parameters.limits_m``.
 
 Flown on the truth in still air, the path and the corrections it meets do not depend on chance,
@@ -201,6 +203,9 @@ class LostRun:
 
     missed: bool
     failed: tuple[str, ...]
+    run: int = -1  # its index among the runs (its draws: (seed, run))
+    reason: str = ""  # where it was lost and why (ReplayRun.lost_reason)
+    missed_ids: tuple[str, ...] = ()  # the landmarks it missed before its loss
 
 
 @dataclass(frozen=True)
@@ -233,7 +238,7 @@ class ReplayReport:
     monte_carlo: MonteCarloSummary | None = None
     encounters: tuple[Encounter, ...] = field(default=(), repr=False)
     # The flight as flown (the whole of it), the mission's nominal path, and the flown track up
-    # to the closest approach to B: what the INS replay used.
+    # to the closest approach to B (or to where it was lost before B): what the INS replay used.
     flight: guidance.Flight | None = field(default=None, repr=False)
     nominal: FlightPath | None = field(default=None, repr=False)
     flown: FlightPath | None = field(default=None, repr=False)
@@ -545,13 +550,20 @@ def monte_carlo(
     ok = np.ones(runs, dtype=bool)
     failed = np.zeros(runs, dtype=bool)  # a failed correction before the run was lost
     failed_ids: list[list[str]] = [[] for _ in range(runs)]
+    reasons = [""] * runs  # where each run was lost, in the words of _fly
     last = 0.0
     for e in encounters:
         v += e.distance - last
         h += e.distance - last
         last = e.distance
         v_lim, h_lim = params.limits_m(e.kind)
-        ok &= (v <= v_lim) & (h <= h_lim)
+        within = (v <= v_lim) & (h <= h_lim)
+        for r in np.flatnonzero(ok & ~within):
+            what = "vertical" if v[r] > v_lim else "horizontal"
+            reasons[r] = (
+                f"lost at {e.kind.name} point {e.id}: {what} error over its limit on arrival"
+            )
+        ok &= within
         won = rng.random(runs) < params.p_success if e.unreliable else np.ones(runs, bool)
         failed |= ok & ~won
         for r in np.flatnonzero(ok & ~won):
@@ -563,12 +575,23 @@ def monte_carlo(
     v += path.length - last
     h += path.length - last
     theta_m = params.limits_m(Kind.B)[0]
-    reached = float(np.linalg.norm(path.points[-1] - scenario.xyz[scenario.end])) <= capture_radius
-    ok &= (v <= theta_m) & (h <= theta_m) & reached
+    miss_b = float(np.linalg.norm(path.points[-1] - scenario.xyz[scenario.end]))
+    reached = miss_b <= capture_radius
+    arrived = (v <= theta_m) & (h <= theta_m) & reached
+    for r in np.flatnonzero(ok & ~arrived):
+        reasons[r] = (
+            "lost at B: an error over theta on arrival"
+            if reached
+            else f"the flight passes {miss_b:.1f} m from B at its closest (3D), outside the "
+            f"capture radius {capture_radius:g} m"
+        )
+    ok &= arrived
     successes = int(np.count_nonzero(ok))
     low, high = wilson_interval(successes, runs, confidence)
     flight = int(np.count_nonzero(~ok & ~failed))
-    lost = tuple(LostRun(False, tuple(failed_ids[r])) for r in np.flatnonzero(~ok))
+    lost = tuple(
+        LostRun(False, tuple(failed_ids[r]), int(r), reasons[r]) for r in np.flatnonzero(~ok)
+    )
     return MonteCarloSummary(
         runs, successes, successes / runs, low, high, confidence, flight,
         runs - successes - flight, lost_runs=lost,
@@ -635,7 +658,8 @@ def flown_path(flight: guidance.Flight) -> FlightPath:
 def _ins_run(
     ins: InsEstimate, path: FlightPath, scenario: Scenario, params: Parameters, capture: float
 ) -> tuple[ReplayRun, list[Encounter]]:
-    """The run the INS made in flight, up to the closest approach to B (``path``'s end)."""
+    """The run the INS made in flight, up to ``path``'s end: the closest approach to B, or where
+    the flight was lost before it came to B."""
     delta = params.delta
     end = path.length
     rows: list[CorrectionRow] = []
@@ -730,10 +754,18 @@ class FlightSetup:
             compiled=self.compiled, commands=self.commands,
         )  # fmt: skip
         track = flown_path(flight)
-        b_distance, _ = closest_approach(
+        b_distance, b_miss = closest_approach(
             track, sc.xyz[sc.end], self.capture_radius, compiled=self.compiled
         )
-        path = track.until(b_distance)
+        if flight.ended == "lost" and b_miss > self.capture_radius:
+            # Lost on arrival at a landmark before it came to B: the run is the flight up to
+            # its loss. Its closest approach to B so far can lie kilometres back (a route that
+            # turns away from B), and cutting there would drop the corrections after it (the
+            # failed one and the loss) and call the landmarks met after it missed: a loss by
+            # chance at unreliable points counted as lost by the flight.
+            path = track
+        else:
+            path = track.until(b_distance)
         if ins is not None:
             ins.finish()
             run, encounters = _ins_run(ins, path, sc, self.params, self.capture_radius)
@@ -766,12 +798,13 @@ def monte_carlo_flights(
     for k in range(runs):
         rng = np.random.default_rng([seed, k])
         model = None if wind.still else wind.draw(rng)
-        run, *_ = setup.fly_once(rng, model)
+        run, _, _, _, missed = setup.fly_once(rng, model)
         successes += run.arrived
         flight_losses += run.flight_lost
         if not run.arrived:
             failed = tuple(c.id for c in run.corrections if c.succeeded is False)
-            lost.append(LostRun(run.missed_before_loss, failed))
+            before = tuple(m.id for m in missed if m.distance <= run.flown_length)
+            lost.append(LostRun(run.missed_before_loss, failed, k, run.lost_reason, before))
     low, high = wilson_interval(successes, runs, confidence)
     return MonteCarloSummary(
         runs, successes, successes / runs, low, high, confidence, flight_losses,
@@ -861,7 +894,10 @@ def replay(
                 lost = runs - mc.successes
                 mc = replace(
                     mc, flight_losses=lost, correction_losses=0,
-                    lost_runs=tuple(replace(r, missed=True) for r in mc.lost_runs),
+                    lost_runs=tuple(
+                        replace(r, missed=True, missed_ids=tuple(m.id for m in missed))
+                        for r in mc.lost_runs
+                    ),
                 )  # fmt: skip
         else:
             mc = monte_carlo_flights(setup, wind, runs, seed + 1, confidence)

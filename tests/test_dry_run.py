@@ -299,6 +299,13 @@ def test_contest_workbook_planned_for_unlimited_climb_is_lost_by_the_flight(
     missed = [r for r in d["rows"] if r["outcome"] == "missed"]
     assert missed and all(r["miss"] > 5.0 and r["point"] in d["why"] for r in missed)
     assert "lost by the flight" in err
+    # Every lost run says where and why; those lost by the flight with no failed correction
+    # name the landmarks they climbed past.
+    lost = d["lost_runs"]
+    assert len(lost) == d["flight_losses"] + d["correction_losses"]
+    assert sum(r["by_the_flight"] for r in lost) == d["flight_losses"]
+    assert len({r["run"] for r in lost}) == len(lost) and all(r["reason"] for r in lost)
+    assert all(r["missed"] for r in lost if r["by_the_flight"] and not r["failed"])
 
 
 @pytest.mark.parametrize("dataset, flags", [(1, DS1), (2, DS2)], ids=["ds1", "ds2"])

@@ -219,3 +219,40 @@ def test_monte_carlo_on_random_scenario_route_all_reliable_is_certain():
     assert rep.arrived == planned.feasible
     assert rep.monte_carlo.success_rate == (1.0 if planned.feasible else 0.0)
     assert math.isclose(rep.flown_length, planned.length, rel_tol=FLIGHT_TOLERANCE)
+
+
+def test_a_flight_lost_by_chance_on_its_way_away_from_b_is_lost_by_its_corrections():
+    """Flights on the INS estimate, each lost where a failed correction leaves too much error:
+    the route turns away from B (its closest approach to B so far is at A, kilometres back), and
+    each lost run is reported lost at the landmark where the limit broke, with the failed
+    correction before it, not as a flight that missed the landmarks it met and passed far from
+    B (a loss by chance counted as lost by the flight: dataset 2 on ArduPlane, 8 of 200)."""
+    # A, P1 (V, unreliable), P2 (H), P3 (V), B behind A. DATASET1: alpha1 25, beta1 20,
+    # theta 30, residual 5: a failure at P1 arrives at P3 with v = 5 + 12 + 8.9 > 25.
+    xyz = np.array(
+        [
+            [0.0, 0.0, 5000.0],
+            [12_000.0, 300.0, 5000.0],
+            [24_000.0, 0.0, 5000.0],
+            [16_000.0, 4000.0, 5000.0],
+            [-2000.0, 0.0, 5000.0],
+        ]
+    )
+    sc = Scenario(
+        ids=("A", "P1", "P2", "P3", "B"),
+        xyz=xyz,
+        kind=np.array([Kind.A, Kind.V, Kind.H, Kind.V, Kind.B], dtype=np.uint8),
+        unreliable=np.array([False, True, False, False, False]),
+        params=DATASET1,
+        origin=ORIGIN,
+    )
+    route = list(range(sc.n))
+    exact = success_probability(sc, route).probability
+    assert exact == pytest.approx(sc.params.p_success)
+    items = mission_through(sc.xyz, home=True)
+    rep = replay(items, sc, home_at_seq0=True, navigate_on_estimate=True, runs=30, seed=3)
+    mc = rep.monte_carlo
+    assert mc is not None and mc.flown
+    assert 0 < mc.runs - mc.successes < mc.runs  # some runs lost, by their failure at P1
+    assert mc.flight_losses == 0 and mc.correction_losses == mc.runs - mc.successes
+    assert all(not r.missed and r.failed == ("P1",) for r in mc.lost_runs)

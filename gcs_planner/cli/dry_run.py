@@ -20,6 +20,7 @@ from gcs_planner.dry_run import (
     DRY_RUN_ACCEPTANCE_RADIUS_M,
     EXIT_LOST,
     DryRunReport,
+    LostRunRow,
     dry_run,
 )
 from gcs_planner.dry_run_track import write_track
@@ -30,6 +31,9 @@ from gcs_planner.mission.geo_exports import trajectory_local
 from gcs_planner.plan_json import plan_to_dict
 from sim.replay import CHORD_SHORTFALL, QUANTISATION_M
 from sim.wind import WindSpec
+
+# Runs lost by the flight named one by one in the text report (all of them in --json).
+SHOWN_FLIGHT_LOSSES = 5
 
 EPILOG = f"""exit codes: 0 the mission verified and, with --runs N, no run was lost by the flight
 and the success rate is consistent with the planned probability (without --runs: the one seeded
@@ -327,6 +331,11 @@ def render(r: DryRunReport) -> str:
             "flown as planned with the same correction outcomes arrives), "
             f"{r.correction_losses} by failed corrections"
         )
+        flight = [lost for lost in r.lost_runs if lost.by_the_flight]
+        for lost in flight[:SHOWN_FLIGHT_LOSSES]:
+            out.append(f"  run {lost.run} lost by the flight: {_lost_run(lost)}")
+        if len(flight) > SHOWN_FLIGHT_LOSSES:
+            out.append(f"  ... {len(flight) - SHOWN_FLIGHT_LOSSES} more (lost_runs in --json)")
     if r.planned_probability < 1.0:
         out.append(
             f"note: the planned probability is {r.planned_probability:.4f} < 1: this replay is "
@@ -350,6 +359,15 @@ def render(r: DryRunReport) -> str:
     else:
         out.append(f"result: NOT verified by the flight: {verdict_line(r)}")
     return "\n".join(out)
+
+
+def _lost_run(lost: LostRunRow) -> str:
+    parts = [lost.reason or "lost"]
+    if lost.missed:
+        parts.append("missed " + ", ".join(lost.missed))
+    if lost.failed:
+        parts.append("failed corrections at " + ", ".join(lost.failed))
+    return "; ".join(parts)
 
 
 def _table(r: DryRunReport) -> str:
