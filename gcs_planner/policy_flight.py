@@ -31,7 +31,7 @@ from gcs_planner.link.connection import mavlink
 from gcs_planner.link.correction_report import CorrectionReport, parse_report
 from gcs_planner.link.mission_client import MissionClient
 from gcs_planner.link.protocol import mission_differences
-from gcs_planner.mission.policy_missions import PolicyMissions
+from gcs_planner.mission.policy_missions import PolicyMissions, Switch
 
 MAV_MODE_FLAG_SAFETY_ARMED = 128
 # How long the vehicle may stay silent (no message of any kind) before the flight is given up
@@ -166,7 +166,7 @@ class PolicyFlight:
                 self._line(f"{r.kind} fix {r.point} {r.outcome}")
                 switch = self.policy.switch_for(self.flown, r.point) if r.no_fix else None
                 if switch is not None:
-                    self._switch(switch.to_mission, switch.resume_item, r.point)
+                    self._switch(switch, r.point)
                     switches += 1
             self._warn_unreported()
             if self.armed is False:
@@ -217,9 +217,21 @@ class PolicyFlight:
                     break  # the vehicle said no: asking again gets the same answer
         raise LinkError(f"mission {name!r} could not be uploaded: {errors[-1]}")
 
-    def _switch(self, to: str, resume: int, point: str) -> None:
+    def _switch(self, switch: Switch, point: str) -> None:
+        to = switch.to_mission
         mission = self.policy.missions[to]
+        if not self.policy.changes_items(switch):
+            # The same items (only switches further on differ): nothing to upload, and no item
+            # set current that would turn the aircraft back to it.
+            self._line(
+                f"following mission {to!r} after the failed fix at {point}: the same items as "
+                f"{self.flown!r}, nothing to upload"
+            )
+            self.flown = to
+            self.flown_names.append(to)
+            return
         self._line(f"switching to mission {to!r} after the failed fix at {point}")
+        old = self.policy.missions[self.flown].items
         try:
             report = self._upload(to, mission.items)
         except LinkError as exc:
@@ -230,6 +242,7 @@ class PolicyFlight:
         )
         self.flown = to  # the vehicle holds it now, whole
         self.flown_names.append(to)
+        resume = _resume_item(switch.resume_item, self.current, old, mission.items)
         self._set_current(resume)
         self._line(f"item {resume} current (confirmed): flying mission {to!r}")
 
@@ -367,3 +380,15 @@ def check_policy(policy: PolicyMissions, source: str = "") -> None:
                 file=source,
                 field=field,
             )
+
+
+def _resume_item(resume: int, current: int | None, old: Any, new: Any) -> int:
+    """Where the vehicle goes on in the branch: the switch's resume item, or the item it flies
+    already when it has gone past the resume item while the upload ran and every item before
+    that one is the same in both missions (setting the resume item would turn it back to it:
+    ArduPlane and PX4 fly to the current item from wherever the aircraft is)."""
+    if current is None or current <= resume or current >= min(len(old), len(new)):
+        return resume
+    if list(old[:current]) != list(new[:current]):
+        return resume
+    return current
