@@ -584,3 +584,89 @@ def test_retry_failed_runs_the_failed_cells_again(tmp_path: Path, cluster) -> No
     assert (retried.skipped, retried.ran, retried.failed) == (3, 1, 0)
     rows = read_results(out)
     assert all(r["status"] == "ok" for r in rows) and len(by_cell(rows)) == 4
+
+
+def start_workers(address: str, count: int, *extra: str) -> subprocess.Popen:
+    """`dask worker ADDRESS --nworkers COUNT` on 127.0.0.1, as a user (or a batch job) starts it."""
+    return subprocess.Popen(
+        [str(BIN / "dask"), "worker", address, "--nworkers", str(count), "--nthreads", "1",
+         "--host", "127.0.0.1", "--no-dashboard", *extra],
+        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+    )  # fmt: skip
+
+
+def stop(*procs: subprocess.Popen) -> None:
+    for p in procs:
+        p.terminate()
+    for p in procs:
+        try:
+            p.wait(timeout=60)
+        except subprocess.TimeoutExpired:
+            p.kill()
+            p.wait()
+
+
+def test_min_workers_waits_for_workers_that_join_later(tmp_path: Path) -> None:
+    scheduler, address = start_scheduler(tmp_path)
+    procs = [scheduler]
+    try:
+        sweep = subprocess.Popen(
+            cli(str(small_spec(tmp_path)), "--out", str(tmp_path / "out"),
+                "--scheduler-file", str(tmp_path / "scheduler.json"),
+                "--min-workers", "2", "--min-workers-timeout", str(DEADLINE_S)),
+            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        )  # fmt: skip
+        procs.insert(0, sweep)
+        seen = []
+        while not any("waiting for 2 Dask workers (0 so far" in line for line in seen):
+            line = sweep.stdout.readline()
+            assert line, f"the sweep ended before it said it waits: {seen} {sweep.stderr.read()}"
+            seen.append(line)
+        assert not (tmp_path / "out" / PARQUET).exists()  # nothing ran without workers
+        procs.insert(1, start_workers(address, 2))
+        out, err = sweep.communicate(timeout=DEADLINE_S)
+        assert sweep.returncode == 0, err
+        assert "2 Dask workers joined" in out and "8 cells run (0 failed" in out
+        assert len(by_cell(read_results(tmp_path / "out"))) == 8
+    finally:
+        stop(*procs)
+
+
+def test_min_workers_that_never_join_stop_the_sweep_with_a_message(tmp_path: Path) -> None:
+    scheduler, address = start_scheduler(tmp_path)
+    try:
+        done = subprocess.run(
+            cli(str(small_spec(tmp_path)), "--out", str(tmp_path / "out"),
+                "--scheduler", address, "--min-workers", "1", "--min-workers-timeout", "2"),
+            capture_output=True, text=True, timeout=DEADLINE_S,
+        )  # fmt: skip
+    finally:
+        stop(scheduler)
+    assert done.returncode == 4, done.stderr
+    assert done.stderr.count("\n") == 1, done.stderr
+    assert "0 of the 1 Dask workers asked for (--min-workers) joined within 2 s" in done.stderr
+    assert "0 cells saved" in done.stderr and "--resume" in done.stderr
+
+
+def test_a_worker_with_another_planner_version_is_refused(tmp_path: Path) -> None:
+    from gcs_planner import __version__
+
+    # A worker whose gcs-planner says it is another release, as an old install on one node would.
+    preload = tmp_path / "other_version.py"
+    preload.write_text("import gcs_planner\ngcs_planner.__version__ = '0.0.1-old'\n")
+    scheduler, address = start_scheduler(tmp_path)
+    workers = start_workers(address, 1, "--preload", str(preload))
+    try:
+        done = subprocess.run(
+            cli(str(small_spec(tmp_path)), "--out", str(tmp_path / "out"),
+                "--scheduler", address, "--min-workers", "1",
+                "--min-workers-timeout", str(DEADLINE_S)),
+            capture_output=True, text=True, timeout=DEADLINE_S,
+        )  # fmt: skip
+    finally:
+        stop(workers, scheduler)
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.count("\n") == 1, done.stderr
+    assert "Dask worker tcp://127.0.0.1:" in done.stderr
+    assert f"runs gcs-planner 0.0.1-old, this client {__version__}" in done.stderr
+    assert read_results(tmp_path / "out") == []  # no cell ran on it

@@ -68,7 +68,23 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         default=60.0,
         metavar="SECONDS",
         help="stop, the finished cells saved, once the scheduler has had no worker for this "
-        "long (default 60; exit status 5)",
+        "long (default 60; exit status 4)",
+    )
+    p.add_argument(
+        "--min-workers",
+        type=int,
+        default=0,
+        metavar="N",
+        help="wait until the cluster has N workers before submitting (batch jobs take time to "
+        "start); default: start at once",
+    )
+    p.add_argument(
+        "--min-workers-timeout",
+        type=float,
+        default=600.0,
+        metavar="SECONDS",
+        help="how long --min-workers waits before it stops with a message (default 600; "
+        "exit status 4)",
     )
     p.add_argument(
         "--dashboard-address",
@@ -127,6 +143,12 @@ def run(args: argparse.Namespace) -> int:
     for flag in ("prune", "retry_failed"):
         if getattr(args, flag) and not args.resume:
             raise InputError("needs --resume", field="--" + flag.replace("_", "-"))
+    if args.min_workers < 0:
+        raise InputError(f"must be >= 0 (got {args.min_workers})", field="--min-workers")
+    if not args.min_workers_timeout > 0:
+        raise InputError(
+            f"must be > 0 (got {args.min_workers_timeout:g})", field="--min-workers-timeout"
+        )
     if not args.no_workers_timeout > 0:
         raise InputError(
             f"must be > 0 (got {args.no_workers_timeout:g})", field="--no-workers-timeout"
@@ -151,6 +173,8 @@ def run(args: argparse.Namespace) -> int:
             no_workers_timeout=args.no_workers_timeout,
             prune=args.prune,
             retry_failed=args.retry_failed,
+            min_workers=args.min_workers,
+            min_workers_timeout=args.min_workers_timeout,
             **({} if args.connect_timeout is None else {"connect_timeout": args.connect_timeout}),
         )
     except SweepInterrupted as exc:

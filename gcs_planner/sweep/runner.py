@@ -33,11 +33,12 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TextIO
 
-from gcs_planner.errors import GcsPlannerError, InputError
+from gcs_planner.errors import InputError
 from gcs_planner.progress import Counter
 from gcs_planner.sweep.cells import Cell, expand
 from gcs_planner.sweep.spec import SweepSpec, read_spec
 from gcs_planner.sweep.task import cell_inputs, finish_row, run_cell
+from gcs_planner.sweep.workers import NoWorkersError, check_versions, wait_for_workers
 
 SUMMARY_PNG = "summary.png"
 # Cells handed to the scheduler at a time: enough to keep any cluster busy, few enough that a
@@ -73,6 +74,8 @@ POLL_S = 0.25
 WORKER_CHECK_S = 2.0
 # A sweep with no worker at all for this long stops with a message, its table saved.
 NO_WORKERS_TIMEOUT_S = 60.0
+# How long --min-workers waits for its workers by default: batch jobs may queue for minutes.
+MIN_WORKERS_TIMEOUT_S = 600.0
 # Connecting to a scheduler across a cluster's network (or while it starts) takes seconds;
 # an address that answers nothing for this long is a wrong one.
 CONNECT_TIMEOUT_S = 20.0
@@ -88,13 +91,6 @@ class SweepInterrupted(KeyboardInterrupt):
         self.saved = saved
         self.out = out
         super().__init__(f"interrupted, {saved} cells saved, resume with --resume")
-
-
-class NoWorkersError(GcsPlannerError):
-    """The scheduler had no worker for too long; the table is saved. Exit 4, as a link that
-    failed (5 is a dry run lost by its replay)."""
-
-    exit_code = 4
 
 
 @dataclass(frozen=True)
@@ -129,6 +125,8 @@ def run_sweep(
     retry_failed: bool = False,
     connect_timeout: float = CONNECT_TIMEOUT_S,
     scheduler_from: str = "--scheduler",
+    min_workers: int = 0,
+    min_workers_timeout: float = MIN_WORKERS_TIMEOUT_S,
 ) -> SweepResult:
     """Run the sweep ``spec`` (a SweepSpec or the path of its TOML) into the folder ``out``.
 
@@ -144,7 +142,9 @@ def run_sweep(
     (default stderr) when it is a terminal and ``quiet`` is False.
 
     Ctrl-C (SIGINT) saves the table and raises :class:`SweepInterrupted`; a scheduler without
-    any worker for ``no_workers_timeout`` seconds saves it and raises :class:`NoWorkersError`.
+    any worker for ``no_workers_timeout`` seconds, or with fewer than ``min_workers`` after
+    ``min_workers_timeout``, saves it and raises :class:`NoWorkersError`; a worker with another
+    planner version raises :class:`~.workers.WorkerVersionError`.
     """
     from gcs_planner.sweep.summary import summary_png
     from gcs_planner.sweep.table import CSV, PARQUET, ResultTable
@@ -153,6 +153,8 @@ def run_sweep(
         spec = read_spec(spec)
     if workers < 1 or threads_per_worker < 1:
         raise InputError("workers and threads per worker must be >= 1", field="--workers")
+    if min_workers < 0:
+        raise InputError(f"must be >= 0 (got {min_workers})", field="--min-workers")
     out = Path(out)
     from gcs_planner.sweep.manifest import check_resume, write_manifest
 
@@ -183,6 +185,9 @@ def run_sweep(
             dashboard = client.dashboard_link or ""
             where = scheduler or f"a local cluster of {workers} worker processes"
             say(f"running on {where}; dashboard: {dashboard or '(none)'}")
+            if min_workers:
+                wait_for_workers(client, min_workers, min_workers_timeout, say)
+            check_versions(client)
             progress = Counter("cells", len(todo), unit="cell", stream=progress_stream, quiet=quiet)
             try:
                 ran, failed, infeasible = _run(
@@ -331,6 +336,7 @@ class _WorkerWatch:
         self.timeout = timeout
         self.last_check = -float("inf")
         self.none_since: float | None = None
+        self.known: set[str] = set(client.nthreads())  # checked when the sweep started
 
     def check(self) -> None:
         now = time.monotonic()
@@ -338,10 +344,14 @@ class _WorkerWatch:
             return
         self.last_check = now
         try:
-            count = len(self.client.nthreads())
+            present = set(self.client.nthreads())
         except Exception:  # the scheduler itself is unreachable: the same wait, nothing runs
-            count = 0
-        if count:
+            present = set()
+        joined = present - self.known
+        if joined:  # a worker that joined mid-sweep runs the same planner, or the sweep stops
+            check_versions(self.client, sorted(joined))
+            self.known |= joined
+        if present:
             self.none_since = None
             return
         if self.none_since is None:
@@ -379,10 +389,10 @@ def _collect(submit, futures, as_completed, table, progress, save_interval, inte
         if interrupted.is_set():
             raise KeyboardInterrupt
         batch = flow.next_batch(block=False)
+        workers.check()  # at most every WORKER_CHECK_S: new workers' versions, none left
         if not batch:
             # A wait with a timeout, not as_completed's blocking one: the Ctrl-C flag and the
             # workers are looked at while a long cell runs, not only when one finishes.
-            workers.check()
             with flow.thread_condition:
                 flow.thread_condition.wait(timeout=POLL_S)
             continue
