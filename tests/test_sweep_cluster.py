@@ -670,3 +670,32 @@ def test_a_worker_with_another_planner_version_is_refused(tmp_path: Path) -> Non
     assert "Dask worker tcp://127.0.0.1:" in done.stderr
     assert f"runs gcs-planner 0.0.1-old, this client {__version__}" in done.stderr
     assert read_results(tmp_path / "out") == []  # no cell ran on it
+
+
+def test_progress_is_one_tqdm_line_on_stderr_and_failed_cells_do_not_break_chosen(
+    tmp_path: Path, cluster, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import io
+
+    import pyarrow.parquet as pq
+    from test_progress import FakeTerminal, screen
+
+    # stderr a terminal, stdout the messages: the progress bar goes to stderr only, and what a
+    # terminal shows after every redraw is one line with the final count (no stray tails).
+    err, out = FakeTerminal(), io.StringIO()
+    monkeypatch.setattr(sys, "stderr", err)
+    (tmp_path / "bad.toml").write_text('points = "missing.csv"\n')
+    spec_path = small_spec(tmp_path, seeds=2)
+    spec_path.write_text(spec_path.read_text() + '[[scenarios]]\nfile = "bad.toml"\n')
+    result = run_sweep(spec_path, tmp_path / "out", scheduler=cluster.scheduler_address, stream=out)
+    assert (result.ran, result.failed) == (8, 2)
+    rows = screen(err.getvalue())
+    assert len(rows) == 1 and rows[0].startswith("cells: 100%") and "8/8" in rows[0], rows
+    assert "failed=2" in rows[0]
+    assert "\r" not in out.getvalue() and "cells:" not in out.getvalue()
+    table = pq.read_table(tmp_path / "out" / PARQUET)
+    # df[df.chosen] in pandas needs a column without nulls; one chosen route per planned cell
+    assert table.column("chosen").null_count == 0
+    chosen = table.filter(table.column("chosen")).to_pylist()
+    assert len(chosen) == 6 and all(r["status"] == "ok" for r in chosen)
+    assert table.schema.field("length").metadata == {b"unit": b"m"}
