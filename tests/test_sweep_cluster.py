@@ -699,3 +699,33 @@ def test_progress_is_one_tqdm_line_on_stderr_and_failed_cells_do_not_break_chose
     chosen = table.filter(table.column("chosen")).to_pylist()
     assert len(chosen) == 6 and all(r["status"] == "ok" for r in chosen)
     assert table.schema.field("length").metadata == {b"unit": b"m"}
+
+
+def test_cells_are_grouped_into_tasks_of_about_a_second_after_a_few_alone(
+    tmp_path: Path, cluster
+) -> None:
+    # Cells that say they took 0.1 s each: after the first few (one per task, to measure),
+    # each task holds about TARGET_TASK_S of cells, fewer near the end (the tail's share).
+    from gcs_planner.sweep import batch
+
+    log = tmp_path / "tasks.log"
+    task = functools.partial(sweep_tasks.stated_cost, seconds=0.1, log=str(log))
+    spec_path = small_spec(tmp_path, seeds=99, deltas="[0.001]")  # 100 cells
+    result = run_sweep(spec_path, tmp_path / "out", scheduler=cluster.scheduler_address, task=task)
+    assert (result.ran, result.failed) == (100, 0)
+    tasks: dict[str, list[str]] = {}
+    for line in log.read_text().splitlines():
+        key, cell = line.split()
+        tasks.setdefault(key, []).append(cell)
+    cells = [c for group in tasks.values() for c in group]
+    assert sorted(cells) == sorted(c.key for c in expand(read_spec(spec_path)))  # each once
+    # The task keys carry the first cell's number: in the order the cells were handed out.
+    sizes = [len(g) for _, g in sorted(tasks.items(), key=lambda kv: int(kv[0].split("-")[2]))]
+    threads = 2
+    probes = batch.PROBES_PER_THREAD * threads
+    assert sizes[:probes] == [1] * probes
+    per_task = round(batch.TARGET_TASK_S / 0.1)
+    assert max(sizes) == per_task and sizes[probes] == per_task
+    assert sizes[-1] < per_task  # the last tasks shrink so that the workers end together
+    assert len(sizes) < 100 / 4
+    assert len(by_cell(read_results(tmp_path / "out"))) == 100

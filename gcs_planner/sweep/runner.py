@@ -21,7 +21,6 @@ given by address keeps its own configuration.
 from __future__ import annotations
 
 import contextlib
-import itertools
 import logging
 import os
 import signal
@@ -35,14 +34,15 @@ from typing import TextIO
 
 from gcs_planner.errors import InputError
 from gcs_planner.progress import Counter
+from gcs_planner.sweep.batch import Batcher, error_row, run_batch
 from gcs_planner.sweep.cells import Cell, expand
 from gcs_planner.sweep.spec import SweepSpec, read_spec
-from gcs_planner.sweep.task import cell_inputs, finish_row, run_cell
+from gcs_planner.sweep.task import run_cell
 from gcs_planner.sweep.workers import NoWorkersError, check_versions, wait_for_workers
 
 SUMMARY_PNG = "summary.png"
-# Cells handed to the scheduler at a time: enough to keep any cluster busy, few enough that a
-# sweep of millions of cells does not hold millions of tasks in the scheduler's memory.
+# Tasks handed to the scheduler at a time, at most: two per worker thread keep every worker busy
+# (.batch sizes them); the cap keeps a huge cluster's scheduler from holding too many.
 IN_FLIGHT = 10_000
 DEFAULT_WORKERS = 2
 # At most 1/SAVE_BUDGET of the sweep's wall time goes to rewriting the result table.
@@ -308,22 +308,30 @@ def _run(
     from distributed import as_completed
 
     token = uuid.uuid4().hex[:8]  # keys unique across sweeps sent to one long-lived scheduler
-    pending = iter(todo)
+    workers = _WorkerWatch(client, no_workers_timeout)
+    batcher = Batcher(todo, workers.threads)
     futures: dict = {}
 
-    def submit(n: int) -> list:
+    def submit() -> list:
+        """Tasks until the window is full: two per worker thread (one running, one waiting
+        on each), IN_FLIGHT at most; the first ones a cell each, to measure (.batch)."""
+        batcher.threads = workers.threads
         new = []
-        for cell in itertools.islice(pending, n):
-            future = client.submit(task, cell, key=f"sweep-{token}-{cell.index}-{cell.key}")
-            futures[future] = cell
+        while len(futures) < min(IN_FLIGHT, batcher.probes):
+            cells = batcher.next()
+            if not cells:
+                break
+            key = f"sweep-{token}-{cells[0].index}-{len(cells)}-{cells[0].key}"
+            future = client.submit(run_batch, task, cells, key=key)
+            futures[future] = cells
             new.append(future)
         return new
 
-    workers = _WorkerWatch(client, no_workers_timeout)
     with _interrupt_flag() as interrupted:
         return _collect(
-            submit, futures, as_completed, table, progress, save_interval, interrupted, workers
-        )
+            submit, futures, batcher, as_completed, table, progress, save_interval, interrupted,
+            workers,
+        )  # fmt: skip
 
 
 class _WorkerWatch:
@@ -336,7 +344,9 @@ class _WorkerWatch:
         self.timeout = timeout
         self.last_check = -float("inf")
         self.none_since: float | None = None
-        self.known: set[str] = set(client.nthreads())  # checked when the sweep started
+        nthreads = client.nthreads()
+        self.known: set[str] = set(nthreads)  # checked when the sweep started
+        self.threads = max(1, sum(nthreads.values()))  # the cluster's worker threads
 
     def check(self) -> None:
         now = time.monotonic()
@@ -344,9 +354,12 @@ class _WorkerWatch:
             return
         self.last_check = now
         try:
-            present = set(self.client.nthreads())
+            nthreads = self.client.nthreads()
         except Exception:  # the scheduler itself is unreachable: the same wait, nothing runs
-            present = set()
+            nthreads = {}
+        present = set(nthreads)
+        if nthreads:
+            self.threads = sum(nthreads.values())
         joined = present - self.known
         if joined:  # a worker that joined mid-sweep runs the same planner, or the sweep stops
             check_versions(self.client, sorted(joined))
@@ -380,38 +393,42 @@ def _interrupt_flag() -> Iterator[threading.Event]:
         signal.signal(signal.SIGINT, previous)
 
 
-def _collect(submit, futures, as_completed, table, progress, save_interval, interrupted, workers):
-    flow = as_completed(submit(IN_FLIGHT))
+def _collect(
+    submit, futures, batcher, as_completed, table, progress, save_interval, interrupted, workers
+):
+    flow = as_completed(submit())
     done = failed = infeasible = 0
     last_save = time.perf_counter()
     wait = save_interval
     while not flow.is_empty():
         if interrupted.is_set():
             raise KeyboardInterrupt
-        batch = flow.next_batch(block=False)
+        finished = flow.next_batch(block=False)
         workers.check()  # at most every WORKER_CHECK_S: new workers' versions, none left
-        if not batch:
+        if not finished:
             # A wait with a timeout, not as_completed's blocking one: the Ctrl-C flag and the
             # workers are looked at while a long cell runs, not only when one finishes.
             with flow.thread_condition:
                 flow.thread_condition.wait(timeout=POLL_S)
             continue
         workers.seen_results()
-        for future in batch:
-            # one in for each one out: the scheduler holds IN_FLIGHT at most
-            for new in submit(1):
-                flow.add(new)
-            cell = futures.pop(future)
+        for future in finished:
+            cells = futures.pop(future)
             try:
-                rows = future.result()
+                results = future.result()
             except Exception as exc:  # the task itself could not run (its worker kept dying)
-                rows = [_error_row(cell, exc)]
+                results = [[error_row(cell, exc)] for cell in cells]
             future.release()
-            if table.add(rows):
-                done += 1
-                status = rows[0].get("status")
-                failed += status == "error"
-                infeasible += status == "infeasible"
+            for rows in results:
+                batcher.observe(rows)
+                if table.add(rows):
+                    done += 1
+                    status = rows[0].get("status")
+                    failed += status == "error"
+                    infeasible += status == "infeasible"
+            # the next tasks sized by what these cells cost
+            for new in submit():
+                flow.add(new)
         progress.update(done, failed=failed)
         if time.perf_counter() - last_save >= wait:
             t0 = time.perf_counter()
@@ -421,9 +438,3 @@ def _collect(submit, futures, as_completed, table, progress, save_interval, inte
     if interrupted.is_set():
         raise KeyboardInterrupt
     return done, failed, infeasible
-
-
-def _error_row(cell: Cell, exc: BaseException) -> dict:
-    row = cell_inputs(cell)
-    row.update(status="error", error=f"{type(exc).__name__}: {exc}".splitlines()[0])
-    return finish_row(row, time.perf_counter())
