@@ -138,8 +138,6 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("is empty: give the scheduler's address", field="--scheduler")
     if args.connect_timeout is not None and not args.connect_timeout > 0:
         raise InputError(f"must be > 0 (got {args.connect_timeout:g})", field="--connect-timeout")
-    scheduler, scheduler_from = scheduler_address(args.scheduler, args.scheduler_file)
-
     for flag in ("prune", "retry_failed"):
         if getattr(args, flag) and not args.resume:
             raise InputError("needs --resume", field="--" + flag.replace("_", "-"))
@@ -159,6 +157,14 @@ def run(args: argparse.Namespace) -> int:
     from gcs_planner.sweep.runner import SweepInterrupted
 
     spec = read_spec(args.spec)
+    if spec.cluster is not None and args.scheduler is None and args.scheduler_file is None:
+        # the spec's [cluster] starts its own scheduler; DASK_SCHEDULER_ADDRESS is not asked
+        from gcs_planner.sweep.jobqueue import require_jobqueue
+
+        require_jobqueue(spec.path)
+        scheduler, scheduler_from = None, "[cluster]"
+    else:
+        scheduler, scheduler_from = scheduler_address(args.scheduler, args.scheduler_file)
     try:
         result = run_sweep(
             spec,

@@ -36,7 +36,7 @@ from gcs_planner.errors import InputError
 from gcs_planner.progress import Counter
 from gcs_planner.sweep.batch import Batcher, error_row, run_batch
 from gcs_planner.sweep.cells import Cell, expand
-from gcs_planner.sweep.spec import SweepSpec, read_spec
+from gcs_planner.sweep.spec import ClusterSpec, SweepSpec, read_spec
 from gcs_planner.sweep.task import run_cell
 from gcs_planner.sweep.workers import NoWorkersError, check_versions, wait_for_workers
 
@@ -131,10 +131,11 @@ def run_sweep(
     """Run the sweep ``spec`` (a SweepSpec or the path of its TOML) into the folder ``out``.
 
     ``scheduler``: the address of an existing Dask scheduler (``tcp://host:8786``), reached
-    within ``connect_timeout`` seconds; without it a LocalCluster of ``workers`` processes is
-    started and closed; ``scheduler_from`` is where the address came from, for the message when
-    it cannot be reached. ``resume``: keep the finished
-    cells of an earlier run in ``out`` and run only the others; it refuses a spec whose cells
+    within ``connect_timeout`` seconds; without it the spec's [cluster] jobs are submitted
+    (:mod:`.jobqueue`) or, without one, a LocalCluster of ``workers`` processes is started;
+    either is closed at the end. ``scheduler_from`` is where the address came from, for the
+    message when it cannot be reached. ``resume``: keep the finished cells of an earlier run
+    in ``out`` and run only the others; it refuses a spec whose cells
     changed since (:mod:`.manifest`) unless ``prune``, which drops the rows of the cells no
     longer in it. ``retry_failed``: run the cells whose task failed again. ``stream``: where
     its messages go (None: nowhere). ``task`` runs one cell on a worker; it must be importable
@@ -176,14 +177,25 @@ def run_sweep(
     started = time.perf_counter()
     ran, failed, infeasible, dashboard = 0, 0, 0, ""
     closing = None
+    jobs = spec.cluster if scheduler is None else None
+    if scheduler is not None and spec.cluster is not None:
+        say(f"note: submitting to {scheduler} ({scheduler_from}): the spec's [cluster] is unused")
+    if jobs is not None:
+        # Batch jobs queue before they start: wait for them rather than count them as gone.
+        min_workers = max(min_workers, 1)
     if todo:
         client, cluster = _connect(
             scheduler, workers, threads_per_worker, dashboard_address, connect_timeout,
-            scheduler_from,
+            scheduler_from, jobs, spec.path,
         )  # fmt: skip
         try:
             dashboard = client.dashboard_link or ""
-            where = scheduler or f"a local cluster of {workers} worker processes"
+            if jobs is not None:
+                from gcs_planner.sweep.jobqueue import describe
+
+                where = describe(jobs)
+            else:
+                where = scheduler or f"a local cluster of {workers} worker processes"
             say(f"running on {where}; dashboard: {dashboard or '(none)'}")
             if min_workers:
                 wait_for_workers(client, min_workers, min_workers_timeout, say)
@@ -258,10 +270,19 @@ def _connect(
     dashboard_address: str,
     connect_timeout: float = CONNECT_TIMEOUT_S,
     scheduler_from: str = "--scheduler",
+    jobs: ClusterSpec | None = None,
+    spec_path: str = "",
 ):
     import dask
     from distributed import Client, LocalCluster
 
+    if scheduler is None and jobs is not None:
+        from gcs_planner.sweep.jobqueue import require_jobqueue, start_jobs
+
+        require_jobqueue(spec_path)
+        host = jobs.host or ""
+        cluster = start_jobs(jobs, spec_path, dashboard_address=f"{host}:0")
+        return Client(cluster), cluster
     if scheduler is None:
         # The scheduler reads these when it starts, each nanny hands them to its worker
         # process (and to a worker it restarts).
@@ -293,7 +314,9 @@ def _disconnect(client, cluster) -> None:
         client.close()
     finally:
         if cluster is not None:
-            cluster.close()
+            # a job cluster whose jobs never started closes with an assertion inside Dask
+            with contextlib.suppress(AssertionError):
+                cluster.close()
 
 
 def _run(
