@@ -101,9 +101,13 @@ CLUSTER_KEYS = (
 )
 # The batch systems dask-jobqueue starts workers on that the sweep offers.
 BATCH_SYSTEMS = ("slurm", "pbs", "sge")
-# What a cell may vary: every scenario and vehicle parameter, the leg model and the objectives.
+# What a cell may vary: every scenario and vehicle parameter, the leg model, the environment
+# the planner reads (metres per error unit, the landmarks' capture radius), the objectives and
+# the search's settings.
 VEHICLE_KEYS = ("cruise_airspeed", "max_bank_angle", "leg_model")
-SWEEP_KEYS = (*PARAMETER_KEYS, *VEHICLE_KEYS, "objectives")
+ENVIRONMENT_KEYS = ("error_unit", "capture_radius")
+SEARCH_KEYS = ("choice", "max_labels", "time_limit")
+SWEEP_KEYS = (*PARAMETER_KEYS, *VEHICLE_KEYS, *ENVIRONMENT_KEYS, "objectives", *SEARCH_KEYS)
 GENERATORS = ("random",)
 BASE_PARAMETERS: dict[str, Parameters] = {"dataset1": DATASET1, "dataset2": DATASET2}
 SCENARIO_SUFFIXES = (".toml", ".csv", ".xlsx")
@@ -470,6 +474,16 @@ def _value(key: str, value: object, where: _Where, table: str, index=None) -> ob
     """One value of a swept key, checked as the scenario readers would check it."""
     if key == "objectives":
         return _objectives(value, where, table, key, index)
+    if key == "choice":
+        if value not in CHOICES:
+            raise where.error(
+                f"unknown choice {value!r}: one of {', '.join(CHOICES)}", table, key, index
+            )
+        return value
+    if key == "max_labels":
+        if not _is_int(value) or value < 1:  # type: ignore[operator]
+            raise where.error(f"must be a whole number >= 1 (got {value!r})", table, key, index)
+        return value
     if key == "leg_model":
         if value not in LEG_MODELS:
             raise where.error(
@@ -483,6 +497,8 @@ def _value(key: str, value: object, where: _Where, table: str, index=None) -> ob
         problems = Parameters(**{**DATASET1.to_dict(), key: number}).validate()
         if problems:
             raise where.error(problems[0], table, key, index)
+    elif key in (*ENVIRONMENT_KEYS, "time_limit") and not number > 0:
+        raise where.error(f"must be > 0 (got {value!r})", table, key, index)
     elif key == "cruise_airspeed" and not 0 < number <= 300:
         raise where.error(f"must lie in (0, 300] m/s (got {value!r})", table, key, index)
     elif key == "max_bank_angle" and not 0 < number <= MAX_BANK_DEG:
