@@ -62,3 +62,16 @@ def stated_cost(cell: Cell, *, seconds: float, log: str) -> list[dict]:
     with open(log, "a", encoding="utf-8") as f:
         f.write(f"{get_worker().get_current_task()} {cell.key}\n")
     return [row]
+
+
+def held(cell: Cell, *, started: str, release: str) -> list[dict]:
+    """run_cell, but cell 0 first says it started (the file ``started``) and waits until the
+    file ``release`` exists (at most 300 s: a hang guard, not a timing)."""
+    import time
+
+    if cell.index == 0:
+        Path(started).write_text("started", encoding="utf-8")
+        deadline = time.monotonic() + 300
+        while not Path(release).exists() and time.monotonic() < deadline:
+            time.sleep(0.05)
+    return run_cell(cell)

@@ -371,7 +371,7 @@ def start_scheduler(tmp_path: Path) -> tuple[subprocess.Popen, str]:
     proc = subprocess.Popen(
         [str(BIN / "dask"), "scheduler", "--host", "127.0.0.1", "--port", "0",
          "--no-dashboard", "--scheduler-file", str(scheduler_file)],
-        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=with_test_tasks(),
     )  # fmt: skip
     try:
         wait_for(scheduler_file.exists, "the scheduler file", proc)
@@ -586,12 +586,19 @@ def test_retry_failed_runs_the_failed_cells_again(tmp_path: Path, cluster) -> No
     assert all(r["status"] == "ok" for r in rows) and len(by_cell(rows)) == 4
 
 
+def with_test_tasks() -> dict:
+    """The environment with the tests' folder on the path: a scheduler unpickles the task
+    graph, and a test task of sweep_tasks names its module there."""
+    path = os.pathsep.join(filter(None, [str(ROOT / "tests"), os.environ.get("PYTHONPATH")]))
+    return {**os.environ, "PYTHONPATH": path}
+
+
 def start_workers(address: str, count: int, *extra: str) -> subprocess.Popen:
     """`dask worker ADDRESS --nworkers COUNT` on 127.0.0.1, as a user (or a batch job) starts it."""
     return subprocess.Popen(
         [str(BIN / "dask"), "worker", address, "--nworkers", str(count), "--nthreads", "1",
          "--host", "127.0.0.1", "--no-dashboard", *extra],
-        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=with_test_tasks(),
     )  # fmt: skip
 
 
@@ -729,3 +736,45 @@ def test_cells_are_grouped_into_tasks_of_about_a_second_after_a_few_alone(
     assert sizes[-1] < per_task  # the last tasks shrink so that the workers end together
     assert len(sizes) < 100 / 4
     assert len(by_cell(read_results(tmp_path / "out"))) == 100
+
+
+def test_a_worker_with_another_version_joining_mid_sweep_stops_it(tmp_path: Path) -> None:
+    import threading
+
+    from gcs_planner.sweep.workers import WorkerVersionError
+
+    preload = tmp_path / "other_version.py"
+    preload.write_text("import gcs_planner\ngcs_planner.__version__ = '0.0.1-old'\n")
+    started, release = tmp_path / "started", tmp_path / "release"
+    task = functools.partial(sweep_tasks.held, started=str(started), release=str(release))
+    scheduler, address = start_scheduler(tmp_path)
+    procs = [start_workers(address, 1), scheduler]
+    outcome: dict = {}
+
+    def sweep() -> None:
+        try:
+            outcome["result"] = run_sweep(
+                small_spec(tmp_path), tmp_path / "out", scheduler=address, task=task,
+                min_workers=1, min_workers_timeout=DEADLINE_S,
+            )  # fmt: skip
+        except BaseException as exc:  # handed to the test's thread
+            outcome["error"] = exc
+
+    thread = threading.Thread(target=sweep)
+    thread.start()
+    try:
+        wait_for(lambda: started.exists() or not thread.is_alive(), "the first cell to start")
+        assert started.exists(), outcome
+        procs.insert(0, start_workers(address, 1, "--preload", str(preload)))
+        thread.join(timeout=DEADLINE_S)
+        assert not thread.is_alive(), "the sweep did not stop"
+    finally:
+        release.write_text("go")
+        thread.join(timeout=DEADLINE_S)
+        stop(*procs)
+    error = outcome.get("error")
+    assert isinstance(error, WorkerVersionError), outcome
+    assert "Dask worker tcp://127.0.0.1:" in str(error) and "runs gcs-planner 0.0.1-old" in str(
+        error
+    )
+    assert "cells saved" in str(error) and "resume with --resume" in str(error)

@@ -38,7 +38,12 @@ from gcs_planner.sweep.batch import Batcher, error_row, run_batch
 from gcs_planner.sweep.cells import Cell, expand
 from gcs_planner.sweep.spec import ClusterSpec, SweepSpec, read_spec
 from gcs_planner.sweep.task import run_cell
-from gcs_planner.sweep.workers import NoWorkersError, check_versions, wait_for_workers
+from gcs_planner.sweep.workers import (
+    NoWorkersError,
+    WorkerVersionError,
+    check_versions,
+    wait_for_workers,
+)
 
 SUMMARY_PNG = "summary.png"
 # Tasks handed to the scheduler at a time, at most: two per worker thread keep every worker busy
@@ -214,8 +219,8 @@ def run_sweep(
                 _disconnect(client, cluster)
             if isinstance(exc, KeyboardInterrupt) and not isinstance(exc, SweepInterrupted):
                 raise SweepInterrupted(len(table.done), out) from None
-            if isinstance(exc, NoWorkersError):
-                raise NoWorkersError(
+            if isinstance(exc, (NoWorkersError, WorkerVersionError)):
+                raise type(exc)(
                     f"{exc}; {len(table.done)} cells saved in {out}, resume with --resume"
                 ) from None
             raise
