@@ -142,9 +142,7 @@ def test_cluster_section_runs_the_sweep_on_slurm_jobs(tmp_path: Path, slurm: Pat
          "--min-workers", "2", "--min-workers-timeout", str(DEADLINE_S)],
         capture_output=True, text=True, timeout=DEADLINE_S, env=env,
     )  # fmt: skip
-    assert done.returncode == 0, done.stderr + "".join(
-        p.read_text() for p in slurm.glob("*.out")
-    )
+    assert done.returncode == 0, done.stderr + "".join(p.read_text() for p in slurm.glob("*.out"))
     assert "running on 2 SLURM jobs of 1 cores, 1GB (queue debug, walltime 00:10:00)" in (
         done.stdout
     )
