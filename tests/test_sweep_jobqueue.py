@@ -143,7 +143,7 @@ def test_cluster_section_runs_the_sweep_on_slurm_jobs(tmp_path: Path, slurm: Pat
         capture_output=True, text=True, timeout=DEADLINE_S, env=env,
     )  # fmt: skip
     assert done.returncode == 0, done.stderr + "".join(p.read_text() for p in slurm.glob("*.out"))
-    assert "running on 2 SLURM jobs of 1 cores, 1GB (queue debug, walltime 00:10:00)" in (
+    assert "running on 2 SLURM jobs of 1 core, 1GB (queue debug, walltime 00:10:00)" in (
         done.stdout
     )
     assert "6 cells run (0 failed, 0 infeasible)" in done.stdout

@@ -95,7 +95,8 @@ def close(cluster) -> None:
 
 def describe(spec: ClusterSpec) -> str:
     """The cluster in a line: "2 SLURM jobs of 2 cores, 4GB (queue debug)"."""
-    where = f"{spec.jobs} {SYSTEM_NAMES[spec.system]} jobs of {spec.cores} cores, {spec.memory}"
+    jobs = f"{spec.jobs} {SYSTEM_NAMES[spec.system]} job{'s' if spec.jobs != 1 else ''}"
+    where = f"{jobs} of {spec.cores} core{'s' if spec.cores != 1 else ''}, {spec.memory}"
     extra = [f"queue {spec.queue}"] if spec.queue else []
     if spec.walltime:
         extra.append(f"walltime {spec.walltime}")
