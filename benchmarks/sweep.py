@@ -1,7 +1,12 @@
 """Sweeps on Dask against a serial loop: the same cells, the same task function.
 
-    python -m benchmarks.sweep                  # 200 contest-like scenarios of 613 points
+    python -m benchmarks.sweep                  # the bundled example, then 200 contest-like
+                                                # scenarios of 613 points
     python -m benchmarks.sweep --scenarios 20   # a shorter run
+
+0. the bundled example (``missions/sweep-example.toml``: 24 cells, each chosen route dry-run 50
+   times): the loop over its cells in this process, then ``gcs-planner sweep``'s own local
+   cluster started, run and stopped, as the command does (start and stop timed and included);
 
 The cells are ``random_scenario(611, seed)`` for seeds 1..N (A, 611 correction points and B: the
 contest's 613 points in its 100 km box, dataset 1's parameters, 24 % of the points unreliable),
@@ -165,6 +170,70 @@ def run_interleaved(
     return timings, ratios, fronts
 
 
+EXAMPLE_SPEC = Path(__file__).resolve().parents[1] / "missions" / "sweep-example.toml"
+
+
+def run_example(
+    folder: Path, workers: int = 2, spec_path: Path = EXAMPLE_SPEC
+) -> tuple[list[Timing], dict]:
+    """The bundled example: the serial loop, then the local cluster `gcs-planner sweep`
+    starts (its start and stop timed), the fronts checked equal."""
+    from gcs_planner.sweep.runner import _connect, _disconnect
+
+    before = _load()
+    s_wall, s_cpu, s_fronts = _serial(spec_path)
+    start = time.perf_counter()
+    client, cluster = _connect(None, workers, 1, "127.0.0.1:0")
+    try:
+        client.wait_for_workers(workers, timeout=DEADLINE_S)
+        startup = time.perf_counter() - start
+        c_wall, c_cpu, c_coord, c_fronts = _on_cluster(
+            spec_path, folder / "example", client, cluster.scheduler_address
+        )
+    finally:
+        stop = time.perf_counter()
+        _disconnect(client, cluster)
+        startup += time.perf_counter() - stop
+    if c_fronts != s_fronts:
+        raise RuntimeError("the example's fronts on the cluster differ from the serial loop's")
+    after = _load()
+    load = (min(before, after), max(before, after))
+    cells = len(s_fronts)
+    name = f"local cluster, {workers} workers × 1 thread (incl. start + stop)"
+    timings = [
+        Timing("serial loop (1 process)", s_wall, s_cpu, cells, load),
+        Timing(name, c_wall + startup, c_cpu, cells, load, startup, c_coord),
+    ]
+    print(
+        f"  example: serial {s_wall:.1f} s, cluster {c_wall + startup:.1f} s "
+        f"({s_wall / (c_wall + startup):.2f}x)",
+        flush=True,
+    )
+    return timings, s_fronts
+
+
+def render_example(timings: list[Timing], spec_path: Path = EXAMPLE_SPEC) -> str:
+    """The example's table: serial loop against the local cluster, the same columns."""
+    serial = timings[0]
+    lines = [
+        f"`{spec_path.name}`: {serial.cells} cells, each chosen route dry-run; identical "
+        "fronts from both runs.",
+        "",
+        "| run | cells | wall time s | of which start + stop s | speed-up vs serial "
+        "| without start + stop | planning CPU s | coordinating CPU s | load avg (1 min) |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|---|",
+    ]
+    for t in timings:
+        work = t.seconds - t.start_stop
+        lines.append(
+            f"| {t.name} | {t.cells} | {t.seconds:,.1f} | {t.start_stop:.1f} | "
+            f"{serial.seconds / t.seconds:.2f}× | {serial.seconds / work:.2f}× | "
+            f"{t.cpu_seconds:,.1f} | {t.coordinating_cpu:.1f} | "
+            f"{t.load[0]:.1f}–{t.load[1]:.1f} |"
+        )
+    return "\n".join(lines)
+
+
 def run_separate(spec_path: Path, out: Path, workers: int) -> tuple[Timing, dict]:
     """A scheduler and workers started as their own processes with the `dask` command."""
     import psutil
@@ -324,6 +393,7 @@ def main(argv: list[str] | None = None) -> None:
         "--turn-radius", type=float, default=200.0, help="0: straight legs (the fast mode)"
     )
     ap.add_argument("--no-separate", action="store_true", help="skip the separate scheduler")
+    ap.add_argument("--no-example", action="store_true", help="skip the bundled example")
     ap.add_argument(
         "--rounds", type=int, default=8, help="alternating rounds of serial and local cluster"
     )
@@ -331,6 +401,10 @@ def main(argv: list[str] | None = None) -> None:
     if min(args.scenarios, args.corrections, args.workers, args.rounds) < 1 or args.turn_radius < 0:
         ap.error("--scenarios, --corrections and --workers must be >= 1, --turn-radius >= 0")
     started = _utc()
+    example = None
+    if not args.no_example:
+        with tempfile.TemporaryDirectory() as tmp:
+            example, _ = run_example(Path(tmp), args.workers)
     timings, ratios = run_benchmark(
         args.scenarios,
         args.corrections,
@@ -342,6 +416,8 @@ def main(argv: list[str] | None = None) -> None:
     when = (
         f"{started} – {_utc()[-9:]}, `python -m benchmarks.sweep {' '.join(argv or sys.argv[1:])}`"
     )
+    if example is not None:
+        print(render_example(example) + "\n")
     print(render(timings, ratios, args.scenarios, args.corrections, args.turn_radius, when))
 
 

@@ -48,3 +48,30 @@ def failing_once(cell: Cell, *, victim: int, marker: str) -> list[dict]:
         Path(marker).write_text("failed", encoding="utf-8")
         raise RuntimeError("a transient failure")
     return run_cell(cell)
+
+
+def stated_cost(cell: Cell, *, seconds: float, log: str) -> list[dict]:
+    """A cell that plans nothing and says it took ``seconds`` on the worker (what the sweep
+    sizes its tasks by); logs the Dask task that ran it and the cell's key."""
+    from distributed import get_worker
+
+    from gcs_planner.sweep.task import cell_inputs
+
+    row = {**cell_inputs(cell), "status": "ok", "error": "", "cell_seconds": seconds}
+    row.update(route=0, chosen=True, length=1000.0 + cell.index, corrections=1)
+    with open(log, "a", encoding="utf-8") as f:
+        f.write(f"{get_worker().get_current_task()} {cell.key}\n")
+    return [row]
+
+
+def held(cell: Cell, *, started: str, release: str) -> list[dict]:
+    """run_cell, but cell 0 first says it started (the file ``started``) and waits until the
+    file ``release`` exists (at most 300 s: a hang guard, not a timing)."""
+    import time
+
+    if cell.index == 0:
+        Path(started).write_text("started", encoding="utf-8")
+        deadline = time.monotonic() + 300
+        while not Path(release).exists() and time.monotonic() < deadline:
+            time.sleep(0.05)
+    return run_cell(cell)

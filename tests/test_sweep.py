@@ -277,3 +277,60 @@ def test_example_spec_plans_every_scenario_with_the_reserve_it_states(tmp_path: 
     for cell in (cells[0], cells[6]):
         rows = run_cell(replace(cell, dry_run_runs=0))
         assert rows and all(r["status"] == "ok" and r["reserve"] == 200.0 for r in rows)
+
+
+def test_environment_and_search_settings_are_swept_and_columns(tmp_path: Path) -> None:
+    import dataclasses
+
+    from gcs_planner.core.planner import plan
+    from gcs_planner.scenario.readers import load_scenario
+
+    spec = read_spec(
+        write_spec(
+            tmp_path,
+            f'[[scenarios]]\nfile = "{EXAMPLE_SCENARIO}"\n'
+            "[grid]\ncapture_radius = [5, 400]\nerror_unit = 0.1\n"
+            'choice = ["shortest", "fewest"]\n'
+            "[[cases]]\nmax_labels = 50000\ntime_limit = 30\n"
+            '[plan]\nobjectives = ["length", "corrections"]\nchoice = "compromise"\n',
+        )
+    )
+    assert spec.swept == ("capture_radius", "choice")
+    cells = expand(spec)
+    assert len(cells) == 4
+    base = load_scenario(EXAMPLE_SCENARIO)
+    for cell in cells:
+        values = dict(cell.values)
+        rows = run_cell(cell)
+        assert rows and all(r["status"] == "ok" for r in rows)
+        assert all(
+            r["capture_radius"] == values["capture_radius"] and r["error_unit"] == 0.1
+            and r["choice"] == values["choice"] and r["max_labels"] == 50000
+            and r["time_limit"] == 30.0
+            for r in rows
+        )  # fmt: skip
+        # as planning the scenario alone with those values
+        alone = plan(
+            dataclasses.replace(base, capture_radius=values["capture_radius"], error_unit=0.1),
+            objectives=("length", "corrections"),
+            choice=values["choice"],
+            max_labels=50000,
+            time_limit=30,
+        )
+        got = sorted(rows, key=lambda r: r["route"])
+        assert [r["route_ids"] for r in got] == [" ".join(r.ids()) for r in alone.routes]
+        assert [r["chosen"] for r in got] == [i == alone.chosen for i in range(len(got))]
+    assert len({c.key for c in cells}) == 4
+
+
+def test_bad_swept_search_setting_names_the_field(tmp_path: Path) -> None:
+    from gcs_planner.errors import InputError
+
+    for text, said in (
+        ('choice = ["nearest"]', "field 'grid.choice': unknown choice 'nearest'"),
+        ("max_labels = [0.5]", "field 'grid.max_labels': must be a whole number >= 1"),
+        ("capture_radius = [0]", "field 'grid.capture_radius': must be > 0"),
+    ):
+        path = write_spec(tmp_path, f'[[scenarios]]\nfile = "{EXAMPLE_SCENARIO}"\n[grid]\n{text}\n')
+        with pytest.raises(InputError, match=said.replace("(", r"\(").replace(")", r"\)")):
+            read_spec(path)

@@ -15,3 +15,11 @@ def test_sweep_benchmark_runs_all_three_ways_with_equal_fronts() -> None:
     text = sweep_bench.render(timings, ratios, 4, 40, 200.0)
     assert text.count("\n| ") == 1 + 3  # the header and one row per run
     assert "identical fronts" in text
+
+
+def test_sweep_benchmark_runs_the_bundled_example_both_ways_with_equal_fronts(tmp_path) -> None:
+    timings, fronts = sweep_bench.run_example(tmp_path, workers=2)
+    assert [t.cells for t in timings] == [24, 24] and len(fronts) == 24
+    assert timings[1].start_stop > 0 and all(t.cpu_seconds > 0 for t in timings)
+    text = sweep_bench.render_example(timings)
+    assert text.count("\n| ") == 1 + 2 and "sweep-example.toml" in text

@@ -371,7 +371,7 @@ def start_scheduler(tmp_path: Path) -> tuple[subprocess.Popen, str]:
     proc = subprocess.Popen(
         [str(BIN / "dask"), "scheduler", "--host", "127.0.0.1", "--port", "0",
          "--no-dashboard", "--scheduler-file", str(scheduler_file)],
-        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=with_test_tasks(),
     )  # fmt: skip
     try:
         wait_for(scheduler_file.exists, "the scheduler file", proc)
@@ -584,3 +584,197 @@ def test_retry_failed_runs_the_failed_cells_again(tmp_path: Path, cluster) -> No
     assert (retried.skipped, retried.ran, retried.failed) == (3, 1, 0)
     rows = read_results(out)
     assert all(r["status"] == "ok" for r in rows) and len(by_cell(rows)) == 4
+
+
+def with_test_tasks() -> dict:
+    """The environment with the tests' folder on the path: a scheduler unpickles the task
+    graph, and a test task of sweep_tasks names its module there."""
+    path = os.pathsep.join(filter(None, [str(ROOT / "tests"), os.environ.get("PYTHONPATH")]))
+    return {**os.environ, "PYTHONPATH": path}
+
+
+def start_workers(address: str, count: int, *extra: str) -> subprocess.Popen:
+    """`dask worker ADDRESS --nworkers COUNT` on 127.0.0.1, as a user (or a batch job) starts it."""
+    return subprocess.Popen(
+        [str(BIN / "dask"), "worker", address, "--nworkers", str(count), "--nthreads", "1",
+         "--host", "127.0.0.1", "--no-dashboard", *extra],
+        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=with_test_tasks(),
+    )  # fmt: skip
+
+
+def stop(*procs: subprocess.Popen) -> None:
+    for p in procs:
+        p.terminate()
+    for p in procs:
+        try:
+            p.wait(timeout=60)
+        except subprocess.TimeoutExpired:
+            p.kill()
+            p.wait()
+
+
+def test_min_workers_waits_for_workers_that_join_later(tmp_path: Path) -> None:
+    scheduler, address = start_scheduler(tmp_path)
+    procs = [scheduler]
+    try:
+        sweep = subprocess.Popen(
+            cli(str(small_spec(tmp_path)), "--out", str(tmp_path / "out"),
+                "--scheduler-file", str(tmp_path / "scheduler.json"),
+                "--min-workers", "2", "--min-workers-timeout", str(DEADLINE_S)),
+            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        )  # fmt: skip
+        procs.insert(0, sweep)
+        seen = []
+        while not any("waiting for 2 Dask workers (0 so far" in line for line in seen):
+            line = sweep.stdout.readline()
+            assert line, f"the sweep ended before it said it waits: {seen} {sweep.stderr.read()}"
+            seen.append(line)
+        assert not (tmp_path / "out" / PARQUET).exists()  # nothing ran without workers
+        procs.insert(1, start_workers(address, 2))
+        out, err = sweep.communicate(timeout=DEADLINE_S)
+        assert sweep.returncode == 0, err
+        assert "2 Dask workers joined" in out and "8 cells run (0 failed" in out
+        assert len(by_cell(read_results(tmp_path / "out"))) == 8
+    finally:
+        stop(*procs)
+
+
+def test_min_workers_that_never_join_stop_the_sweep_with_a_message(tmp_path: Path) -> None:
+    scheduler, address = start_scheduler(tmp_path)
+    try:
+        done = subprocess.run(
+            cli(str(small_spec(tmp_path)), "--out", str(tmp_path / "out"),
+                "--scheduler", address, "--min-workers", "1", "--min-workers-timeout", "2"),
+            capture_output=True, text=True, timeout=DEADLINE_S,
+        )  # fmt: skip
+    finally:
+        stop(scheduler)
+    assert done.returncode == 4, done.stderr
+    assert done.stderr.count("\n") == 1, done.stderr
+    assert "0 of the 1 Dask workers asked for (--min-workers) joined within 2 s" in done.stderr
+    assert "0 cells saved" in done.stderr and "--resume" in done.stderr
+
+
+def test_a_worker_with_another_planner_version_is_refused(tmp_path: Path) -> None:
+    from gcs_planner import __version__
+
+    # A worker whose gcs-planner says it is another release, as an old install on one node would.
+    preload = tmp_path / "other_version.py"
+    preload.write_text("import gcs_planner\ngcs_planner.__version__ = '0.0.1-old'\n")
+    scheduler, address = start_scheduler(tmp_path)
+    workers = start_workers(address, 1, "--preload", str(preload))
+    try:
+        done = subprocess.run(
+            cli(str(small_spec(tmp_path)), "--out", str(tmp_path / "out"),
+                "--scheduler", address, "--min-workers", "1",
+                "--min-workers-timeout", str(DEADLINE_S)),
+            capture_output=True, text=True, timeout=DEADLINE_S,
+        )  # fmt: skip
+    finally:
+        stop(workers, scheduler)
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.count("\n") == 1, done.stderr
+    assert "Dask worker tcp://127.0.0.1:" in done.stderr
+    assert f"runs gcs-planner 0.0.1-old, this client {__version__}" in done.stderr
+    assert read_results(tmp_path / "out") == []  # no cell ran on it
+
+
+def test_progress_is_one_tqdm_line_on_stderr_and_failed_cells_do_not_break_chosen(
+    tmp_path: Path, cluster, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import io
+
+    import pyarrow.parquet as pq
+    from test_progress import FakeTerminal, screen
+
+    # stderr a terminal, stdout the messages: the progress bar goes to stderr only, and what a
+    # terminal shows after every redraw is one line with the final count (no stray tails).
+    err, out = FakeTerminal(), io.StringIO()
+    monkeypatch.setattr(sys, "stderr", err)
+    (tmp_path / "bad.toml").write_text('points = "missing.csv"\n')
+    spec_path = small_spec(tmp_path, seeds=2)
+    spec_path.write_text(spec_path.read_text() + '[[scenarios]]\nfile = "bad.toml"\n')
+    result = run_sweep(spec_path, tmp_path / "out", scheduler=cluster.scheduler_address, stream=out)
+    assert (result.ran, result.failed) == (8, 2)
+    rows = screen(err.getvalue())
+    assert len(rows) == 1 and rows[0].startswith("cells: 100%") and "8/8" in rows[0], rows
+    assert "failed=2" in rows[0]
+    assert "\r" not in out.getvalue() and "cells:" not in out.getvalue()
+    table = pq.read_table(tmp_path / "out" / PARQUET)
+    # df[df.chosen] in pandas needs a column without nulls; one chosen route per planned cell
+    assert table.column("chosen").null_count == 0
+    chosen = table.filter(table.column("chosen")).to_pylist()
+    assert len(chosen) == 6 and all(r["status"] == "ok" for r in chosen)
+    assert table.schema.field("length").metadata == {b"unit": b"m"}
+
+
+def test_cells_are_grouped_into_tasks_of_about_a_second_after_a_few_alone(
+    tmp_path: Path, cluster
+) -> None:
+    # Cells that say they took 0.1 s each: after the first few (one per task, to measure),
+    # each task holds about TARGET_TASK_S of cells, fewer near the end (the tail's share).
+    from gcs_planner.sweep import batch
+
+    log = tmp_path / "tasks.log"
+    task = functools.partial(sweep_tasks.stated_cost, seconds=0.1, log=str(log))
+    spec_path = small_spec(tmp_path, seeds=99, deltas="[0.001]")  # 100 cells
+    result = run_sweep(spec_path, tmp_path / "out", scheduler=cluster.scheduler_address, task=task)
+    assert (result.ran, result.failed) == (100, 0)
+    tasks: dict[str, list[str]] = {}
+    for line in log.read_text().splitlines():
+        key, cell = line.split()
+        tasks.setdefault(key, []).append(cell)
+    cells = [c for group in tasks.values() for c in group]
+    assert sorted(cells) == sorted(c.key for c in expand(read_spec(spec_path)))  # each once
+    # The task keys carry the first cell's number: in the order the cells were handed out.
+    sizes = [len(g) for _, g in sorted(tasks.items(), key=lambda kv: int(kv[0].split("-")[2]))]
+    threads = 2
+    probes = batch.PROBES_PER_THREAD * threads
+    assert sizes[:probes] == [1] * probes
+    per_task = round(batch.TARGET_TASK_S / 0.1)
+    assert max(sizes) == per_task and sizes[probes] == per_task
+    assert sizes[-1] < per_task  # the last tasks shrink so that the workers end together
+    assert len(sizes) < 100 / 4
+    assert len(by_cell(read_results(tmp_path / "out"))) == 100
+
+
+def test_a_worker_with_another_version_joining_mid_sweep_stops_it(tmp_path: Path) -> None:
+    import threading
+
+    from gcs_planner.sweep.workers import WorkerVersionError
+
+    preload = tmp_path / "other_version.py"
+    preload.write_text("import gcs_planner\ngcs_planner.__version__ = '0.0.1-old'\n")
+    started, release = tmp_path / "started", tmp_path / "release"
+    task = functools.partial(sweep_tasks.held, started=str(started), release=str(release))
+    scheduler, address = start_scheduler(tmp_path)
+    procs = [start_workers(address, 1), scheduler]
+    outcome: dict = {}
+
+    def sweep() -> None:
+        try:
+            outcome["result"] = run_sweep(
+                small_spec(tmp_path), tmp_path / "out", scheduler=address, task=task,
+                min_workers=1, min_workers_timeout=DEADLINE_S,
+            )  # fmt: skip
+        except BaseException as exc:  # handed to the test's thread
+            outcome["error"] = exc
+
+    thread = threading.Thread(target=sweep)
+    thread.start()
+    try:
+        wait_for(lambda: started.exists() or not thread.is_alive(), "the first cell to start")
+        assert started.exists(), outcome
+        procs.insert(0, start_workers(address, 1, "--preload", str(preload)))
+        thread.join(timeout=DEADLINE_S)
+        assert not thread.is_alive(), "the sweep did not stop"
+    finally:
+        release.write_text("go")
+        thread.join(timeout=DEADLINE_S)
+        stop(*procs)
+    error = outcome.get("error")
+    assert isinstance(error, WorkerVersionError), outcome
+    assert "Dask worker tcp://127.0.0.1:" in str(error) and "runs gcs-planner 0.0.1-old" in str(
+        error
+    )
+    assert "cells saved" in str(error) and "resume with --resume" in str(error)

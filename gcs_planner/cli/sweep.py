@@ -68,7 +68,23 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         default=60.0,
         metavar="SECONDS",
         help="stop, the finished cells saved, once the scheduler has had no worker for this "
-        "long (default 60; exit status 5)",
+        "long (default 60; exit status 4)",
+    )
+    p.add_argument(
+        "--min-workers",
+        type=int,
+        default=0,
+        metavar="N",
+        help="wait until the cluster has N workers before submitting (batch jobs take time to "
+        "start); default: start at once",
+    )
+    p.add_argument(
+        "--min-workers-timeout",
+        type=float,
+        default=600.0,
+        metavar="SECONDS",
+        help="how long --min-workers waits before it stops with a message (default 600; "
+        "exit status 4)",
     )
     p.add_argument(
         "--dashboard-address",
@@ -122,11 +138,15 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("is empty: give the scheduler's address", field="--scheduler")
     if args.connect_timeout is not None and not args.connect_timeout > 0:
         raise InputError(f"must be > 0 (got {args.connect_timeout:g})", field="--connect-timeout")
-    scheduler, scheduler_from = scheduler_address(args.scheduler, args.scheduler_file)
-
     for flag in ("prune", "retry_failed"):
         if getattr(args, flag) and not args.resume:
             raise InputError("needs --resume", field="--" + flag.replace("_", "-"))
+    if args.min_workers < 0:
+        raise InputError(f"must be >= 0 (got {args.min_workers})", field="--min-workers")
+    if not args.min_workers_timeout > 0:
+        raise InputError(
+            f"must be > 0 (got {args.min_workers_timeout:g})", field="--min-workers-timeout"
+        )
     if not args.no_workers_timeout > 0:
         raise InputError(
             f"must be > 0 (got {args.no_workers_timeout:g})", field="--no-workers-timeout"
@@ -137,6 +157,14 @@ def run(args: argparse.Namespace) -> int:
     from gcs_planner.sweep.runner import SweepInterrupted
 
     spec = read_spec(args.spec)
+    if spec.cluster is not None and args.scheduler is None and args.scheduler_file is None:
+        # the spec's [cluster] starts its own scheduler; DASK_SCHEDULER_ADDRESS is not asked
+        from gcs_planner.sweep.jobqueue import require_jobqueue
+
+        require_jobqueue(spec.path)
+        scheduler, scheduler_from = None, "[cluster]"
+    else:
+        scheduler, scheduler_from = scheduler_address(args.scheduler, args.scheduler_file)
     try:
         result = run_sweep(
             spec,
@@ -151,6 +179,8 @@ def run(args: argparse.Namespace) -> int:
             no_workers_timeout=args.no_workers_timeout,
             prune=args.prune,
             retry_failed=args.retry_failed,
+            min_workers=args.min_workers,
+            min_workers_timeout=args.min_workers_timeout,
             **({} if args.connect_timeout is None else {"connect_timeout": args.connect_timeout}),
         )
     except SweepInterrupted as exc:

@@ -13,7 +13,16 @@ import json
 from dataclasses import dataclass
 
 from gcs_planner.core.budget import DEFAULT_MAX_LABELS, DEFAULT_TIME_LIMIT
-from gcs_planner.sweep.spec import FileSource, GeneratedSource, SweepSpec
+from gcs_planner.sweep.spec import (
+    ENVIRONMENT_KEYS,
+    SEARCH_KEYS,
+    FileSource,
+    GeneratedSource,
+    SweepSpec,
+)
+
+# Swept keys that are not the scenario's or the vehicle's: applied by the task, not the reader.
+NOT_OVERRIDES = ("objectives", *SEARCH_KEYS, *ENVIRONMENT_KEYS)
 
 
 @dataclass(frozen=True)
@@ -44,8 +53,13 @@ class Cell:
 
     @property
     def overrides(self) -> dict[str, object]:
-        """The values as scenario overrides (everything but the objectives)."""
-        return {k: v for k, v in self.values if k != "objectives"}
+        """The values as scenario overrides (the scenario's and the vehicle's parameters)."""
+        return {k: v for k, v in self.values if k not in NOT_OVERRIDES}
+
+    @property
+    def environment(self) -> dict[str, float]:
+        """The swept environment values (metres per error unit, capture radius)."""
+        return {k: float(v) for k, v in self.values if k in ENVIRONMENT_KEYS}  # type: ignore[arg-type]
 
     @property
     def planned_objectives(self) -> tuple[str, ...] | None:
@@ -54,7 +68,8 @@ class Cell:
 
 
 def expand(spec: SweepSpec) -> list[Cell]:
-    """Every cell of ``spec``: each scenario with each value set."""
+    """Every cell of ``spec``: each scenario with each value set (a swept search setting wins
+    over [plan]'s)."""
     cells = []
     for source in spec.scenarios:
         for values in spec.value_sets:
@@ -64,9 +79,9 @@ def expand(spec: SweepSpec) -> list[Cell]:
                     source=source,
                     values=tuple(values.items()),
                     objectives=spec.objectives,
-                    choice=spec.choice,
-                    max_labels=spec.max_labels,
-                    time_limit=spec.time_limit,
+                    choice=values.get("choice", spec.choice),
+                    max_labels=values.get("max_labels", spec.max_labels),
+                    time_limit=values.get("time_limit", spec.time_limit),
                     dry_run_runs=spec.dry_run_runs,
                     dry_run_seed=spec.dry_run_seed,
                 )

@@ -21,7 +21,6 @@ given by address keeps its own configuration.
 from __future__ import annotations
 
 import contextlib
-import itertools
 import logging
 import os
 import signal
@@ -33,15 +32,22 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TextIO
 
-from gcs_planner.errors import GcsPlannerError, InputError
+from gcs_planner.errors import InputError
 from gcs_planner.progress import Counter
+from gcs_planner.sweep.batch import Batcher, error_row, run_batch
 from gcs_planner.sweep.cells import Cell, expand
-from gcs_planner.sweep.spec import SweepSpec, read_spec
-from gcs_planner.sweep.task import cell_inputs, finish_row, run_cell
+from gcs_planner.sweep.spec import ClusterSpec, SweepSpec, read_spec
+from gcs_planner.sweep.task import run_cell
+from gcs_planner.sweep.workers import (
+    NoWorkersError,
+    WorkerVersionError,
+    check_versions,
+    wait_for_workers,
+)
 
 SUMMARY_PNG = "summary.png"
-# Cells handed to the scheduler at a time: enough to keep any cluster busy, few enough that a
-# sweep of millions of cells does not hold millions of tasks in the scheduler's memory.
+# Tasks handed to the scheduler at a time, at most: two per worker thread keep every worker busy
+# (.batch sizes them); the cap keeps a huge cluster's scheduler from holding too many.
 IN_FLIGHT = 10_000
 DEFAULT_WORKERS = 2
 # At most 1/SAVE_BUDGET of the sweep's wall time goes to rewriting the result table.
@@ -73,6 +79,8 @@ POLL_S = 0.25
 WORKER_CHECK_S = 2.0
 # A sweep with no worker at all for this long stops with a message, its table saved.
 NO_WORKERS_TIMEOUT_S = 60.0
+# How long --min-workers waits for its workers by default: batch jobs may queue for minutes.
+MIN_WORKERS_TIMEOUT_S = 600.0
 # Connecting to a scheduler across a cluster's network (or while it starts) takes seconds;
 # an address that answers nothing for this long is a wrong one.
 CONNECT_TIMEOUT_S = 20.0
@@ -88,13 +96,6 @@ class SweepInterrupted(KeyboardInterrupt):
         self.saved = saved
         self.out = out
         super().__init__(f"interrupted, {saved} cells saved, resume with --resume")
-
-
-class NoWorkersError(GcsPlannerError):
-    """The scheduler had no worker for too long; the table is saved. Exit 4, as a link that
-    failed (5 is a dry run lost by its replay)."""
-
-    exit_code = 4
 
 
 @dataclass(frozen=True)
@@ -129,14 +130,17 @@ def run_sweep(
     retry_failed: bool = False,
     connect_timeout: float = CONNECT_TIMEOUT_S,
     scheduler_from: str = "--scheduler",
+    min_workers: int = 0,
+    min_workers_timeout: float = MIN_WORKERS_TIMEOUT_S,
 ) -> SweepResult:
     """Run the sweep ``spec`` (a SweepSpec or the path of its TOML) into the folder ``out``.
 
     ``scheduler``: the address of an existing Dask scheduler (``tcp://host:8786``), reached
-    within ``connect_timeout`` seconds; without it a LocalCluster of ``workers`` processes is
-    started and closed; ``scheduler_from`` is where the address came from, for the message when
-    it cannot be reached. ``resume``: keep the finished
-    cells of an earlier run in ``out`` and run only the others; it refuses a spec whose cells
+    within ``connect_timeout`` seconds; without it the spec's [cluster] jobs are submitted
+    (:mod:`.jobqueue`) or, without one, a LocalCluster of ``workers`` processes is started;
+    either is closed at the end. ``scheduler_from`` is where the address came from, for the
+    message when it cannot be reached. ``resume``: keep the finished cells of an earlier run
+    in ``out`` and run only the others; it refuses a spec whose cells
     changed since (:mod:`.manifest`) unless ``prune``, which drops the rows of the cells no
     longer in it. ``retry_failed``: run the cells whose task failed again. ``stream``: where
     its messages go (None: nowhere). ``task`` runs one cell on a worker; it must be importable
@@ -144,7 +148,9 @@ def run_sweep(
     (default stderr) when it is a terminal and ``quiet`` is False.
 
     Ctrl-C (SIGINT) saves the table and raises :class:`SweepInterrupted`; a scheduler without
-    any worker for ``no_workers_timeout`` seconds saves it and raises :class:`NoWorkersError`.
+    any worker for ``no_workers_timeout`` seconds, or with fewer than ``min_workers`` after
+    ``min_workers_timeout``, saves it and raises :class:`NoWorkersError`; a worker with another
+    planner version raises :class:`~.workers.WorkerVersionError`.
     """
     from gcs_planner.sweep.summary import summary_png
     from gcs_planner.sweep.table import CSV, PARQUET, ResultTable
@@ -153,6 +159,8 @@ def run_sweep(
         spec = read_spec(spec)
     if workers < 1 or threads_per_worker < 1:
         raise InputError("workers and threads per worker must be >= 1", field="--workers")
+    if min_workers < 0:
+        raise InputError(f"must be >= 0 (got {min_workers})", field="--min-workers")
     out = Path(out)
     from gcs_planner.sweep.manifest import check_resume, write_manifest
 
@@ -174,15 +182,29 @@ def run_sweep(
     started = time.perf_counter()
     ran, failed, infeasible, dashboard = 0, 0, 0, ""
     closing = None
+    jobs = spec.cluster if scheduler is None else None
+    if scheduler is not None and spec.cluster is not None:
+        say(f"note: submitting to {scheduler} ({scheduler_from}): the spec's [cluster] is unused")
+    if jobs is not None:
+        # Batch jobs queue before they start: wait for them rather than count them as gone.
+        min_workers = max(min_workers, 1)
     if todo:
         client, cluster = _connect(
             scheduler, workers, threads_per_worker, dashboard_address, connect_timeout,
-            scheduler_from,
+            scheduler_from, jobs, spec.path,
         )  # fmt: skip
         try:
             dashboard = client.dashboard_link or ""
-            where = scheduler or f"a local cluster of {workers} worker processes"
+            if jobs is not None:
+                from gcs_planner.sweep.jobqueue import describe
+
+                where = describe(jobs)
+            else:
+                where = scheduler or f"a local cluster of {workers} worker processes"
             say(f"running on {where}; dashboard: {dashboard or '(none)'}")
+            if min_workers:
+                wait_for_workers(client, min_workers, min_workers_timeout, say)
+            check_versions(client)
             progress = Counter("cells", len(todo), unit="cell", stream=progress_stream, quiet=quiet)
             try:
                 ran, failed, infeasible = _run(
@@ -197,8 +219,8 @@ def run_sweep(
                 _disconnect(client, cluster)
             if isinstance(exc, KeyboardInterrupt) and not isinstance(exc, SweepInterrupted):
                 raise SweepInterrupted(len(table.done), out) from None
-            if isinstance(exc, NoWorkersError):
-                raise NoWorkersError(
+            if isinstance(exc, (NoWorkersError, WorkerVersionError)):
+                raise type(exc)(
                     f"{exc}; {len(table.done)} cells saved in {out}, resume with --resume"
                 ) from None
             raise
@@ -253,10 +275,19 @@ def _connect(
     dashboard_address: str,
     connect_timeout: float = CONNECT_TIMEOUT_S,
     scheduler_from: str = "--scheduler",
+    jobs: ClusterSpec | None = None,
+    spec_path: str = "",
 ):
     import dask
     from distributed import Client, LocalCluster
 
+    if scheduler is None and jobs is not None:
+        from gcs_planner.sweep.jobqueue import require_jobqueue, start_jobs
+
+        require_jobqueue(spec_path)
+        host = jobs.host or ""
+        cluster = start_jobs(jobs, spec_path, dashboard_address=f"{host}:0")
+        return Client(cluster), cluster
     if scheduler is None:
         # The scheduler reads these when it starts, each nanny hands them to its worker
         # process (and to a worker it restarts).
@@ -288,7 +319,9 @@ def _disconnect(client, cluster) -> None:
         client.close()
     finally:
         if cluster is not None:
-            cluster.close()
+            # a job cluster whose jobs never started closes with an assertion inside Dask
+            with contextlib.suppress(AssertionError):
+                cluster.close()
 
 
 def _run(
@@ -303,22 +336,30 @@ def _run(
     from distributed import as_completed
 
     token = uuid.uuid4().hex[:8]  # keys unique across sweeps sent to one long-lived scheduler
-    pending = iter(todo)
+    workers = _WorkerWatch(client, no_workers_timeout)
+    batcher = Batcher(todo, workers.threads)
     futures: dict = {}
 
-    def submit(n: int) -> list:
+    def submit() -> list:
+        """Tasks until the window is full: two per worker thread (one running, one waiting
+        on each), IN_FLIGHT at most; the first ones a cell each, to measure (.batch)."""
+        batcher.threads = workers.threads
         new = []
-        for cell in itertools.islice(pending, n):
-            future = client.submit(task, cell, key=f"sweep-{token}-{cell.index}-{cell.key}")
-            futures[future] = cell
+        while len(futures) < min(IN_FLIGHT, batcher.probes):
+            cells = batcher.next()
+            if not cells:
+                break
+            key = f"sweep-{token}-{cells[0].index}-{len(cells)}-{cells[0].key}"
+            future = client.submit(run_batch, task, cells, key=key)
+            futures[future] = cells
             new.append(future)
         return new
 
-    workers = _WorkerWatch(client, no_workers_timeout)
     with _interrupt_flag() as interrupted:
         return _collect(
-            submit, futures, as_completed, table, progress, save_interval, interrupted, workers
-        )
+            submit, futures, batcher, as_completed, table, progress, save_interval, interrupted,
+            workers,
+        )  # fmt: skip
 
 
 class _WorkerWatch:
@@ -331,6 +372,9 @@ class _WorkerWatch:
         self.timeout = timeout
         self.last_check = -float("inf")
         self.none_since: float | None = None
+        nthreads = client.nthreads()
+        self.known: set[str] = set(nthreads)  # checked when the sweep started
+        self.threads = max(1, sum(nthreads.values()))  # the cluster's worker threads
 
     def check(self) -> None:
         now = time.monotonic()
@@ -338,10 +382,17 @@ class _WorkerWatch:
             return
         self.last_check = now
         try:
-            count = len(self.client.nthreads())
+            nthreads = self.client.nthreads()
         except Exception:  # the scheduler itself is unreachable: the same wait, nothing runs
-            count = 0
-        if count:
+            nthreads = {}
+        present = set(nthreads)
+        if nthreads:
+            self.threads = sum(nthreads.values())
+        joined = present - self.known
+        if joined:  # a worker that joined mid-sweep runs the same planner, or the sweep stops
+            check_versions(self.client, sorted(joined))
+            self.known |= joined
+        if present:
             self.none_since = None
             return
         if self.none_since is None:
@@ -370,38 +421,42 @@ def _interrupt_flag() -> Iterator[threading.Event]:
         signal.signal(signal.SIGINT, previous)
 
 
-def _collect(submit, futures, as_completed, table, progress, save_interval, interrupted, workers):
-    flow = as_completed(submit(IN_FLIGHT))
+def _collect(
+    submit, futures, batcher, as_completed, table, progress, save_interval, interrupted, workers
+):
+    flow = as_completed(submit())
     done = failed = infeasible = 0
     last_save = time.perf_counter()
     wait = save_interval
     while not flow.is_empty():
         if interrupted.is_set():
             raise KeyboardInterrupt
-        batch = flow.next_batch(block=False)
-        if not batch:
+        finished = flow.next_batch(block=False)
+        workers.check()  # at most every WORKER_CHECK_S: new workers' versions, none left
+        if not finished:
             # A wait with a timeout, not as_completed's blocking one: the Ctrl-C flag and the
             # workers are looked at while a long cell runs, not only when one finishes.
-            workers.check()
             with flow.thread_condition:
                 flow.thread_condition.wait(timeout=POLL_S)
             continue
         workers.seen_results()
-        for future in batch:
-            # one in for each one out: the scheduler holds IN_FLIGHT at most
-            for new in submit(1):
-                flow.add(new)
-            cell = futures.pop(future)
+        for future in finished:
+            cells = futures.pop(future)
             try:
-                rows = future.result()
+                results = future.result()
             except Exception as exc:  # the task itself could not run (its worker kept dying)
-                rows = [_error_row(cell, exc)]
+                results = [[error_row(cell, exc)] for cell in cells]
             future.release()
-            if table.add(rows):
-                done += 1
-                status = rows[0].get("status")
-                failed += status == "error"
-                infeasible += status == "infeasible"
+            for rows in results:
+                batcher.observe(rows)
+                if table.add(rows):
+                    done += 1
+                    status = rows[0].get("status")
+                    failed += status == "error"
+                    infeasible += status == "infeasible"
+            # the next tasks sized by what these cells cost
+            for new in submit():
+                flow.add(new)
         progress.update(done, failed=failed)
         if time.perf_counter() - last_save >= wait:
             t0 = time.perf_counter()
@@ -411,9 +466,3 @@ def _collect(submit, futures, as_completed, table, progress, save_interval, inte
     if interrupted.is_set():
         raise KeyboardInterrupt
     return done, failed, infeasible
-
-
-def _error_row(cell: Cell, exc: BaseException) -> dict:
-    row = cell_inputs(cell)
-    row.update(status="error", error=f"{type(exc).__name__}: {exc}".splitlines()[0])
-    return finish_row(row, time.perf_counter())

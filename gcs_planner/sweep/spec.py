@@ -34,6 +34,21 @@ the terminal and not a thousand failed cells. Errors name the spec file, its lin
     [dry_run]                                 # optional: replay each chosen route
     runs = 200
     seed = 0
+
+    [cluster]                                 # optional: workers as batch jobs (dask-jobqueue)
+    system = "slurm"                          # slurm, pbs or sge
+    jobs = 4                                  # jobs submitted (default 1)
+    cores = 8                                 # per job
+    memory = "16GB"                           # per job
+    walltime = "02:00:00"                     # optional, per job
+    queue = "normal"                          # optional: partition (SLURM) or queue
+    processes = 8                             # optional: worker processes per job (default:
+                                              # cores, one thread each)
+    account = "proj42"                        # optional (SLURM, PBS)
+    host = "10.0.0.5"                         # optional: the address the jobs reach the
+                                              # scheduler at (default: dask-jobqueue's choice)
+    log_directory = "logs"                    # optional: the jobs' output, relative to the spec
+    job_directives = ["--exclusive"]          # optional: more lines for the job script's header
 """
 
 from __future__ import annotations
@@ -59,7 +74,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover - exercised only on Python 3.10
     pass
 
-TOP_KEYS = ("name", "plan", "scenarios", "grid", "cases", "dry_run")
+TOP_KEYS = ("name", "plan", "scenarios", "grid", "cases", "dry_run", "cluster")
 PLAN_KEYS = ("objectives", "choice", "max_labels", "time_limit")
 FILE_KEYS = ("file",)
 GENERATOR_KEYS = (
@@ -71,9 +86,28 @@ GENERATOR_KEYS = (
     "unreliable_fraction",
 )
 DRY_RUN_KEYS = ("runs", "seed")
-# What a cell may vary: every scenario and vehicle parameter, the leg model and the objectives.
+CLUSTER_KEYS = (
+    "system",
+    "jobs",
+    "cores",
+    "memory",
+    "walltime",
+    "queue",
+    "processes",
+    "account",
+    "host",
+    "log_directory",
+    "job_directives",
+)
+# The batch systems dask-jobqueue starts workers on that the sweep offers.
+BATCH_SYSTEMS = ("slurm", "pbs", "sge")
+# What a cell may vary: every scenario and vehicle parameter, the leg model, the environment
+# the planner reads (metres per error unit, the landmarks' capture radius), the objectives and
+# the search's settings.
 VEHICLE_KEYS = ("cruise_airspeed", "max_bank_angle", "leg_model")
-SWEEP_KEYS = (*PARAMETER_KEYS, *VEHICLE_KEYS, "objectives")
+ENVIRONMENT_KEYS = ("error_unit", "capture_radius")
+SEARCH_KEYS = ("choice", "max_labels", "time_limit")
+SWEEP_KEYS = (*PARAMETER_KEYS, *VEHICLE_KEYS, *ENVIRONMENT_KEYS, "objectives", *SEARCH_KEYS)
 GENERATORS = ("random",)
 BASE_PARAMETERS: dict[str, Parameters] = {"dataset1": DATASET1, "dataset2": DATASET2}
 SCENARIO_SUFFIXES = (".toml", ".csv", ".xlsx")
@@ -116,6 +150,23 @@ ScenarioSource = FileSource | GeneratedSource
 
 
 @dataclass(frozen=True)
+class ClusterSpec:
+    """The spec's [cluster]: worker jobs on a batch system, started through dask-jobqueue."""
+
+    system: str  # slurm, pbs or sge
+    jobs: int
+    cores: int  # per job
+    memory: str  # per job, as the batch system takes it ("16GB")
+    processes: int  # worker processes per job
+    walltime: str | None = None
+    queue: str | None = None
+    account: str | None = None
+    host: str | None = None
+    log_directory: str | None = None
+    job_directives: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
 class SweepSpec:
     """A checked sweep spec: the cells are scenarios × value sets (see :mod:`.cells`)."""
 
@@ -132,6 +183,7 @@ class SweepSpec:
     time_limit: float | None = DEFAULT_TIME_LIMIT
     dry_run_runs: int = 0
     dry_run_seed: int = 0
+    cluster: ClusterSpec | None = None
 
 
 class _Where:
@@ -192,6 +244,7 @@ def read_spec(path: str | Path) -> SweepSpec:
     scenarios = _scenarios(doc, where, path.parent)
     value_sets, swept = _value_sets(doc, where)
     runs, seed = _dry_run(doc, where)
+    cluster = _cluster(doc, where, path.parent)
     return SweepSpec(
         path=str(path.resolve()),
         name=name,
@@ -204,6 +257,7 @@ def read_spec(path: str | Path) -> SweepSpec:
         time_limit=time_limit,
         dry_run_runs=runs,
         dry_run_seed=seed,
+        cluster=cluster,
     )
 
 
@@ -420,6 +474,16 @@ def _value(key: str, value: object, where: _Where, table: str, index=None) -> ob
     """One value of a swept key, checked as the scenario readers would check it."""
     if key == "objectives":
         return _objectives(value, where, table, key, index)
+    if key == "choice":
+        if value not in CHOICES:
+            raise where.error(
+                f"unknown choice {value!r}: one of {', '.join(CHOICES)}", table, key, index
+            )
+        return value
+    if key == "max_labels":
+        if not _is_int(value) or value < 1:  # type: ignore[operator]
+            raise where.error(f"must be a whole number >= 1 (got {value!r})", table, key, index)
+        return value
     if key == "leg_model":
         if value not in LEG_MODELS:
             raise where.error(
@@ -433,6 +497,8 @@ def _value(key: str, value: object, where: _Where, table: str, index=None) -> ob
         problems = Parameters(**{**DATASET1.to_dict(), key: number}).validate()
         if problems:
             raise where.error(problems[0], table, key, index)
+    elif key in (*ENVIRONMENT_KEYS, "time_limit") and not number > 0:
+        raise where.error(f"must be > 0 (got {value!r})", table, key, index)
     elif key == "cruise_airspeed" and not 0 < number <= 300:
         raise where.error(f"must lie in (0, 300] m/s (got {value!r})", table, key, index)
     elif key == "max_bank_angle" and not 0 < number <= MAX_BANK_DEG:
@@ -454,3 +520,67 @@ def _dry_run(doc: dict, where: _Where) -> tuple[int, int]:
     if not _is_int(seed) or seed < 0:
         raise where.error(f"must be a whole number >= 0 (got {seed!r})", "dry_run", "seed")
     return runs, seed
+
+
+_MEMORY = re.compile(r"^\s*\d+(\.\d+)?\s*([kKMGTP]i?)?B\s*$")
+_WALLTIME = re.compile(r"^\d+(:[0-5]\d){0,2}$|^\d+-\d+(:[0-5]\d){0,2}$")
+
+
+def _cluster(doc: dict, where: _Where, base: Path) -> ClusterSpec | None:
+    if "cluster" not in doc:
+        return None
+    table = _table(doc, "cluster", where)
+    _unknown(table, CLUSTER_KEYS, where, "cluster")
+
+    def fail(message: str, key: str | None) -> InputError:
+        return where.error(message, "cluster", key)
+
+    for required in ("system", "cores", "memory"):
+        if required not in table:
+            raise fail("missing key (a [cluster] needs system, cores and memory)", required)
+    system = table["system"]
+    if system not in BATCH_SYSTEMS:
+        raise fail(f"unknown batch system {system!r}: one of {', '.join(BATCH_SYSTEMS)}", "system")
+    counts = {}
+    for key, default in (("jobs", 1), ("cores", None), ("processes", table.get("cores"))):
+        value = table.get(key, default)
+        if not _is_int(value) or value < 1:
+            raise fail(f"must be a whole number >= 1 (got {value!r})", key)
+        counts[key] = value
+    if counts["cores"] % counts["processes"]:
+        raise fail(
+            f"must divide cores ({counts['cores']}): each worker process gets the same threads",
+            "processes",
+        )
+    memory = table["memory"]
+    if not isinstance(memory, str) or not _MEMORY.match(memory):
+        raise fail(f'must be an amount such as "16GB" (got {memory!r})', "memory")
+    walltime = table.get("walltime")
+    if walltime is not None and (not isinstance(walltime, str) or not _WALLTIME.match(walltime)):
+        raise fail(f'must be a time such as "02:00:00" (got {walltime!r})', "walltime")
+    texts = {}
+    for key in ("queue", "account", "host", "log_directory"):
+        value = table.get(key)
+        if value is not None and (not isinstance(value, str) or not value.strip()):
+            raise fail(f"must be a non-empty string (got {value!r})", key)
+        texts[key] = value
+    if texts["account"] is not None and system == "sge":
+        raise fail("SGE jobs take no account (give the queue, or a job directive)", "account")
+    if texts["log_directory"] is not None:
+        texts["log_directory"] = str((base / texts["log_directory"]).resolve())
+    directives = table.get("job_directives", [])
+    if not isinstance(directives, list) or not all(isinstance(d, str) for d in directives):
+        raise fail(f"must be a list of strings (got {directives!r})", "job_directives")
+    return ClusterSpec(
+        system=system,
+        jobs=counts["jobs"],
+        cores=counts["cores"],
+        memory=memory.strip(),
+        processes=counts["processes"],
+        walltime=walltime,
+        queue=texts["queue"],
+        account=texts["account"],
+        host=texts["host"],
+        log_directory=texts["log_directory"],
+        job_directives=tuple(directives),
+    )

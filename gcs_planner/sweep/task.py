@@ -9,6 +9,7 @@ The same function is what the serial benchmark and the tests call directly, whic
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 import socket
@@ -33,8 +34,11 @@ def load_cell_scenario(cell: Cell) -> Scenario:
     if isinstance(source, FileSource):
         from gcs_planner.scenario.readers import load_scenario
 
-        return load_scenario(source.path, cell.overrides)
-    return _generated(source, cell.overrides)
+        scenario = load_scenario(source.path, cell.overrides)
+    else:
+        scenario = _generated(source, cell.overrides)
+    environment = cell.environment
+    return dataclasses.replace(scenario, **environment) if environment else scenario
 
 
 def _generated(source: GeneratedSource, overrides: dict[str, object]) -> Scenario:
@@ -163,6 +167,8 @@ def cell_inputs(cell: Cell) -> dict:
     for key, value in cell.values:
         row[key] = ",".join(value) if key == "objectives" else value  # type: ignore[arg-type]
     row["choice"] = cell.choice
+    row["max_labels"] = cell.max_labels
+    row["time_limit"] = cell.time_limit
     # A failed or infeasible cell has no chosen route: False, never null, so that a boolean
     # mask (pandas' df[df.chosen]) works on any table.
     row["chosen"] = False
@@ -177,6 +183,8 @@ def _scenario_inputs(scenario: Scenario) -> dict:
         "unreliable_points": counts["unreliable"],
         "leg_model": scenario.leg_model,
         "cruise_airspeed": scenario.cruise_airspeed,
+        "error_unit": scenario.error_unit,
+        "capture_radius": scenario.capture_radius,
     }
     row.update({k: float(getattr(scenario.params, k)) for k in PARAMETER_FIELDS})
     return row
