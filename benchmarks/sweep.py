@@ -212,13 +212,9 @@ def run_example(
     return timings, s_fronts
 
 
-def render_example(timings: list[Timing], spec_path: Path = EXAMPLE_SPEC) -> str:
-    """The example's table: serial loop against the local cluster, the same columns."""
-    serial = timings[0]
+def _timing_table(timings: list[Timing], serial: Timing) -> list[str]:
+    """The rows of a timing table (header first), each run against the serial loop."""
     lines = [
-        f"`{spec_path.name}`: {serial.cells} cells, each chosen route dry-run; identical "
-        "fronts from both runs.",
-        "",
         "| run | cells | wall time s | of which start + stop s | speed-up vs serial "
         "| without start + stop | planning CPU s | coordinating CPU s | load avg (1 min) |",
         "|---|---:|---:|---:|---:|---:|---:|---:|---|",
@@ -231,6 +227,18 @@ def render_example(timings: list[Timing], spec_path: Path = EXAMPLE_SPEC) -> str
             f"{t.cpu_seconds:,.1f} | {t.coordinating_cpu:.1f} | "
             f"{t.load[0]:.1f}–{t.load[1]:.1f} |"
         )
+    return lines
+
+
+def render_example(timings: list[Timing], spec_path: Path = EXAMPLE_SPEC) -> str:
+    """The example's table: serial loop against the local cluster, the same columns."""
+    serial = timings[0]
+    lines = [
+        f"`{spec_path.name}`: {serial.cells} cells, each chosen route dry-run; identical "
+        "fronts from both runs.",
+        "",
+        *_timing_table(timings, serial),
+    ]
     return "\n".join(lines)
 
 
@@ -367,18 +375,8 @@ def render(
         "loop, the workers for a cluster; coordinating CPU s: of the client, the scheduler and "
         "the nannies.",
         "",
-        "| run | cells | wall time s | of which start + stop s | speed-up vs serial "
-        "| without start + stop | planning CPU s | coordinating CPU s | load avg (1 min) |",
-        "|---|---:|---:|---:|---:|---:|---:|---:|---|",
+        *_timing_table(timings, serial),
     ]
-    for t in timings:
-        work = t.seconds - t.start_stop
-        lines.append(
-            f"| {t.name} | {t.cells} | {t.seconds:,.1f} | {t.start_stop:.1f} | "
-            f"{serial.seconds / t.seconds:.2f}× | {serial.seconds / work:.2f}× | "
-            f"{t.cpu_seconds:,.1f} | {t.coordinating_cpu:.1f} | "
-            f"{t.load[0]:.1f}–{t.load[1]:.1f} |"
-        )
     lines.append("")
     lines.append(f"CPUs seen by this process: {os.cpu_count()}.")
     return "\n".join(lines)
