@@ -177,7 +177,7 @@ def replan_on_failure(
                 if progress is not None:
                     progress(out.plans)
             found = found_memo[skey]
-            if found is not None and tuple(found) != tuple((at, *_path(own))):
+            if found is not None and tuple(found) != tuple((at, *success_path(own))):
                 candidate = _chain(scenario, list(found))
                 if level < levels:
                     candidate = build(candidate, *fail_state, end_heading, visited, level + 1)
@@ -193,7 +193,7 @@ def replan_on_failure(
     return out
 
 
-def _path(node: Policy) -> tuple[int, ...]:
+def success_path(node: Policy) -> tuple[int, ...]:
     """The points after ``node``'s first along its success path."""
     pts = node.points[1:]
     while node.on_success is not None:

@@ -21,7 +21,7 @@ from gcs_planner.core.policy_front import (
     exact_policy_front,
     replanned_front,
 )
-from gcs_planner.core.replan import replan_on_failure, search_continuation
+from gcs_planner.core.replan import replan_on_failure, search_continuation, success_path
 from gcs_planner.errors import GcsPlannerError
 from gcs_planner.mission.policy_build import (
     MissionPath,
@@ -281,7 +281,7 @@ def _is_route(policy: Policy) -> bool:
     """Whether the policy never branches (both outcomes continue the same way everywhere)."""
     node = policy
     while node.on_success is not None:
-        if node.on_failure is not node.on_success and _path(node.on_failure) != _path(
+        if node.on_failure is not node.on_success and _points(node.on_failure) != _points(
             node.on_success
         ):
             return False
@@ -289,9 +289,6 @@ def _is_route(policy: Policy) -> bool:
     return True
 
 
-def _path(node: Policy) -> tuple[int, ...]:
-    pts = node.points
-    while node.on_success is not None:
-        node = node.on_success
-        pts += node.points[1:]
-    return pts
+def _points(node: Policy) -> tuple[int, ...]:
+    """The whole path below ``node`` along its success outcomes, its first point included."""
+    return (node.points[0], *success_path(node))
