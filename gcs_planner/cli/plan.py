@@ -26,6 +26,8 @@ from gcs_planner.cli.vehicle_from import (
 if TYPE_CHECKING:
     from gcs_planner.core.planner import Plan
     from gcs_planner.core.route import Route
+    from gcs_planner.core.switch_room import SwitchRoom
+    from gcs_planner.scenario.model import Scenario
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -66,6 +68,14 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         help="with --policy, replan failure branches again at their own unreliable points, N "
         "levels deep (default 1: the route's own failures)",
     )
+    p.add_argument(
+        "--switch-time",
+        default=None,
+        metavar="SECONDS",
+        help="with --policy, seconds from a failed fix to the branch flying (report, upload, "
+        "read-back, set current; default 10): every run-out is planned at least this long at "
+        "the largest ground speed, plus the capture radius, so the switch happens on it",
+    )
     p.set_defaults(func=run)
 
 
@@ -77,6 +87,7 @@ def run(args: argparse.Namespace) -> int:
         from gcs_planner.errors import InputError
 
         raise InputError(f"must be >= 1, not {args.policy_levels}", field="--policy-levels")
+    switch_seconds = _switch_time(args)
     if args.policy and not args.out:
         from gcs_planner.errors import InputError
 
@@ -94,6 +105,9 @@ def run(args: argparse.Namespace) -> int:
     scenario = load_scenario_from_args(args)
     scenario = derive_envelope(args, scenario, wind_text=args.wind)
     scenario = apply_from_state(args, scenario)
+    room = None
+    if args.policy:
+        scenario, room = _switch_room(scenario, switch_seconds)
     result = plan_from_args(args, scenario)
     plan_dict = plan_json.plan_to_dict(result)
     text = plan_json.dumps_dict(plan_dict)
@@ -108,6 +122,10 @@ def run(args: argparse.Namespace) -> int:
         from gcs_planner.mission.policy_export import make_policy
 
         policy = make_policy(result, plan_dict, levels=args.policy_levels)
+        if room is not None:
+            from dataclasses import replace
+
+            policy = replace(policy, switch_room=room)
         if not args.json:
             from gcs_planner.mission.policy_export import summary
 
@@ -334,3 +352,36 @@ def render(result: Plan) -> str:
         render_table(result.route),
     ]
     return "\n".join(out)
+
+
+def _switch_time(args: argparse.Namespace) -> float:
+    """--switch-time in seconds (only with --policy); the default when not given."""
+    from gcs_planner.core.switch_room import DEFAULT_SWITCH_TIME_S
+    from gcs_planner.errors import InputError
+
+    if args.switch_time is None:
+        return DEFAULT_SWITCH_TIME_S
+    if not args.policy:
+        raise InputError("only with --policy (the room to switch missions in)",
+                         field="--switch-time")  # fmt: skip
+    try:
+        seconds = float(args.switch_time)
+    except ValueError:
+        seconds = math.nan
+    if not (math.isfinite(seconds) and 0 <= seconds <= 600):
+        raise InputError(
+            f"must be a number of seconds in [0, 600], got {args.switch_time!r}",
+            field="--switch-time",
+        )
+    return seconds
+
+
+def _switch_room(scenario: Scenario, seconds: float) -> tuple[Scenario, SwitchRoom | None]:
+    """The scenario with room to switch missions after every point (core/switch_room.py), and
+    that room (None for straight legs, which have no run-outs)."""
+    from gcs_planner.core.switch_room import applies, switch_room, with_switch_room
+
+    if not applies(scenario):
+        return scenario, None
+    room = switch_room(scenario, seconds)
+    return with_switch_room(scenario, room), room

@@ -22,6 +22,7 @@ from gcs_planner.core.policy_front import (
     replanned_front,
 )
 from gcs_planner.core.replan import replan_on_failure, search_continuation, success_path
+from gcs_planner.core.switch_room import SwitchRoom
 from gcs_planner.errors import GcsPlannerError
 from gcs_planner.mission.policy_build import (
     MissionPath,
@@ -69,6 +70,9 @@ class PolicyExport:
     exact: bool = False
     levels: int = 1
     unproven_branches: tuple[str, ...] = ()  # failed points whose continuation is not proven
+    # The run-out kept after every point so that a switch fits in it (core/switch_room.py);
+    # None when the policy was planned without one (straight legs, or a library caller).
+    switch_room: SwitchRoom | None = None
 
 
 def replaceable(out: str | os.PathLike[str], route_files: tuple[str, ...]) -> list[str]:
@@ -167,6 +171,8 @@ def render_policy_files(result: Plan, plan: dict, exp: PolicyExport) -> list[tup
     data = policy_to_dict(
         result.scenario, exp.policy, exp.missions, exp.value, files=files, route=made_from
     )
+    if exp.switch_room is not None:
+        data["switch_room"] = exp.switch_room.to_dict()
     out.append((POLICY_FILE, dumps_policy(data)))
     s = result.scenario
     title = (
@@ -242,6 +248,8 @@ def summary(result: Plan, exp: PolicyExport) -> str:
         f"{exp.value.length - exp.route_value.length:+,.1f} m in its longest outcome"
         f" ({exp.value.probability - best.probability:+.4f} against the most reliable route)"
     )
+    if exp.switch_room is not None:
+        out.append(f"  {exp.switch_room.describe()}")
     out += _policy_front_lines(exp)
     for s in exp.missions.switches:
         out.append(
