@@ -47,6 +47,8 @@ class PolicyRun:
     points_met: tuple[str, ...]
     why: str  # why it did not arrive, or what failed on the link ("" when it arrived)
     link_failed: bool = False
+    # (failed or missed point, metres flown from its fix to the branch's item set current)
+    switches: tuple[tuple[str, float], ...] = ()
 
 
 @dataclass(frozen=True)
@@ -58,6 +60,23 @@ class PolicyDryRunReport:
     time_scale: float
     probability: float | None  # the policy's exact probability of arriving, when given
     confidence: float
+    switch_room: float | None = None  # m: the run-out the policy keeps for a switch, if any
+
+    @property
+    def switches(self) -> list[tuple[str, float]]:
+        return [s for r in self.runs for s in r.switches]
+
+    @property
+    def longest_switch(self) -> float | None:
+        return max((d for _, d in self.switches), default=None)
+
+    @property
+    def switches_beyond_room(self) -> int:
+        """Switches made farther from the fix than the policy's switch room: the aircraft had
+        left the run-out both missions share when the branch was set current."""
+        if self.switch_room is None:
+            return 0
+        return sum(d > self.switch_room for _, d in self.switches)
 
     @property
     def successes(self) -> int:
@@ -100,6 +119,22 @@ def policy_probability(path: str) -> float | None:
     if isinstance(value, bool) or not isinstance(value, int | float) or not 0 <= value <= 1:
         raise InputError(
             f"must be a number in [0, 1], got {value!r}", file=path, field="value.probability"
+        )
+    return float(value)
+
+
+def policy_switch_room(path: str) -> float | None:
+    """The switch room (metres) policy.json was planned with (``switch_room.distance_m``,
+    core/switch_room.py), or None when it has none."""
+    from gcs_planner.mission.policy_file import load_policy_dict
+
+    room = load_policy_dict(path).get("switch_room")
+    value = room.get("distance_m") if isinstance(room, dict) else None
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, int | float) or not value >= 0:
+        raise InputError(
+            f"must be a number >= 0, got {value!r}", file=path, field="switch_room.distance_m"
         )
     return float(value)
 
@@ -157,9 +192,13 @@ def policy_dry_run(
     navigate_on_estimate: bool = True,
     confidence: float = 0.99,
     say: Callable[[str], None] | None = None,
+    set_params: dict[str, float] | None = None,
+    switch_room: float | None = None,
 ) -> PolicyDryRunReport:
     """Fly ``policy`` ``runs`` times with a mock vehicle whose landmark database is
-    ``landmarks``; ``loss`` is the fraction of messages the vehicle drops both ways."""
+    ``landmarks``; ``loss`` is the fraction of messages the vehicle drops both ways;
+    ``set_params`` are autopilot parameters set on the vehicle (PARAM_SET, read back) before
+    the primary mission is uploaded, as a ground station sets up the aircraft."""
     if runs < 1:
         raise ValueError("runs must be >= 1")
     flavour = policy.missions[policy.primary].firmware
@@ -179,9 +218,12 @@ def policy_dry_run(
                 retries,
                 navigate_on_estimate,
                 say,
+                set_params or {},
             )
         )
-    return PolicyDryRunReport(flavour, tuple(done), loss, seed, time_scale, probability, confidence)
+    return PolicyDryRunReport(
+        flavour, tuple(done), loss, seed, time_scale, probability, confidence, switch_room
+    )
 
 
 def _one_run(
@@ -197,6 +239,7 @@ def _one_run(
     retries,
     estimate,
     say,
+    settings,
 ) -> PolicyRun:
     port = free_udp_port()
     faults = FaultRates(drop=loss) if loss > 0 else None
@@ -214,8 +257,13 @@ def _one_run(
         navigate_on_estimate=estimate,
     )
     vehicle.flight_seed = seed * 1_000_003 + k
-    # The time warp (a cruise time scale) ends only where the policy switches.
-    vehicle.watch_points = frozenset(s.point for s in policy.switches)
+    # The time warp (a cruise time scale) ends only where the policy switches to a mission
+    # with other items (a branch that keeps the mission flown uploads nothing: no window).
+    vehicle.watch_points = frozenset(
+        s.point
+        for s in policy.switches
+        if policy.missions[s.to_mission].items != policy.missions[s.mission].items
+    )
     flown: tuple[str, ...] = ()
     why = ""
     with vehicle:
@@ -224,9 +272,10 @@ def _one_run(
         try:
             client.connect(timeout=10.0)
             if flavour == "px4":
-                set_parameter(
-                    link, client._target(), *PX4_ACCEPTANCE, timeout=timeout, retries=retries
-                )
+                settings = {PX4_ACCEPTANCE[0]: PX4_ACCEPTANCE[1], **settings}
+            for name, value in settings.items():
+                set_parameter(link, client._target(), name, value, timeout=timeout,
+                              retries=retries)  # fmt: skip
             flight = PolicyFlight(client, policy, say=say or (lambda _line: None))
             try:
                 flight.run(start=True)
@@ -242,4 +291,4 @@ def _one_run(
     if why or live is None:
         return PolicyRun(k, False, flown, (), why or "the vehicle did not fly", link_failed=True)
     reason = "" if live.arrived else (live.run.lost_reason or "did not arrive")
-    return PolicyRun(k, live.arrived, flown, live.points_met, reason)
+    return PolicyRun(k, live.arrived, flown, live.points_met, reason, switches=live.switches)

@@ -383,12 +383,19 @@ def check_policy(policy: PolicyMissions, source: str = "") -> None:
 
 
 def _resume_item(resume: int, current: int | None, old: Any, new: Any) -> int:
-    """Where the vehicle goes on in the branch: the switch's resume item, or the item it flies
-    already when it has gone past the resume item while the upload ran and every item before
-    that one is the same in both missions (setting the resume item would turn it back to it:
-    ArduPlane and PX4 fly to the current item from wherever the aircraft is)."""
-    if current is None or current <= resume or current >= min(len(old), len(new)):
+    """Where the vehicle goes on in the branch: the switch's resume item, unless the vehicle
+    has gone past it while the upload ran (setting it would turn the aircraft back to it:
+    ArduPlane and PX4 fly to the current item from wherever the aircraft is). Then: the item it
+    flies already, when every item before that one is the same in both missions; else the
+    branch's first item of its own (the first that differs from the old mission), flown
+    from where the aircraft is."""
+    if current is None or current <= resume:
         return resume
-    if list(old[:current]) != list(new[:current]):
-        return resume
-    return current
+    shared = 0
+    for a, b in zip(old, new):
+        if a != b:
+            break
+        shared += 1
+    if current <= shared and current < len(new):
+        return current
+    return max(resume, min(shared, len(new) - 1))

@@ -152,6 +152,10 @@ class LiveFlight:
         self._corrections_told = 0
         self._events_told = 0
         self.changes: list[tuple[float, str]] = []  # (simulated time, what changed), for logs
+        # (failed or missed point, metres flown from its fix to the item set current): what a
+        # switch cost, against the policy's switch room (core/switch_room.py).
+        self.switches: list[tuple[str, float]] = []
+        self._missed_at: dict[str, float] = {}  # missed landmark -> distance flown when told
         self.finished = False
 
     # The stored mission ----------------------------------------------------------------------
@@ -208,10 +212,21 @@ class LiveFlight:
         if k is None:
             return False
         self.pilot.cmds = list(self.stored)  # the item is read from storage
+        self._note_switch()
         self._restart_at(k)
         self._cache = {}
         self.changes.append((self.t, f"current item set to {seq}"))
         return True
+
+    def _note_switch(self) -> None:
+        """Record how far the aircraft flew from the latest failed or missed fix to now."""
+        fixes = [(c.id, c.distance) for c in self.ins.corrections if c.succeeded is False]
+        fixes += list(self._missed_at.items())
+        if not fixes:
+            return
+        pid, at = max(fixes, key=lambda f: f[1])
+        if all(pid != done for done, _ in self.switches):
+            self.switches.append((pid, float(self.ins.distance - at)))
 
     def _restart_at(self, k: int) -> None:
         p = self.pilot
@@ -278,6 +293,8 @@ class LiveFlight:
                                        compiled=True)  # fmt: skip
             kind = Kind(int(self.scenario.kind[li])).name
             out.append(MissedFix(self.scenario.ids[li], kind, seq, float(miss)))
+            # Told now, so a switch on it counts from here (its closest approach is behind).
+            self._missed_at[self.scenario.ids[li]] = float(self.ins.distance)
             self._missed.add(li)  # told once
         self._pending = keep
         return out
@@ -295,8 +312,16 @@ class LiveFlight:
         track = self.track()
         if len(track.points) < 2:
             track = FlightPath(np.vstack([track.points, track.points]), (-1, -1), (0.0, 0.0))
-        b_distance, _ = closest_approach(track, sc.xyz[sc.end], self.capture_radius, compiled=True)
-        run, _ = _ins_run(self.ins, track.until(b_distance), sc, self.params, self.capture_radius)
+        b_distance, b_miss = closest_approach(
+            track, sc.xyz[sc.end], self.capture_radius, compiled=True
+        )
+        if self.pilot.ended == "lost" and b_miss > self.capture_radius:
+            # Lost at a landmark before B: the run is the flight up to its loss, as the replay
+            # judges it (sim/replay.py): its closest approach to B so far may lie far back.
+            path = track
+        else:
+            path = track.until(b_distance)
+        run, _ = _ins_run(self.ins, path, sc, self.params, self.capture_radius)
         return run
 
     def sample(self) -> np.ndarray:

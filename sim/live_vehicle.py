@@ -57,6 +57,8 @@ class LiveReport:
     points_met: tuple[str, ...]  # correction landmarks the flight used, in order
     final_mission: tuple[Any, ...]  # the items stored when it ended
     track: FlightPath | None = None  # the flown track (local frame)
+    # (failed or missed point, metres flown from its fix to the branch's item set current)
+    switches: tuple[tuple[str, float], ...] = ()
 
     @property
     def arrived(self) -> bool:
@@ -74,8 +76,9 @@ class _Samples:
 
 # With a cruise time scale (``MockVehicle.cruise_speedup``), the flight advances at most this many
 # simulated seconds between looks for a failed or missed fix, so that the honest time scale
-# starts within this much flight of the fix (125 m at 25 m/s).
-CRUISE_STEP_S = 5.0
+# starts within this much flight of the fix (25 m at 25 m/s: the report of a failed fix comes
+# late by at most that, which the policy's switch room must absorb too).
+CRUISE_STEP_S = 1.0
 # The honest window after a failed or missed fix closes when the ground station sets an item
 # current, at the next correction, or after this long (simulated).
 WINDOW_MAX_S = 1800.0
@@ -245,7 +248,7 @@ def fly_live(vehicle: Any, *, seed: int = 0, time_scale: float | None = None) ->
         vehicle._heartbeat()
     report = LiveReport(
         run, flight.pilot.ended, flight.t, tuple(flight.changes), tuple(met),
-        tuple(vehicle.mission), flight.track(),
+        tuple(vehicle.mission), flight.track(), tuple(flight.switches),
     )  # fmt: skip
     vehicle.last_live = report
     return report

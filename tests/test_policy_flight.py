@@ -43,11 +43,14 @@ def policy_file(monkeypatch, tmp_path):
 
     held: dict[str, PolicyMissions] = {}
 
-    def provide(policy: PolicyMissions, probability: float | None = None):
+    def provide(policy: PolicyMissions, probability: float | None = None,
+                room: float | None = None):  # fmt: skip
         path = tmp_path / "policy.json"
-        data = {"format": real.FORMAT, "version": real.VERSION}
+        data: dict = {"format": real.FORMAT, "version": real.VERSION}
         if probability is not None:
             data["value"] = {"probability": probability}
+        if room is not None:
+            data["switch_room"] = {"distance_m": room}
         path.write_text(json.dumps(data))
         held[str(path)] = policy
         return str(path)
@@ -124,11 +127,38 @@ def test_dry_run_of_the_policy_under_5_percent_loss(policy_file, tmp_path, capsy
     toml = write_scenario(tmp_path, p_success=0.0)
     path = policy_file(policy_missions(policy_scenario(0.0)), probability=1.0)
     rc = main(["dry-run", str(toml), "--policy", path, "--runs", "2", "--loss", "0.05",
-               "--time-scale", str(SWITCH_SCALE), "--navigate-on-truth", "--json"])  # fmt: skip
+               "--time-scale", str(SWITCH_SCALE), "--cruise-time-scale", "1000",
+               "--navigate-on-truth", "--json"])  # fmt: skip
     d = json.loads(capsys.readouterr().out)
     assert rc == 0 and d["ok"] and d["successes"] == 2 and d["probability_within_ci"]
     assert [r["missions_flown"] for r in d["runs"]] == [["primary", "after-P2"]] * 2
     assert all(r["points_met"] == ["H1", "P2", "V3"] for r in d["runs"])
+
+
+def test_dry_run_of_the_policy_measures_its_switches_against_the_room(policy_file, tmp_path,
+                                                                     capsys):  # fmt: skip
+    """Each switch's distance from its fix is reported; a room smaller than it is warned of.
+    The parameters given are set on the vehicle before the upload: one it lacks fails the run."""
+    toml = write_scenario(tmp_path, p_success=0.0)
+    path = policy_file(policy_missions(policy_scenario(0.0)), probability=1.0, room=1.0)
+    rc = main(["dry-run", str(toml), "--policy", path, "--runs", "1", "--time-scale",
+               str(SWITCH_SCALE), "--cruise-time-scale", "1000", "--navigate-on-truth",
+               "--param", "TECS_CLMB_MAX=9", "--json"])  # fmt: skip
+    d = json.loads(capsys.readouterr().out)
+    assert rc == 0 and d["successes"] == 1 and d["switch_room"] == 1.0
+    [[point, metres]] = d["runs"][0]["switches"]
+    # told as the track leaves the 5 m capture radius, switched within the 2 km to V3
+    assert point == "P2" and CAPTURE <= metres < 2000.0 and d["longest_switch_m"] == metres
+    assert d["switches_beyond_room"] == 1
+    rc = main(["dry-run", str(toml), "--policy", path, "--runs", "1", "--time-scale",
+               str(SWITCH_SCALE), "--cruise-time-scale", "1000",
+               "--navigate-on-truth"])  # fmt: skip
+    out = capsys.readouterr().out
+    assert rc == 0 and "1 switch(es) set current, the farthest" in out
+    assert "WARNING: 1 switch(es) beyond the switch room" in out
+    rc = main(["dry-run", str(toml), "--policy", path, "--runs", "1", "--param",
+               "NO_SUCH_PARAM=1", "--timeout", "0.2"])  # fmt: skip
+    assert rc == 4 and "NO_SUCH_PARAM" in capsys.readouterr().out
 
 
 def _unsendable(policy: PolicyMissions, command: int) -> PolicyMissions:

@@ -167,7 +167,7 @@ def parse_params(pairs: list[str]) -> dict[str, float]:
 def run(args: argparse.Namespace) -> int:
     if args.policy is not None:
         refuse_plan_flags(args)
-        return run_policy(args, _number)
+        return run_policy(args, _number, parse_params(args.param))
     runs = int(_number(args.runs, "--runs", int, 0))
     wind = parse_wind(args.wind, args.gust)
     settings = parse_params(args.param)

@@ -16,6 +16,7 @@ from gcs_planner.policy_dry_run import (
     check_against_scenario,
     policy_dry_run,
     policy_probability,
+    policy_switch_room,
 )
 from sim.live_vehicle import DEFAULT_TIME_SCALE
 from sim.replay import DEFAULT_CAPTURE_RADIUS_M
@@ -48,7 +49,11 @@ def add_policy_arguments(g: argparse._ArgumentGroup) -> None:
     )
 
 
-def run_policy(args: argparse.Namespace, number) -> int:  # noqa: ANN001 - cli.dry_run._number
+def run_policy(
+    args: argparse.Namespace,
+    number,  # noqa: ANN001 - cli.dry_run._number
+    settings: dict[str, float],
+) -> int:
     runs = int(number(args.runs, "--runs", int, 1))
     loss = number(args.loss, "--loss", float, 0.0, 1.0)
     seed = int(number(args.seed, "--seed", int, 0))
@@ -77,6 +82,8 @@ def run_policy(args: argparse.Namespace, number) -> int:  # noqa: ANN001 - cli.d
         cruise_scale=cruise,
         navigate_on_estimate=not args.navigate_on_truth,
         say=say,
+        set_params=settings,
+        switch_room=policy_switch_room(args.policy),
     )
     if args.json:
         out = asdict(report)
@@ -86,6 +93,8 @@ def run_policy(args: argparse.Namespace, number) -> int:  # noqa: ANN001 - cli.d
             success_ci=list(report.interval),
             ok=report.ok,
             probability_within_ci=report.probability_within_ci,
+            longest_switch_m=report.longest_switch,
+            switches_beyond_room=report.switches_beyond_room,
         )
         sys.stdout.write(json.dumps(out, indent=2) + "\n")
     else:
@@ -131,13 +140,29 @@ def render(r: PolicyDryRunReport, source: str) -> str:
         out.append(
             f"{r.link_failures} run(s) lost to the ground station's link (counted as not arrived)"
         )
+    if r.switches:
+        room = (
+            "the policy keeps no switch room"
+            if r.switch_room is None
+            else f"the policy's switch room {r.switch_room:.0f} m"
+        )
+        out.append(
+            f"{len(r.switches)} switch(es) set current, the farthest {r.longest_switch:.0f} m "
+            f"flown after its fix ({room})"
+        )
+        if r.switches_beyond_room:
+            out.append(
+                f"WARNING: {r.switches_beyond_room} switch(es) beyond the switch room: the "
+                "aircraft had left the run-out it shares with the branch (plan with a longer "
+                "--switch-time, or fly at a smaller --time-scale)"
+            )
     return "\n".join(out)
 
 
 def refuse_plan_flags(args: argparse.Namespace) -> None:
     """--policy flies the policy's own missions: flags that shape a plan's flight are refused
     rather than ignored."""
-    for flag, value in (("--track-out", args.track_out), ("--param", args.param or None)):
+    for flag, value in (("--track-out", args.track_out),):
         if value:
             raise InputError("not used with --policy", field=flag)
     for flag, value in (("--wind", args.wind), ("--gust", args.gust)):
