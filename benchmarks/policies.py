@@ -7,7 +7,13 @@ Dataset 2 with Table 2's limits, R = 200 m, the default 200 m reserve, climb/des
 15°/15° and 20°/25° (the envelopes issue 27 names). Each row: the best of its kind by F3, then
 shorter worst case; the policy front's size (the non-dominated of routes and policies).
 
-    python -m benchmarks.policies [--levels 1,2,3] [--envelopes 15/15,20/25]
+An envelope written ``15/15:ardupilot`` is the one flown by the mock ArduPlane at 25 m/s EAS:
+every leg straight for ArduPlane's settle distance before and after each landmark (its L1
+distance at the TAS of the highest point, docs/model.md "Straight at every landmark") and every
+run-out at least the switch room of a 10 s switch (core/switch_room.py), as `plan --policy`
+plans it; the others are the contest's model (no run-in or run-out, no switch room).
+
+    python -m benchmarks.policies [--levels 1,2,3] [--envelopes 15/15,20/25,15/15:ardupilot]
 """
 
 from __future__ import annotations
@@ -17,28 +23,48 @@ import time
 
 from benchmarks.cases import DATA
 from benchmarks.report import table
+from gcs_planner.autopilot import effective
 from gcs_planner.core.contingency import Policy, evaluate
 from gcs_planner.core.planner import plan
 from gcs_planner.core.policy_front import replanned_front
 from gcs_planner.core.replan import replan_on_failure
+from gcs_planner.core.switch_room import DEFAULT_SWITCH_TIME_S, switch_room, with_switch_room
 from gcs_planner.library import load_scenario
+from gcs_planner.scenario.model import Scenario
+from gcs_planner.vehicle import tas_from_eas
 
 TABLE2 = {"alpha1": 20, "alpha2": 10, "beta1": 15, "beta2": 20, "theta": 20, "delta": 0.001}
 
 
-def rows(envelopes: list[tuple[float, float]], levels: list[int]) -> list[list[object]]:
+def flown_by(sc: Scenario, firmware: str) -> Scenario:
+    """``sc`` as ``plan --policy --approach S --departure S`` plans it for ``firmware``: S its
+    settle distance at the TAS of the highest point, every run-out at least the switch room."""
+    top = float(sc.xyz[:, 2].max()) + (sc.origin.alt if sc.origin else 0.0)
+    settle = effective(firmware, {}).settle_distance(tas_from_eas(sc.cruise_airspeed, top))
+    sc = sc.with_params(approach=settle, departure=settle)
+    return with_switch_room(sc, switch_room(sc, DEFAULT_SWITCH_TIME_S))
+
+
+def rows(envelopes: list[tuple[float, float, str]], levels: list[int]) -> list[list[object]]:
     out: list[list[object]] = []
-    for climb, descent in envelopes:
+    for climb, descent, firmware in envelopes:
         sc = load_scenario(
             DATA / "dataset2.xlsx", **TABLE2, turn_radius=200.0,
             max_climb_angle=climb, max_descent_angle=descent,
         )  # fmt: skip
+        if firmware:
+            sc = flown_by(sc, firmware)
         t0 = time.perf_counter()
         result = plan(sc, choice="most-reliable", min_probability=0.0)
         planned = time.perf_counter() - t0
         values = [evaluate(sc, Policy.from_route(sc, r)) for r in result.routes]
         best = max(values, key=lambda v: (v.probability, -v.length))
-        envelope = f"{climb:g}°/{descent:g}°"
+        envelope = f"{climb:g}°/{descent:g}°" + (
+            f", {firmware} (run-in {sc.params.approach:.0f} m, "
+            f"run-out {sc.params.departure:.0f} m)"
+            if firmware
+            else ""
+        )
         out.append([
             envelope, "best route", f"{len(result.routes)} routes", f"{best.probability:.4f}",
             f"{best.length:,.0f}", best.corrections, f"{best.expected_length_arrived:,.0f}",
@@ -71,10 +97,14 @@ HEADER = [
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--levels", default="1,2,3")
-    ap.add_argument("--envelopes", default="15/15,20/25")
+    ap.add_argument("--envelopes", default="15/15,20/25,15/15:ardupilot")
     args = ap.parse_args(argv)
     levels = [int(x) for x in args.levels.split(",")]
-    envelopes = [tuple(float(y) for y in x.split("/")) for x in args.envelopes.split(",")]
+    envelopes = []
+    for spec in args.envelopes.split(","):
+        angles, _, firmware = spec.partition(":")
+        climb, descent = (float(y) for y in angles.split("/"))
+        envelopes.append((climb, descent, firmware))
     print(table(HEADER, rows(envelopes, levels)))  # type: ignore[arg-type]
 
 
