@@ -36,6 +36,8 @@ JSBSim's altitude above sea level less the frame's origin altitude.
 
 from __future__ import annotations
 
+import ctypes
+import io
 import math
 import os
 import sys
@@ -72,6 +74,7 @@ CLIMB_SHORT_MPS = 0.5
 BANK_SHORT_DEG = 5.0
 
 
+_LIBC = ctypes.CDLL(None)
 _NODES = {
     "phi": "attitude/phi-rad", "theta": "attitude/theta-rad", "vt": "velocities/vt-fps",
     "ve": "velocities/ve-fps", "vdown": "velocities/v-down-fps", "p": "velocities/p-rad_sec",
@@ -88,17 +91,24 @@ class AirframeLimit(Exception):
 
 @contextmanager
 def _quiet() -> Iterator[None]:
-    """JSBSim writes its banner, trim failures and output-file errors to the C++ streams: send
-    them to /dev/null so a dry run's text (and its --json) stays the dry run's."""
+    """JSBSim writes its banner, trim reports and output-file errors to std::cout, which the
+    jsbsim module may pass on to Python's sys.stdout or leave on the C stream: silence both,
+    so a dry run's text (and its --json) stays the dry run's."""
     sys.stdout.flush()
     sys.stderr.flush()
     saved = [os.dup(1), os.dup(2)]
     null = os.open(os.devnull, os.O_WRONLY)
+    py_out, py_err = sys.stdout, sys.stderr
     try:
         os.dup2(null, 1)
         os.dup2(null, 2)
+        sys.stdout = sys.stderr = io.StringIO()
         yield
     finally:
+        sys.stdout, sys.stderr = py_out, py_err
+        # std::cout is synchronised with C's stdout, which buffers when not a terminal: flush
+        # it into /dev/null before the descriptors are put back.
+        _LIBC.fflush(None)
         os.dup2(saved[0], 1)
         os.dup2(saved[1], 2)
         for fd in (*saved, null):
