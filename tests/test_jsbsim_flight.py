@@ -9,9 +9,7 @@ from pathlib import Path
 
 import pytest
 
-pytest.importorskip(
-    "jsbsim", reason="the jsbsim extra is not installed (pip install '.[jsbsim]')"
-)
+pytest.importorskip("jsbsim", reason="the jsbsim extra is not installed (pip install '.[jsbsim]')")
 
 from gcs_planner.cli import main  # noqa: E402
 from gcs_planner.dry_run import EXIT_LOST  # noqa: E402
