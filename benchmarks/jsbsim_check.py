@@ -22,6 +22,7 @@ from benchmarks.report import machine, table
 from gcs_planner.core.planner import plan
 from gcs_planner.dry_run import dry_run
 from gcs_planner.scenario.readers import load_scenario
+from sim.aircraft import RollLagFlightModel
 from sim.jsbsim_airframe import DEFAULT_AIRCRAFT, FlightModel
 from sim.wind import WindSpec
 
@@ -45,6 +46,12 @@ def lifted(directory: Path) -> Path:
     return directory / "scenario.toml"
 
 
+def _model_name(model: object, aircraft: str) -> str:
+    if model is None:
+        return "point mass"
+    return "point mass, roll lag" if isinstance(model, RollLagFlightModel) else f"JSBSim {aircraft}"
+
+
 def verdict(r) -> str:  # noqa: ANN001 - DryRunReport
     if r.airframe_limits:
         return "cannot be flown"
@@ -61,7 +68,7 @@ def rows(aircraft: str) -> list[tuple]:
             planned = plan(load_scenario(path))
             for flavour in ("ardupilot", "px4"):
                 for wind in (WindSpec(), WIND):
-                    for model in (None, FlightModel(aircraft)):
+                    for model in (None, RollLagFlightModel(), FlightModel(aircraft)):
                         t0 = time.perf_counter()
                         r = dry_run(planned, load_scenario(path), flavour=flavour, wind=wind,
                                     flight_model=model)  # fmt: skip
@@ -74,7 +81,7 @@ def rows(aircraft: str) -> list[tuple]:
                         )  # not flown: no misses
                         out.append((
                             name, flavour, "still" if wind.still else "5@270 g1.5",
-                            "point mass" if model is None else f"JSBSim {aircraft}",
+                            _model_name(model, aircraft),
                             "–" if r.airframe_limits else f"{r.flown_difference:+.1f}",
                             "–" if r.airframe_limits else f"{r.max_deviation:.1f}",
                             misses or "–", verdict(r), f"{time.perf_counter() - t0:.1f}",

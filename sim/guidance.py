@@ -213,6 +213,9 @@ def fly(
     limits: list[str] = []
     if flight_model is not None:
         compiled = False  # the numba kernel flies the point mass only
+        # A model that cannot cut a step at a waypoint's acceptance circle or finish line
+        # (JSBSim) is stepped finer: the switch comes at most one such step late.
+        dt = min(dt, getattr(flight_model, "outer_step", dt))
         alt = float(frame.origin.alt)
         limits = flight_model.limits(
             leg_needs(cmds, start, alt, profile, ap), profile.cruise_airspeed

@@ -54,6 +54,7 @@ RATE_HZ = 60.0  # FDM and inner loops (the issue's 50-120 Hz; ArduPlane's fast l
 # The c172r: the c172x's controls have hysteresis (0.05 rad on the elevator) that makes any
 # inner loop limit-cycle; the c172r's have none.
 DEFAULT_AIRCRAFT = "c172r"
+OUTER_STEP_S = 0.5
 # Inner loops (per radian of error): roll to aileron, pitch to elevator, sideslip to rudder.
 ROLL_KP, ROLL_KI, ROLL_KD = 2.0, 1.0, 0.4
 ROLL_RATE = math.radians(70.0)
@@ -394,6 +395,12 @@ class FlightModel:
 
     aircraft: str = DEFAULT_AIRCRAFT
     rate_hz: float = RATE_HZ
+    # The navigator's step (s). JSBSim cannot fly a step again to stop on a waypoint's
+    # acceptance circle or finish line, so the autopilot switches up to one step late (23 m at
+    # 0.5 s). A 0.1 s step was tried (docs/jsbsim.md): PX4 then switches on time and passes B
+    # 8 m off, as the roll-lag point mass does; but in gusts its c172r then circled a waypoint
+    # for altitude until the time limit (not diagnosed), so the default stays the dry run's.
+    outer_step: float = OUTER_STEP_S
     _cache: dict = field(default_factory=dict, repr=False)
 
     name = "jsbsim"
