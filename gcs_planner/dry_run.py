@@ -176,6 +176,12 @@ class DryRunReport:
     # Every lost run of the Monte Carlo: where and why, what it missed and where its
     # corrections failed before, and whether it counts as lost by the flight.
     lost_runs: tuple[LostRunRow, ...] = ()
+    # The flight model (sim/jsbsim_airframe.py with --flight-model jsbsim), what it found
+    # before the flight that the airframe cannot fly (where and why: the mission cannot be
+    # flown as planned) and what it could not hold in flight.
+    flight_model: str = "point mass"
+    airframe_limits: tuple[str, ...] = ()
+    airframe_shortfalls: tuple[str, ...] = ()
 
     @property
     def demonstration(self) -> bool:
@@ -219,7 +225,7 @@ class DryRunReport:
         """The verdict: verified, and with runs no run lost by the flight and the success rate
         consistent with the planned probability; without runs (a demonstration) the seeded
         flight arrived."""
-        if not self.verified:
+        if not self.verified or self.airframe_limits:
             return False
         if self.runs == 0:
             return self.arrived
@@ -275,6 +281,7 @@ def dry_run(
     error_unit: float = DEFAULT_ERROR_UNIT_M,
     set_params: dict[str, float] | None = None,
     set_plan_params: bool = False,
+    flight_model: object | None = None,
 ) -> DryRunReport:
     """Fly ``plan``'s chosen route on a mock vehicle whose landmark database is ``landmarks``.
 
@@ -310,6 +317,9 @@ def dry_run(
     rates, roll limit, ArduPlane's NAVL1_LIM_BANK: ``link.vehicle_check``): with
     ``set_plan_params`` they are set (``set_params`` wins where both name one), otherwise the
     upload is refused and the report says which and why.
+
+    ``flight_model`` (sim/jsbsim_airframe.py ``FlightModel``; default the point mass) flies the
+    replay in JSBSim: what the airframe cannot fly (``airframe_limits``) fails the verdict.
     """
     if flavour not in FLAVOURS:
         raise ValueError(f"flavour must be one of {FLAVOURS}, got {flavour!r}")
@@ -404,6 +414,7 @@ def dry_run(
             wind=wind,
             navigate_on_estimate=navigate_on_estimate,
             error_unit=error_unit,
+            flight_model=flight_model,
         )
         dropped = sum(
             inj.counts.dropped for inj in (vehicle.faults_out, vehicle.faults_in) if inj is not None
@@ -494,7 +505,20 @@ def dry_run(
             [c.id for c in replayed.run.corrections if c.succeeded is False],
         ),
         lost_runs=tuple(lost_runs),
+        **_airframe(replayed),
     )
+
+
+def _airframe(replayed: replay_mod.ReplayReport) -> dict:
+    """The flight model's fields of the report."""
+    flight = replayed.flight
+    if flight is None:
+        return {}
+    return {
+        "flight_model": flight.flight_model,
+        "airframe_limits": flight.limits,
+        "airframe_shortfalls": flight.shortfalls,
+    }
 
 
 def lost_by_the_flight(
@@ -647,6 +671,14 @@ def _row(c: replay_mod.CorrectionRow, planned: dict, miss: float = 0.0) -> DryRu
 
 
 def _why(report: replay_mod.ReplayReport, missed: list[DryRunRow] | None = None) -> str:
+    limits = report.flight.limits if report.flight is not None else ()
+    if limits:
+        more = f" (and {len(limits) - 1} more)" if len(limits) > 1 else ""
+        return f"the airframe cannot fly the mission: {limits[0]}{more}"
+    return _why_flown(report, missed)
+
+
+def _why_flown(report: replay_mod.ReplayReport, missed: list[DryRunRow] | None = None) -> str:
     """Where the vehicle was lost and which limit broke, with the numbers, and the corrections
     the flight missed on the way ("" if it arrived)."""
     run = report.run

@@ -26,8 +26,9 @@ import numpy as np
 from gcs_planner.mission.items import GLOBAL_AMSL_FRAMES, GLOBAL_RELATIVE_FRAMES, MissionItem
 from gcs_planner.scenario.georef import LocalFrame
 from gcs_planner.vehicle import G, VehicleProfile
-from sim import flight_kernel
-from sim.aircraft import AircraftState
+from sim import atmosphere, flight_kernel
+from sim.aircraft import AircraftState, RollLagFlightModel
+from sim.jsbsim_airframe import AirframeLimit, FlightModel, LegNeed
 from sim.navigators import NAVIGATORS
 from sim.navigators.base import (
     COARSE_STEPS,
@@ -77,6 +78,11 @@ class Flight:
     ground_speed: np.ndarray | None = None  # m/s
     autopilot: AutopilotParams | None = None
     wind: WindModel | None = None
+    # Flown by another flight model (sim/jsbsim_airframe.py): its name, what it found it
+    # cannot fly before the flight (where and why), and what it could not hold in flight.
+    flight_model: str = "point mass"
+    limits: tuple[str, ...] = field(default=())
+    shortfalls: tuple[str, ...] = field(default=())
 
     @cached_property
     def cumulative(self) -> np.ndarray:
@@ -168,6 +174,7 @@ def fly(
     ins: object | None = None,
     compiled: bool = True,
     commands: Sequence[NavCommand] | None = None,
+    flight_model: FlightModel | RollLagFlightModel | None = None,
 ) -> Flight:
     """Fly the stored ``items`` in mode AUTO from ``start`` (local frame) at ``profile``'s cruise
     airspeed (EAS) under ``flavour``'s navigator with the autopilot ``params`` (by default its
@@ -184,6 +191,11 @@ def fly(
     kernel; False flies every step in the Python navigator, the reference. ``commands``: the
     items as mission_commands gives them for these arguments, when the caller has them (a
     Monte Carlo flies one mission many times).
+
+    ``flight_model`` (sim/jsbsim_airframe.py ``FlightModel``) flies the navigator's demands in
+    JSBSim instead of the point mass, all in Python: the legs are checked against the airframe
+    first (``Flight.limits``), and an airframe that cannot be trimmed at the start is not
+    flown (``ended`` "cannot be flown").
     """
     ap = params or AutopilotParams(flavour=flavour, loiter_radius=profile.turn_radius)
     if commands is None:
@@ -197,6 +209,24 @@ def fly(
         time_limit = default_time_limit(cmds, start, profile, wind)
     s0 = AircraftState(float(start[0]), float(start[1]), float(start[2]), course)
     field_ = None if wind is None or wind.still else WindField(wind, profile.cruise_airspeed)
+    airframe = None
+    limits: list[str] = []
+    if flight_model is not None:
+        compiled = False  # the numba kernel flies the point mass only
+        # A model that cannot cut a step at a waypoint's acceptance circle or finish line
+        # (JSBSim) is stepped finer: the switch comes at most one such step late.
+        dt = min(dt, getattr(flight_model, "outer_step", dt))
+        alt = float(frame.origin.alt)
+        limits = flight_model.limits(
+            leg_needs(cmds, start, alt, profile, ap), profile.cruise_airspeed
+        )
+        try:
+            airframe = flight_model.airframe(
+                s0, profile.cruise_airspeed, alt, field_.current() if field_ else (0.0, 0.0)
+            )
+        except AirframeLimit as exc:
+            limits.insert(0, str(exc))
+            return _unflown(s0, profile, ap, wind, flight_model, limits)
     pilot = NAVIGATORS[ap.flavour](
         cmds,
         profile.cruise_airspeed,
@@ -207,6 +237,7 @@ def fly(
         wind=field_,
         alt_offset=float(frame.origin.alt),
         ins=ins,
+        airframe=airframe,
     )
     pilot.record()
     going = pilot.advance()
@@ -240,7 +271,78 @@ def fly(
         ground_speed=arr[:, 11],
         autopilot=ap,
         wind=wind,
+        flight_model="point mass" if flight_model is None else flight_model.describe(),
+        limits=tuple(limits),
+        shortfalls=_shortfalls(airframe, arr),
     )
+
+
+def _shortfalls(airframe: object, samples: np.ndarray) -> tuple[str, ...]:
+    """The airframe's in-flight shortfalls, each with the item being flown and where."""
+    out = []
+    for sf in getattr(airframe, "shortfalls", ()):
+        k = min(int(np.searchsorted(samples[:, 0], sf.t)), len(samples) - 1)
+        out.append(
+            f"{sf.kind} on the way to item {int(samples[k, 8])} at ({sf.x:,.0f}, {sf.y:,.0f}) m, "
+            f"{sf.t:.0f} s: {sf.text}"
+        )
+    return tuple(out)
+
+
+def _unflown(
+    s0: AircraftState,
+    profile: VehicleProfile,
+    ap: AutopilotParams,
+    wind: WindModel | None,
+    model: FlightModel | RollLagFlightModel,
+    limits: list[str],
+) -> Flight:
+    """The flight of an airframe that could not start: one sample where it stands."""
+    one = np.array([0.0])
+    return Flight(
+        t=one, xyz=np.array([[s0.x, s0.y, s0.z]]), course=np.array([s0.course]),
+        bank=np.zeros(1), climb=np.zeros(1), airspeed=np.array([profile.cruise_airspeed]),
+        current=np.array([-1]), events=(), ended="cannot be flown", notes=(),
+        heading=np.array([s0.course]), tas=np.zeros(1), ground_speed=np.zeros(1),
+        autopilot=ap, wind=wind, flight_model=model.describe(), limits=tuple(limits),
+    )  # fmt: skip
+
+
+def leg_needs(
+    cmds: Sequence[NavCommand],
+    start: tuple[float, float, float],
+    alt_offset: float,
+    profile: VehicleProfile,
+    ap: AutopilotParams,
+) -> list[LegNeed]:
+    """What each leg asks of the airframe: its top altitude (above sea level), its flight-path
+    angle (a straight leg's slope; a loiter's helix at the plan's climb angle, or the
+    autopilot's climb rate when that is less), the bank its turns need at the top: the plan's
+    turning radius (a loiter's own radius) at the true airspeed there, within the roll limit."""
+    out = []
+    prev = start
+    roll_limit = float(ap.bank_limit or 45.0)
+    for c in cmds:
+        if c.pos is None:
+            continue
+        top = max(prev[2], c.pos[2]) + alt_offset
+        tas = profile.cruise_airspeed * atmosphere.eas2tas(top)
+        dz = c.pos[2] - prev[2]
+        run = math.hypot(c.pos[0] - prev[0], c.pos[1] - prev[1])
+        radius = profile.turn_radius
+        if c.command in LOITERS:
+            signed = c.params[1] if c.command == NAV_LOITER_TO_ALT else c.params[2]
+            radius = abs(signed) or radius
+            rate = float(ap.climb_rate or 5.0) if dz > 0 else float(ap.sink_rate or 5.0)
+            steepest = math.degrees(math.asin(min(rate / tas, 1.0)))
+            plan = profile.max_climb_angle if dz > 0 else profile.max_descent_angle
+            gamma = math.copysign(min(steepest, plan), dz) if abs(dz) > 1.0 else 0.0
+        else:
+            gamma = math.degrees(math.atan2(dz, run)) if run > 1.0 else 0.0
+        bank = math.degrees(math.atan(tas * tas / (G * radius))) if radius > 0 else 0.0
+        out.append(LegNeed(c.seq, top, gamma, min(bank, roll_limit)))
+        prev = c.pos
+    return out
 
 
 def turn_radius_flown(bank_deg: float, airspeed: float) -> float:

@@ -718,6 +718,8 @@ class FlightSetup:
     error_unit: float
     nominal: FlightPath
     compiled: bool = True  # plain steps in sim/flight_kernel.py; False: the Python reference
+    # Another flight model than the point mass (sim/jsbsim_airframe.py FlightModel), or None.
+    flight_model: object | None = None
 
     @cached_property
     def mission_landmarks(self) -> list[tuple[int, int]]:
@@ -752,6 +754,7 @@ class FlightSetup:
             flavour=self.flavour, params=self.autopilot, home_at_seq0=self.home_at_seq0,
             home_alt=self.home_alt, course=self.course, dt=self.dt, wind=wind, ins=ins,
             compiled=self.compiled, commands=self.commands,
+            flight_model=self.flight_model,  # type: ignore[arg-type]
         )  # fmt: skip
         track = flown_path(flight)
         b_distance, b_miss = closest_approach(
@@ -832,6 +835,7 @@ def replay(
     navigate_on_estimate: bool = False,
     error_unit: float = DEFAULT_ERROR_UNIT_M,
     compiled: bool = True,
+    flight_model: object | None = None,
 ) -> ReplayReport:
     """Fly the stored ``items`` and replay the INS against the landmark database ``scenario``.
 
@@ -850,6 +854,8 @@ def replay(
 
     ``compiled`` flies the flight's plain steps in the numba kernel (sim/flight_kernel.py);
     False flies all of them in the Python navigators, the reference the kernel is tested on.
+    ``flight_model`` (sim/jsbsim_airframe.py ``FlightModel``) flies JSBSim instead of the point
+    mass (as deterministic: a still-air flight on the truth is flown once for every run).
     """
     # The aircraft is held to the true limits: the planner's reserve is its own margin.
     params = (params or scenario.params).flown()
@@ -877,7 +883,7 @@ def replay(
         tuple(items), scenario, params, profile, flavour,
         autopilot or guidance.AutopilotParams(flavour, loiter_radius=profile.turn_radius),
         frame, home_at_seq0, home_alt, course, capture_radius, dt, navigate_on_estimate,
-        error_unit, nominal, compiled,
+        error_unit, nominal, compiled, flight_model,
     )  # fmt: skip
     rng = np.random.default_rng(seed)
     model = None if wind.still else wind.draw(np.random.default_rng([seed, 2**31]))

@@ -124,6 +124,19 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         metavar="PATH",
         help="write the flown track beside the mission's path (.geojson or .kml)",
     )
+    g.add_argument(
+        "--flight-model",
+        choices=("point-mass", "jsbsim"),
+        default="point-mass",
+        help="what flies the autopilot's demands: the point mass (default) or JSBSim's flight "
+        "dynamics (the jsbsim extra: pip install '.[jsbsim]'; docs/jsbsim.md)",
+    )
+    g.add_argument(
+        "--aircraft",
+        metavar="NAME",
+        help="the JSBSim aircraft of --flight-model jsbsim, one shipped with the jsbsim package "
+        "(default c172r)",
+    )
     g.add_argument("--json", action="store_true", help="print one JSON object, nothing else")
     add_policy_arguments(g)
     p.set_defaults(func=run)
@@ -164,8 +177,36 @@ def parse_params(pairs: list[str]) -> dict[str, float]:
     return out
 
 
+def flight_model_from_args(args: argparse.Namespace) -> object | None:
+    """The JSBSim flight model of --flight-model jsbsim (None: the point mass), checked here:
+    the extra installed, the aircraft one that jsbsim ships (one line, exit 2 when not)."""
+    if args.flight_model != "jsbsim":
+        if args.aircraft is not None:
+            raise InputError("only with --flight-model jsbsim", field="--aircraft")
+        return None
+    try:
+        import jsbsim  # noqa: F401
+    except ImportError:
+        raise InputError(
+            "needs the jsbsim package: pip install '.[jsbsim]'", field="--flight-model"
+        ) from None
+    from sim.jsbsim_airframe import DEFAULT_AIRCRAFT, FlightModel, available_aircraft
+
+    name = args.aircraft or DEFAULT_AIRCRAFT
+    shipped = available_aircraft()
+    if name not in shipped:
+        light = ", ".join(a for a in ("c172r", "c172x", "c182", "c310", "J3Cub", "pa28"))
+        raise InputError(
+            f"no JSBSim aircraft {name!r} (shipped: {len(shipped)}, e.g. {light})",
+            field="--aircraft",
+        )
+    return FlightModel(name)
+
+
 def run(args: argparse.Namespace) -> int:
     if args.policy is not None:
+        if args.flight_model != "point-mass" or args.aircraft is not None:
+            raise InputError("the policy dry run flies the point mass only", field="--flight-model")
         refuse_plan_flags(args)
         return run_policy(args, _number, parse_params(args.param))
     runs = int(_number(args.runs, "--runs", int, 0))
@@ -175,6 +216,7 @@ def run(args: argparse.Namespace) -> int:
     seed = int(_number(args.seed, "--seed", int, 0))
     timeout = _number(args.timeout, "--timeout", float, 1e-3)
     acceptance = int(_number(args.acceptance_radius, "--acceptance-radius", int, 1, 256))
+    model = flight_model_from_args(args)
     track_out = args.track_out
     if track_out is not None and not track_out.lower().endswith((".geojson", ".json", ".kml")):
         raise InputError("must end in .geojson, .json or .kml", field="--track-out")
@@ -213,6 +255,7 @@ def run(args: argparse.Namespace) -> int:
         navigate_on_estimate=not args.navigate_on_truth,
         set_params=settings,
         set_plan_params=args.set_params,
+        flight_model=model,
     )
     if track_out is not None and flown:
         try:
@@ -240,6 +283,8 @@ def run(args: argparse.Namespace) -> int:
 
 def verdict_line(r: DryRunReport) -> str:
     """Why the verdict failed, in one line."""
+    if r.airframe_limits:
+        return r.why
     if r.runs == 0:
         return f"lost: {r.why}"
     parts = []
@@ -296,6 +341,12 @@ def render(r: DryRunReport) -> str:
         )
     for note in r.flight_notes:
         out.append(f"  note: {note}")
+    if r.flight_model != "point mass":
+        out.append(f"flight model: {r.flight_model}")
+    for limit in r.airframe_limits:
+        out.append(f"  CANNOT FLY: {limit}")
+    for shortfall in r.airframe_shortfalls:
+        out.append(f"  could not hold: {shortfall}")
     if r.missed:
         out.append(
             "missed: "
@@ -349,6 +400,8 @@ def render(r: DryRunReport) -> str:
         )
     if not r.verified:
         out.append("result: the upload did not verify")
+    elif r.airframe_limits:
+        out.append(f"result: the mission cannot be flown: {r.why}")
     elif r.demonstration:
         out.append("result: verified and arrived" if r.arrived else f"result: LOST: {r.why}")
     elif r.ok:

@@ -24,6 +24,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 
@@ -78,6 +79,38 @@ class Event:
     text: str = ""
 
 
+class Airframe(Protocol):
+    """What flies a navigator's demands for one step: a lateral acceleration (m/s^2, + left) and
+    a climb rate (m/s) within ``env``, through ``wind`` (east, north m/s), from ``s`` (the state
+    it returned last). ``exact``: it can fly any step again from any state it returned, so a
+    step may be cut at a finish line and lengthened on settled straight legs (the point mass);
+    a flight model with its own state (JSBSim) cannot."""
+
+    exact: bool
+
+    def step(
+        self,
+        s: AircraftState,
+        env: Envelope,
+        lateral_accel: float,
+        climb_rate: float,
+        dt: float,
+        wind: tuple[float, float] = (0.0, 0.0),
+        eas2tas: float = 1.0,
+        heading: float | None = None,
+    ) -> AircraftState: ...
+
+
+class PointMass:
+    """The point mass of sim/aircraft.py as an airframe."""
+
+    exact = True
+    step = staticmethod(step)
+
+
+POINT_MASS = PointMass()
+
+
 def wrap(a: float) -> float:
     return (a + math.pi) % (2 * math.pi) - math.pi
 
@@ -99,8 +132,12 @@ class Navigator:
         wind: WindField | None = None,
         alt_offset: float = 0.0,
         ins: object | None = None,
+        airframe: Airframe | None = None,
     ) -> None:
         self.cmds = commands
+        # What flies the navigator's demands: the point mass (sim/aircraft.py) unless another
+        # flight model is given (sim/jsbsim_airframe.py), the navigator code the same for both.
+        self.airframe: Airframe = airframe or POINT_MASS
         self.cruise = airspeed
         self.ap = ap
         self.free_turn = free_turn
@@ -202,7 +239,8 @@ class Navigator:
     def _fly(self, lateral: float, climb: float, dt: float, heading: float | None = None) -> None:
         wind = (0.0, 0.0) if self.wind is None else self.wind.step(dt)
         before = self.s
-        self.s = step(before, self.env, lateral, climb, dt, wind, self.eas2tas(before.z), heading)
+        e2t = self.eas2tas(before.z)
+        self.s = self.airframe.step(before, self.env, lateral, climb, dt, wind, e2t, heading)
         self._after(before)
 
     def _after(self, before: AircraftState) -> None:
@@ -420,6 +458,7 @@ class Navigator:
             coarse = dt * COARSE_STEPS
             if (
                 self.settled
+                and self.airframe.exact
                 and (self.wind is None or self.wind.sigma == 0.0)
                 and abs(self.alt_error) < 0.5
                 and dist > 3.0 * self.ground_speed() * coarse
@@ -429,15 +468,18 @@ class Navigator:
         before, est0 = self.s, self.est
         wind = (0.0, 0.0) if self.wind is None else self.wind.step(dt)
         e2t = self.eas2tas(before.z)
-        self.s = step(before, self.env, lateral, climb, dt, wind, e2t, heading)
+        self.s = self.airframe.step(before, self.env, lateral, climb, dt, wind, e2t, heading)
         off = (est0[0] - before.x, est0[1] - before.y)
         f0 = self.finish_line(est0, c)
         f1 = self.finish_line((self.s.x + off[0], self.s.y + off[1]), c)
         crossed = f0 < 0 <= f1
-        if crossed and not self.free_turn:
+        if crossed and not self.free_turn and self.airframe.exact:
             # The autopilot checks the finish line many times a second: stop the step on it,
-            # so that the next leg starts there and not up to a step beyond.
-            self.s = step(before, self.env, lateral, climb, dt * f0 / (f0 - f1), wind, e2t)
+            # so that the next leg starts there and not up to a step beyond. (A flight model
+            # that cannot fly a step again from its start flies its inner steps on: the next
+            # leg starts up to one outer step beyond.)
+            cut = dt * f0 / (f0 - f1)
+            self.s = self.airframe.step(before, self.env, lateral, climb, cut, wind, e2t)
         self._after(before)
         self.record()
         return self._check_waypoint(c, acc, crossed)

@@ -1,0 +1,133 @@
+"""The mock vehicle on JSBSim's flight dynamics (issue 31): the bundled scenario flown end to end
+through upload and read-back on both autopilots, the airframe's own limits reported, the flags."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("jsbsim", reason="the jsbsim extra is not installed (pip install '.[jsbsim]')")
+
+from gcs_planner.cli import main  # noqa: E402
+from gcs_planner.dry_run import EXIT_LOST  # noqa: E402
+from gcs_planner.scenario.georef import DEFAULT_ORIGIN, LocalFrame  # noqa: E402
+from gcs_planner.vehicle import G, VehicleProfile  # noqa: E402
+from sim import guidance  # noqa: E402
+from sim.aircraft import AircraftState, Envelope  # noqa: E402
+from sim.jsbsim_airframe import FlightModel, JSBSimAirframe, LegNeed  # noqa: E402
+from sim.navigators.base import NavCommand  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+SCENARIO = ROOT / "missions" / "jsbsim" / "scenario.toml"
+
+
+@pytest.mark.parametrize("firmware", ["ardupilot", "px4"])
+def test_bundled_scenario_flies_on_jsbsim_through_upload_and_read_back(capsys, firmware):
+    rc = main(["dry-run", str(SCENARIO), "--flight-model", "jsbsim", "--firmware", firmware,
+               "--json"])  # fmt: skip
+    out, err = capsys.readouterr()
+    d = json.loads(out)
+    assert rc == 0, err
+    assert d["verified"] is True and d["arrived"] is True and d["ok"] is True
+    assert d["flight_model"].startswith("JSBSim c172r")
+    assert d["airframe_limits"] == []
+    # Every planned correction made, in order, each within the capture radius.
+    assert d["corrections_as_planned"] is True
+    assert [r["outcome"] for r in d["rows"]] == ["ok"] * (len(d["route"]) - 2)
+    assert all(r["miss"] <= d["capture_radius"] for r in d["rows"])
+    # A real airframe does not fly the planned path to the metre: it is longer than the plan
+    # (turns entered late) but within the plan's flight reserve.
+    assert 0.0 < d["flown_difference"] < d["reserve"]
+
+
+def _straight_airframe() -> tuple[JSBSimAirframe, Envelope]:
+    start = AircraftState(0.0, 0.0, 700.0, 0.0)
+    return JSBSimAirframe("c172r", start, 45.0, 0.0), Envelope(45.0, 45.0, 5.0, 5.0)
+
+
+def test_airframe_holds_its_trim_and_rolls_into_a_turn_with_a_lag():
+    airframe, env = _straight_airframe()
+    s = airframe.state()
+    for _ in range(40):  # 20 s straight and level
+        s = airframe.step(s, env, 0.0, 0.0, 0.5)
+    # Wings level and on its trim; nothing holds the heading but the navigator (not here).
+    assert abs(s.z - 700.0) < 0.5 and abs(s.bank_deg) < 1.0
+    assert abs(s.heading) < math.radians(1.0)
+    assert s.x == pytest.approx(20.0 * s.tas, rel=0.01)  # east at its true airspeed
+    # Ask for a 45 degree left bank (a = g): the point mass has it at once, JSBSim rolls.
+    s = airframe.step(s, env, G, 0.0, 0.25)
+    assert -30.0 < s.bank_deg < -1.0
+    banks = []
+    for _ in range(20):
+        s = airframe.step(s, env, G, 0.0, 0.5)
+        banks.append(s.bank_deg)
+    assert banks[-1] == pytest.approx(-45.0, abs=3.0)
+    assert min(banks) > -52.0  # overshoot limited
+    assert abs(s.z - 700.0) < 10.0  # the turn costs a few metres at most
+
+
+def test_airframe_that_cannot_be_trimmed_at_the_start_is_not_flown():
+    frame = LocalFrame(DEFAULT_ORIGIN)
+    profile = VehicleProfile(turn_radius=300.0, cruise_airspeed=28.0)
+    cmds = [NavCommand(1, 16, (3000.0, 0.0, 3000.0), (0.0, 1.0, 0.0, 0.0))]
+    flight = guidance.fly([], frame, (0.0, 0.0, 3000.0), profile, commands=cmds,
+                          flight_model=FlightModel("J3Cub"))  # fmt: skip
+    assert flight.ended == "cannot be flown"
+    assert "J3Cub cannot be trimmed level at 28 m/s EAS" in flight.limits[0]
+    assert "3,000 m" in flight.limits[0]
+
+
+def test_leg_limits_name_the_leg_and_the_airframe_s_best():
+    model = FlightModel("c172r")
+    best = model.best_climb_deg(1000.0, 45.0)
+    assert 2.0 < best < 8.0
+    out = model.limits([LegNeed(7, 1000.0, best + 2.0, 20.0), LegNeed(8, 1000.0, 1.0, 20.0)], 45.0)
+    assert len(out) == 1
+    assert out[0].startswith("leg to item 7 (up to 1,000 m): climbs")
+    assert f"at most {best:.1f} deg" in out[0]
+
+
+def test_mission_above_the_airframe_s_ceiling_exits_5_with_where_and_why(tmp_path, capsys):
+    """The bundled scenario lifted by 2.6 km: the c172r cannot hold 45 m/s there."""
+    lines = (SCENARIO.parent / "points.csv").read_text().splitlines()
+    lifted = [lines[0]]
+    for line in lines[1:]:
+        f = line.split(",")
+        f[3] = str(float(f[3]) + 2600.0)
+        lifted.append(",".join(f))
+    (tmp_path / "points.csv").write_text("\n".join(lifted) + "\n")
+    (tmp_path / "scenario.toml").write_text(SCENARIO.read_text())
+    rc = main(["dry-run", str(tmp_path / "scenario.toml"), "--flight-model", "jsbsim"])
+    out, err = capsys.readouterr()
+    assert rc == EXIT_LOST
+    assert "cannot be trimmed level at 45 m/s EAS at the start altitude 3,200 m" in err
+    assert "result: the mission cannot be flown" in out
+
+
+@pytest.mark.parametrize(
+    ("flags", "field"),
+    [
+        (["--flight-model", "jsbsim", "--aircraft", "nosuch"], "--aircraft"),
+        (["--aircraft", "c172r"], "--aircraft"),
+    ],
+)
+def test_bad_flight_model_flags_are_one_line_and_exit_2(capsys, flags, field):
+    rc = main(["dry-run", str(SCENARIO), *flags])
+    _, err = capsys.readouterr()
+    assert rc == 2
+    assert field in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
+
+
+def test_turn_bank_needs_are_within_the_roll_limit():
+    """The leg needs the check flies: the plan's 400 m radius at 47 m/s true is 29 deg."""
+    profile = VehicleProfile(turn_radius=400.0, cruise_airspeed=45.0)
+    ap = guidance.AutopilotParams(flavour="ardupilot", loiter_radius=400.0)
+    cmds = [NavCommand(1, 16, (5000.0, 0.0, 800.0), (0.0, 1.0, 0.0, 0.0))]
+    (need,) = guidance.leg_needs(cmds, (0.0, 0.0, 600.0), 0.0, profile, ap)
+    tas = 45.0 * guidance.atmosphere.eas2tas(800.0)
+    assert need.top == 800.0
+    assert need.gamma_deg == pytest.approx(math.degrees(math.atan2(200.0, 5000.0)))
+    assert need.bank_deg == pytest.approx(math.degrees(math.atan(tas * tas / (G * 400.0))))
