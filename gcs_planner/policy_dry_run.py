@@ -106,37 +106,34 @@ class PolicyDryRunReport:
         return self.link_failures == 0 and self.probability_within_ci is not False
 
 
+def _policy_number(path: str, section: str, key: str, upper: float | None) -> float | None:
+    """policy.json's ``section.key``: a number >= 0 (and <= ``upper``), or None when the file
+    gives none; else one line naming the file and the field, exit 2."""
+    from gcs_planner.mission.policy_file import load_policy_dict
+
+    part = load_policy_dict(path).get(section)
+    value = part.get(key) if isinstance(part, dict) else None
+    if value is None:
+        return None
+    ok = not isinstance(value, bool) and isinstance(value, int | float) and value >= 0
+    if not ok or (upper is not None and not value <= upper):
+        wanted = f"in [0, {upper:g}]" if upper is not None else ">= 0"
+        raise InputError(
+            f"must be a number {wanted}, got {value!r}", file=path, field=f"{section}.{key}"
+        )
+    return float(value)
+
+
 def policy_probability(path: str) -> float | None:
     """The policy's exact probability of arriving, as policy.json carries it
     (``value.probability``, docs/policy-json.md), or None when the file gives none."""
-    from gcs_planner.mission.policy_file import load_policy_dict
-
-    data = load_policy_dict(path)
-    value = data.get("value")
-    value = value.get("probability") if isinstance(value, dict) else None
-    if value is None:
-        return None
-    if isinstance(value, bool) or not isinstance(value, int | float) or not 0 <= value <= 1:
-        raise InputError(
-            f"must be a number in [0, 1], got {value!r}", file=path, field="value.probability"
-        )
-    return float(value)
+    return _policy_number(path, "value", "probability", 1.0)
 
 
 def policy_switch_room(path: str) -> float | None:
     """The switch room (metres) policy.json was planned with (``switch_room.distance_m``,
     core/switch_room.py), or None when it has none."""
-    from gcs_planner.mission.policy_file import load_policy_dict
-
-    room = load_policy_dict(path).get("switch_room")
-    value = room.get("distance_m") if isinstance(room, dict) else None
-    if value is None:
-        return None
-    if isinstance(value, bool) or not isinstance(value, int | float) or not value >= 0:
-        raise InputError(
-            f"must be a number >= 0, got {value!r}", file=path, field="switch_room.distance_m"
-        )
-    return float(value)
+    return _policy_number(path, "switch_room", "distance_m", None)
 
 
 def check_against_scenario(

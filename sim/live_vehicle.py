@@ -31,6 +31,7 @@ import numpy as np
 
 from gcs_planner.link.connection import mavlink
 from gcs_planner.link.correction_report import format_report
+from gcs_planner.link.protocol import DEFAULT_TIMEOUT_S
 from sim import telemetry
 from sim.guidance import AutopilotParams
 from sim.ins import InsCorrection
@@ -82,16 +83,29 @@ CRUISE_STEP_S = 1.0
 # The honest window after a failed or missed fix closes when the ground station sets an item
 # current, at the next correction, or after this long (simulated).
 WINDOW_MAX_S = 1800.0
+# After the ground station sets an item current, the honest scale holds until it has been
+# quiet this many wall seconds: a DO_SET_MISSION_CURRENT whose acknowledgement was lost is sent
+# again after the ground station's timeout (gcs_planner/link/protocol.py, 1.5 s), and a copy
+# taken at the cruise scale would find the aircraft a thousand seconds further on and turn it
+# back to the item set (run 59 of README's 400-run dry run: an item set current 14.3 km on).
+SETTLE_WALL_S = 2 * DEFAULT_TIMEOUT_S
 
 
 @dataclass
 class _Window:
-    """After a failed or missed fix, while the ground station may act: the honest time scale."""
+    """After a failed or missed fix, while the ground station may act, or after it acted, until
+    it is quiet (``quiet_until``, wall seconds): the honest time scale."""
 
     since: float  # simulated seconds
+    quiet_until: float | None = None  # wall seconds; None: a window opened by a fix
 
-    def over(self, flight: LiveFlight, t: float, happened: Any) -> bool:
+    def over(self, flight: LiveFlight, t: float, happened: Any, now: float) -> bool:
+        if self.quiet_until is not None:
+            return now >= self.quiet_until or t - self.since > WINDOW_MAX_S
         return flight.current < 0 or bool(happened.corrections) or t - self.since > WINDOW_MAX_S
+
+    def settling(self) -> bool:
+        return self.quiet_until is not None
 
 
 def _fly_to(
@@ -189,10 +203,10 @@ def fly_live(vehicle: Any, *, seed: int = 0, time_scale: float | None = None) ->
             happened, sim_t, opened = _fly_to(
                 flight, sim_t, target, window is None and cruise > scale, watch
             )
-            if window is not None and window.over(flight, sim_t, happened):
+            if window is not None and window.over(flight, sim_t, happened, now):
                 window = None
-            if opened and window is None:
-                window = _Window(sim_t)
+            if opened and (window is None or window.settling()):
+                window = _Window(sim_t)  # a new failure: the ground station may act again
             for e in happened.reached:
                 vehicle._send(vehicle.mav.mission_item_reached_encode(e.seq))
             for c in happened.corrections:
@@ -218,7 +232,9 @@ def fly_live(vehicle: Any, *, seed: int = 0, time_scale: float | None = None) ->
                     flight.stored_changed(value, keep_active=server.in_place)
                 elif what == "current":
                     flight.set_current(value)
-                    window = None  # the ground station has acted: back to the cruise scale
+                    # The ground station has acted: back to the cruise scale once it is quiet
+                    # (a resent set-current lands in honest time).
+                    window = _Window(sim_t, quiet_until=now + SETTLE_WALL_S)
             if flight.current >= 0 and flight.current != last_current:
                 last_current = flight.current
                 vehicle._fly_current(last_current)
