@@ -34,12 +34,16 @@ from sim.wind import WindSpec
 
 # Runs lost by the flight named one by one in the text report (all of them in --json).
 SHOWN_FLIGHT_LOSSES = 5
+# Legs outside the envelope in the wind flown named one by one (all of them in --json).
+SHOWN_ENVELOPE_SHORTFALLS = 8
 
 EPILOG = f"""exit codes: 0 the mission verified and, with --runs N, no run was lost by the flight
 and the success rate is consistent with the planned probability (without --runs: the one seeded
 flight, a demonstration, arrived); 2 bad input; 3 no feasible route; {LinkError.exit_code} the
-upload failed or the read-back differs; {EXIT_LOST} the mission verified but the verdict failed
-(the output says where and which limit)."""
+upload failed or the read-back differs; {EXIT_LOST} the mission verified but the verdict failed:
+a run lost by the flight, a success rate not consistent with the plan, a mission the airframe cannot
+fly, or legs that do not fit the aircraft's envelope in the wind flown (the output says where
+and which limit)."""
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -285,9 +289,18 @@ def verdict_line(r: DryRunReport) -> str:
     """Why the verdict failed, in one line."""
     if r.airframe_limits:
         return r.why
-    if r.runs == 0:
-        return f"lost: {r.why}"
     parts = []
+    if r.envelope_shortfalls:
+        first = r.envelope_shortfalls[0]
+        legs = len({s.leg for s in r.envelope_shortfalls})
+        parts.append(
+            f"{legs} leg(s) do not fit the aircraft's envelope in the {r.envelope_wind:g} m/s wind "
+            f"flown (first: {first.describe()})"
+        )
+    if r.runs == 0:
+        if not r.arrived:
+            parts.append(f"lost: {r.why}")
+        return "; ".join(parts) if r.envelope_shortfalls else f"lost: {r.why}"
     if r.flight_losses:
         parts.append(f"{r.flight_losses} of {r.runs} runs lost by the flight")
     if not r.probability_within_ci:
@@ -347,6 +360,7 @@ def render(r: DryRunReport) -> str:
         out.append(f"  CANNOT FLY: {limit}")
     for shortfall in r.airframe_shortfalls:
         out.append(f"  could not hold: {shortfall}")
+    out += _envelope_lines(r)
     if r.missed:
         out.append(
             "missed: "
@@ -402,6 +416,8 @@ def render(r: DryRunReport) -> str:
         out.append("result: the upload did not verify")
     elif r.airframe_limits:
         out.append(f"result: the mission cannot be flown: {r.why}")
+    elif r.envelope_shortfalls:
+        out.append("result: NOT verified: " + verdict_line(r).removeprefix("verdict failed: "))
     elif r.demonstration:
         out.append("result: verified and arrived" if r.arrived else f"result: LOST: {r.why}")
     elif r.ok:
@@ -412,6 +428,34 @@ def render(r: DryRunReport) -> str:
     else:
         out.append(f"result: NOT verified by the flight: {verdict_line(r)}")
     return "\n".join(out)
+
+
+def _envelope_lines(r: DryRunReport) -> list[str]:
+    """The plan's legs against its aircraft's envelope in the wind flown (checked before the
+    flight): a summary per limit, then the shortfalls one by one."""
+    if r.envelope_wind is None:
+        return []
+    head = f"envelope in the wind flown ({r.envelope_wind:g} m/s from any direction, per leg at "
+    head += "the TAS of its highest point): "
+    if not r.envelope_shortfalls:
+        return [head + "every leg fits"]
+    by_limit: dict[str, list] = {}
+    for s in r.envelope_shortfalls:
+        by_limit.setdefault(s.limit, []).append(s)
+    summary = []
+    for limit, rows in by_limit.items():
+        worst = max(rows, key=lambda s: abs(s.needs - s.can))
+        summary.append(
+            f"{limit} on {len(rows)} leg(s) (worst leg {worst.leg}: {worst.needs:.2f} {worst.unit}"
+            f", the aircraft {worst.can:.2f} {worst.unit})"
+        )
+    out = [head + "DOES NOT FIT: " + "; ".join(summary)]
+    for s in r.envelope_shortfalls[:SHOWN_ENVELOPE_SHORTFALLS]:
+        out.append(f"  DOES NOT FIT: {s.describe()}")
+    more = len(r.envelope_shortfalls) - SHOWN_ENVELOPE_SHORTFALLS
+    if more > 0:
+        out.append(f"  ... {more} more (envelope_shortfalls in --json)")
+    return out
 
 
 def _lost_run(lost: LostRunRow) -> str:
