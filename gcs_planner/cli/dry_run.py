@@ -446,8 +446,8 @@ def _envelope_lines(r: DryRunReport) -> list[str]:
     for limit, rows in by_limit.items():
         worst = max(rows, key=lambda s: abs(s.needs - s.can))
         summary.append(
-            f"{limit} on {len(rows)} leg(s) (worst leg {worst.leg}: {worst.needs:.2f} {worst.unit}"
-            f", the aircraft {worst.can:.2f} {worst.unit})"
+            f"{limit} on {len(rows)} leg(s) (worst leg {worst.leg}: planned {worst.needs:.2f} "
+            f"{worst.unit}, in this wind {worst.can:.2f} {worst.unit})"
         )
     out = [head + "DOES NOT FIT: " + "; ".join(summary)]
     for s in r.envelope_shortfalls[:SHOWN_ENVELOPE_SHORTFALLS]:
