@@ -99,7 +99,9 @@ def fly(result, firmware: str, wind: float, gust: float, seed: int) -> float | N
     route = result.route
     on_route = {s.id for s in route.stops}
     met = {e.id: e.distance for e in report.encounters if e.id in on_route}
-    rows = [SimpleNamespace(point=i, distance=d, on_route=True, outcome="ok") for i, d in met.items()]
+    rows = [
+        SimpleNamespace(point=i, distance=d, on_route=True, outcome="ok") for i, d in met.items()
+    ]
     flown_to_b = report.flown.length if report.flown is not None else None
     return stretch_overrun(route, rows, flown_to_b)
 
