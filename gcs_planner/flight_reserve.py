@@ -1,4 +1,5 @@
-"""The flight reserve derived from what it must cover (docs/model.md, "Flight reserve").
+"""The flight reserve derived from what it must cover (docs/model.md, "Flight in the real
+world", its flight reserve).
 
 An aircraft under its autopilot flies more than the planned legs between two resets of an error:
 
