@@ -145,3 +145,35 @@ def test_each_autopilot_enters_its_turns_as_late_as_its_guidance() -> None:
         assert late_entry("px4", radius, speed)[0] == pytest.approx(radius / 2)
         either = late_entry(None, radius, speed)[0]
         assert either == max(l1 / 2, radius / 2)
+
+
+def _scenario_toml(tmp_path, environment: str) -> str:
+    from pathlib import Path
+
+    points = Path(__file__).resolve().parents[1] / "missions" / "example" / "points.csv"
+    text = (
+        f'name = "gusty"\npoints = "{points}"\n[parameters]\nalpha1 = 25\nalpha2 = 15\n'
+        "beta1 = 20\nbeta2 = 25\ntheta = 30\ndelta = 0.001\n[vehicle]\ncruise_airspeed = 20\n"
+        'max_bank_angle = 40\nmax_climb_rate = 4\nmax_sink_rate = 4\nfirmware = "px4"\n'
+        f"[environment]\n{environment}\n"
+    )
+    path = tmp_path / "gusty.toml"
+    path.write_text(text, encoding="utf-8")
+    return str(path)
+
+
+def test_the_scenario_file_states_the_design_gust(tmp_path, capsys) -> None:
+    """[environment] gust is the design gust the derived reserve covers; --gust wins; a bad one
+    is one line naming the file, line and field."""
+    path = _scenario_toml(tmp_path, 'wind = "5"\ngust = 2')
+    assert main(["plan", path, "--json"]) == 0
+    r = json.loads(capsys.readouterr().out)["reserve"]
+    assert r["source"] == "derived" and r["gust"] == 2.0 and r["autopilot"] == "px4"
+    assert main(["plan", path, "--json", "--gust", "0"]) == 0
+    still = json.loads(capsys.readouterr().out)["reserve"]
+    assert still["gust"] == 0.0 and still["metres"] == pytest.approx(r["metres"] - r["gust_term_m"])
+    bad = _scenario_toml(tmp_path, "gust = -1")
+    assert main(["plan", bad]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "gusty.toml" in err[0] and "environment.gust" in err[0]
+    assert "Traceback" not in err[0]
