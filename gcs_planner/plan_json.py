@@ -76,6 +76,25 @@ def capture_of(plan: Plan) -> dict[str, Any]:
     return {**check, "warning": capture_warning(check)}
 
 
+def reserve_of(plan: Plan) -> dict[str, Any]:
+    """The flight reserve the plan was made with, where it came from and, when derived, its
+    derivation and the chosen route's own stretches checked against it (flight_reserve.py)."""
+    s = plan.scenario
+    metres = s.params.reserve
+    source = s.reserve_source or ("stated" if metres > 0 else "none")
+    out: dict[str, Any] = {"metres": metres, "source": source}
+    basis = s.reserve_basis
+    if basis is not None:
+        out.update(basis.to_dict())
+        out["metres"] = metres
+        if plan.routes:
+            need, frm, to = basis.route_check(plan.route)
+            out["chosen_route"] = {
+                "need_m": need, "from": frm, "to": to, "covered": need <= metres + 1e-9,
+            }  # fmt: skip
+    return out
+
+
 def plan_to_dict(plan: Plan) -> dict[str, Any]:
     s = plan.scenario
     origin = (
@@ -99,6 +118,8 @@ def plan_to_dict(plan: Plan) -> dict[str, Any]:
             "initial_errors": list(s.initial_errors),
         },
         "parameters": s.params.to_dict(),
+        # parameters.reserve with where it came from and, when derived, how.
+        "reserve": reserve_of(plan),
         "vehicle": {
             "leg_model": s.vehicle.leg_model,
             "cruise_airspeed": s.vehicle.cruise_airspeed,

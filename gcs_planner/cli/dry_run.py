@@ -240,6 +240,8 @@ def run(args: argparse.Namespace) -> int:
         firmware_defaults=False,
         # ... but the legs run straight over each landmark as far as the flown autopilot needs.
         flown_by=args.firmware,
+        # The gusts flown are the plan's design gusts: the derived reserve covers them.
+        gust=wind.gust,
     )
     result = plan_from_args(args, scenario)
     # The vehicle's landmark database comes from the file again, not from the planner.

@@ -27,6 +27,7 @@ if TYPE_CHECKING:
     from gcs_planner.core.planner import Plan
     from gcs_planner.core.route import Route
     from gcs_planner.core.switch_room import SwitchRoom
+    from gcs_planner.flight_reserve import DerivedReserve
     from gcs_planner.scenario.model import Scenario
 
 
@@ -244,8 +245,10 @@ def render_table(route: Route) -> str:
     return "\n".join(lines)
 
 
-def reserve_line(reserve: float) -> str:
-    """What the flight reserve promises, in the operator's words."""
+def reserve_line(reserve: float, basis: DerivedReserve | None = None) -> str:
+    """What the flight reserve promises, in the operator's words, and why it is that large."""
+    if reserve > 0 and basis is not None:
+        return f"flight reserve: {reserve:,.0f} m, {basis.describe()}; --reserve M states it"
     if reserve > 0:
         return (
             f"flight reserve: {reserve:,.0f} m (every error stays within its limit for a flight up "
@@ -253,6 +256,26 @@ def reserve_line(reserve: float) -> str:
             "plans to the limits)"
         )
     return "flight reserve: none (the limits are planned to the metre: --reserve M keeps a margin)"
+
+
+def reserve_check_line(result: Plan) -> list[str]:
+    """The derived reserve against the chosen route's own stretches, leg by leg."""
+    from gcs_planner.plan_json import reserve_of
+
+    check = reserve_of(result).get("chosen_route")
+    if not check:
+        return []
+    where = f"{check['from']} to {check['to']}"
+    if check["covered"]:
+        return [
+            f"  the chosen route's stretches need at most {check['need_m']:,.0f} m ({where}: "
+            "its turns, helices and gusts leg by leg): covered"
+        ]
+    return [
+        f"warning: the chosen route's stretch {where} needs {check['need_m']:,.0f} m (its turns, "
+        f"helices and gusts leg by leg), more than the reserve: --reserve "
+        f"{math.ceil(check['need_m'])} states one that covers it"
+    ]
 
 
 def _capture_lines(result: Plan) -> list[str]:
@@ -285,7 +308,8 @@ def render(result: Plan) -> str:
         ),
         f"vehicle: {s.vehicle.describe()}",
         *(s.envelope.describe() if s.envelope is not None else ()),
-        reserve_line(p.reserve),
+        reserve_line(p.reserve, s.reserve_basis),
+        *reserve_check_line(result),
         *(f"warning: {w}" for w in result.warnings),
         *_capture_lines(result),
         f"optimality: {result.statement}",

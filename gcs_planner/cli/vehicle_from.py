@@ -15,6 +15,7 @@ from dataclasses import replace
 
 from gcs_planner.autopilot import autopilot_for, effective
 from gcs_planner.errors import InputError
+from gcs_planner.flight_reserve import MAX_SHARE, DerivedReserve, late_entry
 from gcs_planner.scenario.model import Scenario
 from gcs_planner.vehicle import FIRMWARES, DerivedEnvelope, bank_angle_for, parse_wind
 
@@ -53,6 +54,13 @@ def add_envelope_arguments(
             metavar="SPEED[@FROM_DEG]",
             help="design wind, m/s: the envelope holds in a wind of this speed from any "
             "direction (a direction given is held from any direction too: conservative)",
+        )
+        g.add_argument(
+            "--gust",
+            type=float,
+            metavar="SPEED",
+            help="design gusts, m/s per horizontal axis: the derived flight reserve covers the "
+            "track they lengthen (default 0)",
         )
 
 
@@ -135,6 +143,7 @@ def derive_envelope(
     firmware: str | None = None,
     firmware_defaults: bool = True,
     flown_by: str | None = None,
+    gust: float | None = None,
 ) -> Scenario:
     """The scenario with its envelope derived from the autopilot's terms, when any is given
     (rates, bank, firmware or a design wind); else ``scenario`` unchanged (today's envelope).
@@ -145,6 +154,8 @@ def derive_envelope(
     dry run, whose --firmware names the flown autopilot and must not change its plan).
     ``flown_by``: the autopilot that will fly the plan when no firmware fills the envelope (the
     dry run's): its settle distance gives the straight run-in and run-out at every landmark.
+    ``gust``: the design gust (m/s per axis; None: ``--gust``, else the scenario's
+    [environment] gust, else 0), which the derived flight reserve covers.
     Bad values are InputError naming the flag."""
     terms, environment, toml = _toml_terms(scenario)
     if "error_unit" in environment or "capture_radius" in environment:
@@ -264,11 +275,55 @@ def derive_envelope(
         )
         return scenario
     out = scenario.with_params(**changes)
-    return out.with_vehicle(
+    out = out.with_vehicle(
         cruise_airspeed=float(eas),
         envelope=env,
         radius_source="derived" if "turn_radius" in changes else out.radius_source,
     )
+    if gust is None:
+        gust = getattr(args, "gust", None)
+    gust_field = "--gust"
+    if gust is None and "gust" in environment:
+        gust, gust_field = float(environment["gust"]), f"{toml}: environment.gust"  # type: ignore[arg-type]
+    gust = 0.0 if gust is None else float(gust)
+    if not (math.isfinite(gust) and 0.0 <= gust <= 50.0):
+        raise InputError(f"must be a speed in [0, 50] m/s (got {gust:g})", field=gust_field)
+    return with_derived_reserve(out, env, gust, env.autopilot or flown_by)
+
+
+def with_derived_reserve(
+    scenario: Scenario, env: DerivedEnvelope, gust: float, autopilot: str | None = None
+) -> Scenario:
+    """The scenario planning with the reserve derived from what it must cover (turn entry at
+    the envelope's radius, the design ``gust`` over the longest stretch: flight_reserve.py),
+    when nobody stated one and the reader gave airplane legs its constant default; else
+    unchanged. The cap on the default (5 % of the tightest limit) holds for it too."""
+    p = scenario.params
+    if (
+        scenario.reserve_source != "default"
+        or scenario.leg_model != "airplane"
+        or p.turn_radius <= 0
+        or env.bank_deg <= 0
+    ):
+        return scenario
+    limits = [getattr(p, k) for k in ("alpha1", "alpha2", "beta1", "beta2", "theta")]
+    # The arcs are flown at the larger of the planned radius and the roll limit's at V + W.
+    radius = max(p.turn_radius, env.turn_radius)
+    late, rule = late_entry(autopilot, radius, env.ground_speed_max)
+    basis = DerivedReserve(
+        turn_radius=radius,
+        late=late,
+        late_rule=rule,
+        tas=env.tas,
+        ground_speed=env.ground_speed_max,
+        bank_deg=env.bank_deg,
+        autopilot=autopilot,
+        gust=gust,
+        stretch=max(limits) / p.delta,
+        cap=MAX_SHARE * min(limits) / p.delta,
+    )
+    out = scenario.with_params(reserve=basis.metres)
+    return out.with_vehicle(reserve_source="derived", reserve_basis=basis)
 
 
 def _with_runs(

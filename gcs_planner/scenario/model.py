@@ -12,6 +12,7 @@ from enum import IntEnum
 
 import numpy as np
 
+from gcs_planner.flight_reserve import DerivedReserve
 from gcs_planner.vehicle import (
     DEFAULT_CAPTURE_RADIUS_M,
     DEFAULT_CRUISE_AIRSPEED,
@@ -180,6 +181,11 @@ class Scenario:
     # The envelope derived from the autopilot's terms and the design wind (None: the angles
     # and radius were stated directly, or assumed).
     envelope: DerivedEnvelope | None = None
+    # Where params.reserve came from: "stated" (a flag or the scenario file), "default" (the
+    # reader's constant for airplane legs, vehicle.DEFAULT_RESERVE_M), "derived" (from what it
+    # must cover: ``reserve_basis``, with the envelope) or "" (none: straight and cs3d legs).
+    reserve_source: str = ""
+    reserve_basis: DerivedReserve | None = None
     # Metres of position error per error unit (Table 2's decimetres) and the landmarks'
     # capture radius (3D, metres): the planner's capture check reads them.
     error_unit: float = DEFAULT_ERROR_UNIT_M

@@ -131,7 +131,10 @@ def load_scenario(
         heading = toml_reader.check_heading(
             _as_list(given["heading_at_a"]), file=COMMAND_LINE, row=None
         )
-    _default_reserve(values, extra)
+    if "reserve" in values:
+        extra["reserve_source"] = "stated"
+    elif _default_reserve(values, extra):
+        extra["reserve_source"] = "default"
     params = _parameters(path, suffix, values, sources)
     return Scenario(
         ids=points.ids,
@@ -218,21 +221,25 @@ def _override_origin(value: object) -> Origin:
     return toml_reader.check_origin(value.lat, value.lon, value.alt, file=COMMAND_LINE)
 
 
-def _default_reserve(values: dict[str, float], extra: dict[str, object]) -> None:
+def _default_reserve(values: dict[str, float], extra: dict[str, object]) -> bool:
     """A scenario flown on airplane legs keeps a flight reserve unless one is given: a plan
-    that uses its limits to the metre is lost by the first late turn (vehicle.DEFAULT_RESERVE_M).
-    Straight and cs3d legs reproduce the contest's model and plan without one."""
+    that uses its limits to the metre is lost by the first late turn (vehicle.DEFAULT_RESERVE_M;
+    with an envelope derived from the autopilot's terms, the reserve is derived too:
+    cli/vehicle_from.py). Straight and cs3d legs reproduce the contest's model and plan without
+    one. True when it filled one in."""
     if "reserve" in values or any(k not in values for k in PARAMETER_NAMES):
-        return
+        return False
     radius = values.get("turn_radius", Parameters.turn_radius)
     if extra.get("leg_model", DEFAULT_LEG_MODEL) != "airplane" or not radius > 0:
-        return
+        return False
     try:
         tightest = min(float(values[k]) for k in PARAMETER_NAMES[:5]) / float(values["delta"])
     except (TypeError, ValueError, ZeroDivisionError):
-        return  # _parameters says what is wrong with them
+        return False  # _parameters says what is wrong with them
     if math.isfinite(tightest) and tightest > 0:
         values["reserve"] = min(DEFAULT_RESERVE_M, DEFAULT_RESERVE_MAX_SHARE * tightest)
+        return True
+    return False
 
 
 def _parameters(

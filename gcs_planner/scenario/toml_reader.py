@@ -35,9 +35,10 @@ TOP_KEYS = (
 # [vehicle] in the autopilot's terms: the envelope is derived from these (cli/vehicle_from.py,
 # issue 32), so they are kept apart from the keys the scenario reader turns into parameters.
 AUTOPILOT_KEYS = ("max_climb_rate", "max_sink_rate", "firmware")
-# [environment]: the design wind ("SPEED[@FROM_DEG]" or a number of m/s), metres of position
-# error per error unit, and the landmarks' capture radius (metres, 3D).
-ENVIRONMENT_KEYS = ("wind", "error_unit", "capture_radius")
+# [environment]: the design wind ("SPEED[@FROM_DEG]" or a number of m/s), the design gust (m/s
+# per horizontal axis: the derived flight reserve covers it), metres of position error per error
+# unit, and the landmarks' capture radius (metres, 3D).
+ENVIRONMENT_KEYS = ("wind", "gust", "error_unit", "capture_radius")
 # [vehicle]: the aircraft. The turning radius and the climb limits may stand here or under
 # [parameters]; cruise_airspeed with max_bank_angle gives the radius when it is not given.
 VEHICLE_KEYS = (
@@ -336,6 +337,10 @@ def _term(value: object, key: str, table: str, file: str, text: str) -> tuple[ob
         if not ok or not math.isfinite(float(speed)):
             raise fail(f'must be SPEED >= 0 m/s or "SPEED@FROM_DEG" (got {value!r})')
         return text_value, line
+    if key == "gust":
+        if not _is_number(value) or not 0.0 <= float(value) <= 50.0:  # type: ignore[arg-type]
+            raise fail(f"must be a speed in [0, 50] m/s (got {value!r})")
+        return float(value), line  # type: ignore[arg-type]
     if not _is_number(value) or not (math.isfinite(float(value)) and float(value) > 0):  # type: ignore[arg-type]
         raise fail(f"must be a number > 0 (got {value!r})")
     return float(value), line  # type: ignore[arg-type]

@@ -1,0 +1,179 @@
+"""The flight reserve derived from what it must cover (turn entry, gusts) when the envelope is
+derived from the autopilot's terms and nobody states a reserve (gcs_planner/flight_reserve.py),
+its line in the plan's summary and its block in the plan JSON; and the mock vehicle's flights
+of the contest routes staying within it."""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import replace
+
+import pytest
+from conftest import DATA
+
+from benchmarks.reserve import SHIPPED, TABLE2, fly, planned
+from gcs_planner.cli import main
+from gcs_planner.flight_reserve import MAX_SHARE, DerivedReserve
+
+DS1 = [f"--{k}={v:g}" for k, v in TABLE2[1].items()]
+AP = [f"--{k.replace('_', '-')}={v:g}" for k, v in SHIPPED["ardupilot"].items()]
+
+
+def plan_json(capsys, *argv: str) -> dict:
+    assert main(["plan", str(DATA / "dataset1.xlsx"), *DS1, *argv, "--json"]) == 0
+    return json.loads(capsys.readouterr().out)
+
+
+def plan_text(capsys, *argv: str) -> str:
+    assert main(["plan", str(DATA / "dataset1.xlsx"), *DS1, *argv]) == 0
+    return capsys.readouterr().out
+
+
+def basis(**changes) -> DerivedReserve:
+    base = DerivedReserve(turn_radius=96.0, tas=20.7, ground_speed=30.7, bank_deg=45.0,
+                          autopilot="ardupilot", gust=1.5, stretch=30_000.0, cap=750.0,
+                          late=62.0)  # fmt: skip
+    return replace(base, **changes)
+
+
+def test_a_turn_adds_most_as_a_u_turn_and_gusts_by_the_square_of_their_speed() -> None:
+    b = basis()
+    extras = [b.turn_extra(math.radians(a)) for a in range(0, 181, 5)]
+    assert extras[0] == 0.0 and extras == sorted(extras)
+    assert extras[-1] == pytest.approx(b.per_turn)
+    # A turn entered d late: d straight on, the same arc, and only d cos(theta) gained along the
+    # new line: flown against planned at the point abeam on the new line.
+    theta, d = math.radians(70), b.late
+    assert b.turn_extra(theta) == pytest.approx(d - d * math.cos(theta))
+    assert basis(gust=0.0).gust_term == 0.0
+    assert basis(gust=3.0).gust_term == pytest.approx(4 * b.gust_term)
+    assert b.needed == pytest.approx(b.turns * b.per_turn + b.gust_term)
+    assert basis(late=2 * b.late, gust=0.0).needed == pytest.approx(2 * basis(gust=0.0).needed)
+    capped = basis(cap=100.0)
+    assert capped.capped and capped.metres == 100.0 < capped.needed
+
+
+def test_plan_derives_the_reserve_prints_it_with_its_reason_and_writes_it(capsys) -> None:
+    d = plan_json(capsys, *AP, "--firmware=ardupilot", "--wind=5", "--gust=1.5")
+    r = d["reserve"]
+    env = d["vehicle"]["envelope"]
+    assert r["source"] == "derived" and r["metres"] == d["parameters"]["reserve"]
+    # 2 turns x 2d, d = L1/2 (ArduPlane's L1 distance is its run-in); gusts (sigma/TAS)^2/2
+    # over the longest stretch, 30 km
+    want = 2 * env["approach_m"] + 0.5 * (1.5 / env["tas"]) ** 2 * 30 / 0.001
+    assert r["metres"] == pytest.approx(want)
+    assert r["metres"] != 200.0  # not the constant default
+    check = r["chosen_route"]
+    assert check["covered"] == (check["need_m"] <= r["metres"])
+    text = plan_text(capsys, *AP, "--firmware=ardupilot", "--wind=5", "--gust=1.5")
+    line = next(x for x in text.splitlines() if x.startswith("flight reserve:"))
+    want = f"flight reserve: {r['metres']:,.0f} m, derived for ardupilot: turn entry"
+    assert line.startswith(want)
+    assert "gusts 1.5 m/s over 30.0 km" in line and line.endswith("--reserve M states it")
+
+
+def test_stated_and_contest_reserves_are_unchanged(capsys) -> None:
+    stated = plan_json(capsys, *AP, "--wind=5", "--reserve=150")
+    assert stated["parameters"]["reserve"] == 150.0 and stated["reserve"]["source"] == "stated"
+    assert "derivation" not in stated["reserve"]
+    # the envelope stated directly: the constant default, as before
+    direct = plan_json(capsys, "--turn-radius=200")
+    assert direct["parameters"]["reserve"] == 200.0 and direct["reserve"]["source"] == "default"
+    for legs in (["--turn-radius=0"], ["--turn-radius=200", "--leg-model=cs3d"]):
+        contest = plan_json(capsys, *legs, "--objectives=length,corrections")
+        assert contest["parameters"]["reserve"] == 0.0
+        assert contest["reserve"]["source"] == "none"
+
+
+def test_the_derived_reserve_keeps_the_default_cap() -> None:
+    """Limits of a few kilometres: the derived reserve is held to 5 % of the tightest, as the
+    constant default is."""
+    from types import SimpleNamespace
+
+    from gcs_planner.cli.vehicle_from import derive_envelope
+    from gcs_planner.scenario.readers import load_scenario
+
+    tight = {k: v / 4 for k, v in TABLE2[1].items() if k != "delta"}
+    terms = SHIPPED["ardupilot"]
+    loaded = load_scenario(DATA / "dataset1.xlsx", {**TABLE2[1], **tight, "turn_radius": 50.0})
+    assert loaded.reserve_source == "default"
+    s = derive_envelope(SimpleNamespace(firmware="ardupilot", **terms), loaded, wind_text="10",
+                        gust=5.0)  # fmt: skip
+    b = s.reserve_basis
+    assert s.reserve_source == "derived" and b.capped and b.needed > s.params.reserve
+    assert s.params.reserve == pytest.approx(MAX_SHARE * 15 / 4 / 0.001)
+    assert s.params.validate() == []
+
+
+# (workbook, autopilot, design wind, gusts): still air, wind and gusts on both autopilots,
+# dataset 2's tighter limits.
+FLOWN = [(1, "ardupilot", 0.0, 0.0), (1, "ardupilot", 10.0, 1.5), (1, "px4", 10.0, 1.5),
+         (2, "ardupilot", 5.0, 1.5)]  # fmt: skip
+
+
+@pytest.mark.parametrize(("dataset", "firmware", "wind", "gust"), FLOWN)
+def test_the_mock_vehicle_flies_no_stretch_longer_than_the_derived_reserve_covers(
+    dataset, firmware, wind, gust
+) -> None:
+    """The chosen route flown by the mock autopilot (set up as --set-params does) in the design
+    wind from two drawn directions: the most it flies beyond the plan between a reset and a
+    check of an error stays within the derived reserve, and within the route's own leg-by-leg
+    need (its turns, helices and gusts)."""
+    from gcs_planner.plan_json import reserve_of
+
+    result = planned(dataset, firmware, wind, gust)
+    reserve = result.scenario.params.reserve
+    need = reserve_of(result)["chosen_route"]["need_m"]
+    flown = [fly(result, firmware, wind, gust, seed) for seed in range(2)]
+    assert all(o is not None for o in flown)
+    worst = max(flown)
+    assert worst > 0  # the flights do fly beyond the plan: the check measures something
+    assert worst <= reserve, (worst, reserve)
+    assert worst <= need, (worst, need)
+
+
+def test_each_autopilot_enters_its_turns_as_late_as_its_guidance() -> None:
+    """ArduPlane trails by half its L1 distance (the run-in it settles over), PX4 by half the
+    radius; an autopilot not named by the larger, so it holds for either."""
+    from gcs_planner.autopilot import effective
+    from gcs_planner.flight_reserve import late_entry
+
+    for radius, speed in ((44.0, 20.7), (96.0, 30.7), (400.0, 30.7)):
+        l1 = effective("ardupilot", {}).settle_distance(speed)
+        assert late_entry("ardupilot", radius, speed)[0] == pytest.approx(l1 / 2)
+        assert late_entry("px4", radius, speed)[0] == pytest.approx(radius / 2)
+        either = late_entry(None, radius, speed)[0]
+        assert either == max(l1 / 2, radius / 2)
+
+
+def _scenario_toml(tmp_path, environment: str) -> str:
+    from pathlib import Path
+
+    points = Path(__file__).resolve().parents[1] / "missions" / "example" / "points.csv"
+    text = (
+        f'name = "gusty"\npoints = "{points}"\n[parameters]\nalpha1 = 25\nalpha2 = 15\n'
+        "beta1 = 20\nbeta2 = 25\ntheta = 30\ndelta = 0.001\n[vehicle]\ncruise_airspeed = 20\n"
+        'max_bank_angle = 40\nmax_climb_rate = 4\nmax_sink_rate = 4\nfirmware = "px4"\n'
+        f"[environment]\n{environment}\n"
+    )
+    path = tmp_path / "gusty.toml"
+    path.write_text(text, encoding="utf-8")
+    return str(path)
+
+
+def test_the_scenario_file_states_the_design_gust(tmp_path, capsys) -> None:
+    """[environment] gust is the design gust the derived reserve covers; --gust wins; a bad one
+    is one line naming the file, line and field."""
+    path = _scenario_toml(tmp_path, 'wind = "5"\ngust = 2')
+    assert main(["plan", path, "--json"]) == 0
+    r = json.loads(capsys.readouterr().out)["reserve"]
+    assert r["source"] == "derived" and r["gust"] == 2.0 and r["autopilot"] == "px4"
+    assert main(["plan", path, "--json", "--gust", "0"]) == 0
+    still = json.loads(capsys.readouterr().out)["reserve"]
+    assert still["gust"] == 0.0 and still["metres"] == pytest.approx(r["metres"] - r["gust_term_m"])
+    bad = _scenario_toml(tmp_path, "gust = -1")
+    assert main(["plan", bad]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "gusty.toml" in err[0] and "environment.gust" in err[0]
+    assert "Traceback" not in err[0]
