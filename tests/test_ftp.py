@@ -152,6 +152,29 @@ def test_upload_and_download_by_ftp_over_loopback():
         got = client.download()
         assert client.transfer_used == "ftp"
         assert [(it.x, it.y) for it in got[1:]] == [(it.x, it.y) for it in items[1:]]
+        # The read's session was closed by its TerminateSession: numbered past the burst's
+        # end-of-file NAK, it was not taken for a re-request of that NAK (GCS_FTP::worker).
+        assert not _open_files(vehicle)
+
+
+def _open_files(vehicle: MockVehicle) -> list[str]:
+    """The modes of the vehicle's FTP sessions that hold a file open."""
+    return [s.mode for s in vehicle.ftp.sessions.values() if s.mode]
+
+
+def test_every_download_terminates_its_session_at_the_first_request():
+    """Before the fix each download's TerminateSession went unanswered for its 6 attempts
+    (6-9 s) and left the session open on the vehicle. A mission of one burst packet: the
+    file's bytes are all in before the burst's end-of-file NAK comes."""
+    items = _mission(4)
+    with _loopback() as (vehicle, client):
+        client.upload_verified(items)
+        for _ in range(3):
+            before = vehicle.ftp.requests
+            client.download()
+            assert client.transfer_used == "ftp" and not _open_files(vehicle)
+            # open, burst read, terminate: nothing asked twice on a link that loses nothing
+            assert vehicle.ftp.requests - before == 3
 
 
 def ftp_capability() -> int:

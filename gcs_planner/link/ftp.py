@@ -187,6 +187,16 @@ class FtpClient:
             if self.session and p.session != self.session:
                 self.foreign_sessions.add(p.session)
                 continue
+            if p.req_opcode == BURST_READ_FILE and (p.seq + 1 - self.seq) & 0xFFFF < 0x8000:
+                # A burst's replies count up from the request's number plus one, and one more
+                # ends it when the file does (GCS_FTP.cpp, BurstReadFile: reply.seq_number++
+                # per packet, then the EndOfFile NAK), which may come after the read has all
+                # its bytes. The next request is numbered past both: one numbered a reply's
+                # number less one is taken for a re-request of that reply (GCS_FTP::worker:
+                # request.seq_number + 1 == reply.seq_number), answered with it again and
+                # never served: TerminateSession after every download went unanswered so,
+                # for its 6 attempts (QGC's FTPManager advances its sequence likewise).
+                self.seq = (p.seq + 1) & 0xFFFF
             return p
         return None
 
