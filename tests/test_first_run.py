@@ -1,5 +1,6 @@
 """A first plan after installing: with numba's cache empty, a plan Python proves quickly runs in
-Python (nothing compiled) and gives the same plan; `gcs-planner compile` fills the cache."""
+Python (nothing compiled) and gives the same plan. (`gcs-planner compile` filling the cache:
+tests/test_compile_notice.py, which compiles once for both.)"""
 
 from __future__ import annotations
 
@@ -61,16 +62,3 @@ def test_a_first_plan_compiles_nothing_and_plans_the_same(tmp_path, dataset_path
     want = plan(sc)
     assert [r["route"] for r in data["front"]] == [list(r.ids()) for r in want.routes]
     assert data["optimality"]["optimal"] and want.optimal
-
-
-def test_compile_fills_numbas_cache(tmp_path) -> None:
-    cache = tmp_path / "numba"
-    first = _cli(["compile"], cache)
-    assert first.returncode == 0, first.stderr
-    assert "every kernel is in numba's cache" in first.stdout
-    names = _kernel_files(cache)
-    for kernel in ("search_kernel.search-", "probe_kernel.probe-", "kernel.fewest_corrections-"):
-        assert any(n.startswith(kernel) for n in names), (kernel, names)
-    # Nothing left to compile: it says so before it starts.
-    again = _cli(["compile"], cache)
-    assert again.returncode == 0 and "none (all cached)" in again.stdout
