@@ -313,9 +313,9 @@ def test_terminal_ctrl_c_stops_saves_and_resume_gives_the_uninterrupted_table(
     tmp_path: Path, cluster
 ) -> None:
     # A terminal's Ctrl-C reaches the whole process group: the command and its local cluster's
-    # worker processes. 80 cells of 400 points (some 0.2 s each): work left after the first
+    # worker processes. 40 cells of 400 points (some 0.2 s each): work left after the first
     # saved cell on any machine.
-    cells = 80
+    cells = 40
     spec_path = small_spec(tmp_path, seeds=cells - 1, deltas="[0.001]", corrections=400)
     out = tmp_path / "out"
     proc = subprocess.Popen(
