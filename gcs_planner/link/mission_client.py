@@ -15,7 +15,8 @@ Missions can also travel by MAVLink FTP (:mod:`gcs_planner.link.ftp`,
 :mod:`gcs_planner.link.mission_ftp`): ``transfer="auto"`` writes and reads
 ``@MISSION/mission.dat`` when the vehicle's AUTOPILOT_VERSION sets MAV_PROTOCOL_CAPABILITY_FTP
 and it runs ArduPilot (PX4 sets the bit but serves no @MISSION), and falls back to the mission
-protocol when the vehicle answers that it has no such file; ``"ftp"`` and ``"mission"`` force
+protocol when the vehicle answers that it has no such file, or keeps the file busy (another
+ground station's upload holds it); ``"ftp"`` and ``"mission"`` force
 one; ``auto`` is the default, the library's as the command line's. The read-back
 goes the way the upload went, with the same verdicts (differs / could not read it back).
 
@@ -41,7 +42,15 @@ from typing import Any
 
 from gcs_planner.errors import InputError, LinkError
 from gcs_planner.link.connection import Link, mavlink
-from gcs_planner.link.ftp import FILE_NOT_FOUND, NAK, UNKNOWN_COMMAND, FtpClient, FtpError
+from gcs_planner.link.ftp import (
+    FILE_NOT_FOUND,
+    NAK,
+    UNKNOWN_COMMAND,
+    FtpBusy,
+    FtpClient,
+    FtpError,
+    FtpQuiet,
+)
 from gcs_planner.link.mission_ftp import (
     HEADER,
     ITEM,
@@ -928,8 +937,16 @@ class MissionClient:
 
     def _fallback(self, exc: FtpError) -> bool:
         """Whether an FTP failure sends an automatic choice back to the mission protocol: the
-        vehicle has no mission file (or no FTP) at all."""
-        return self.transfer == "auto" and exc.code in _NO_MISSION_FILE
+        vehicle has no mission file (or no FTP) at all; its file stayed busy through every
+        reset and wait (the mission protocol does not share AP_Filesystem_Mission's one
+        upload at a time); or one FTP request went unanswered through all its resends, which
+        at 30 % loss each way befalls about one exchange in 60 (0.51 ** 6), where the mission
+        protocol resends at the round trip's pace until nothing has come for its stall limit.
+        Nothing an upload failing so sent was stored: the vehicle stores the file when it is
+        closed, and a close whose answer was lost is not an FtpError (_Unconfirmed)."""
+        if self.transfer != "auto":
+            return False
+        return exc.code in _NO_MISSION_FILE or isinstance(exc, (FtpBusy, FtpQuiet))
 
     def _ftp_upload(self, items: Sequence[MissionItem]) -> None:
         data = encode_mission(items)
