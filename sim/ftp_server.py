@@ -20,7 +20,8 @@ AP_Filesystem_Mission.cpp:
   bytes per second ms, so a burst uses a third of the serial rate; nothing is sent while the
   radio's last RADIO_STATUS has 33 % or less free (``last_txbuf_is_greater(33)``), and a
   session whose reply cannot go for 3 s is closed;
-* CreateFile of mission.dat opens an empty buffer (one upload at a time), WriteFile writes at
+* CreateFile of mission.dat opens an empty buffer (one upload at a time: another is NAK
+  FailErrno, the errno one the open did not set), WriteFile writes at
   its offset and is acknowledged with it, and TerminateSession closes the file, which stores
   the mission (``finish_upload``): the header's magic and count must match the bytes, no item
   may be all zeros, every item must be one this vehicle stores, a DO_JUMP target must be
@@ -71,6 +72,7 @@ STAT_SIZE = 1024 * 1024  # AP_Filesystem_Mission::stat's fixed size
 BURST_PACKETS = 2000  # GCS_FTP BurstReadFile: transfer_size
 SEND_TIMEOUT_S = 3.0  # FTP_SESSION_TIMEOUT: a reply that cannot go closes the session
 EINVAL = 22
+ERRNO_LEFT = 0  # errno as an earlier call left it: a failed open that does not set it
 MAV_CMD_DO_JUMP = 177
 FRAME_BYTES = 12 + 254  # a MAVLink 2 FILE_TRANSFER_PROTOCOL frame (PAYLOAD_SIZE)
 
@@ -229,7 +231,11 @@ class FtpServer:
                 s.mode, s.content = "read", self._file()
                 self._reply(peer, p, ftp.ACK, data=struct.pack("<I", STAT_SIZE), session=s.sid)
             elif any(o.mode == "write" for o in self.sessions.values()):
-                self._nak(peer, p, 1, session=s.sid)  # only one upload at a time
+                # Only one upload at a time: AP_Filesystem_Mission::open returns -1 without
+                # setting errno, and GCS_FTP's CreateFile answers FailErrno with whatever errno
+                # holds (GCS_FTP::error); ERRNO_LEFT stands for it. Not Fail: a client cannot
+                # tell this refusal by its code from any other failed open.
+                self._nak(peer, p, ftp.FAIL_ERRNO, ERRNO_LEFT, session=s.sid)
             else:
                 s.mode, s.buf = "write", bytearray()
                 self._reply(peer, p, ftp.ACK, session=s.sid)

@@ -257,6 +257,54 @@ def test_an_upload_whose_open_ack_was_lost_resets_and_opens_again():
         assert dropped and report.transfer == "ftp" and _holds(vehicle, items)
 
 
+def test_an_open_refused_after_each_resend_is_asked_again_after_a_reset_each_time():
+    # At 30 % loss each way about three opens in ten lose their ACK and are refused on the
+    # resend (the first copy holds the file): three opens in a row, one upload in 40.
+    items = _mission(40)
+    with _loopback(transfer="ftp", timeout=0.5) as (vehicle, client):
+        send = vehicle.ftp._send_payload
+        dropped: list[int] = []
+        refusals: list[bytes] = []
+
+        def lose_open_acks(peer, payload):
+            p = ftp.unpack(payload)
+            if p.req_opcode == ftp.CREATE_FILE and p.opcode == ftp.ACK:
+                if len(dropped) < client.retries:
+                    dropped.append(p.session)
+                    return
+            if p.req_opcode == ftp.CREATE_FILE and p.opcode == ftp.NAK:
+                refusals.append(p.data)
+            send(peer, payload)
+
+        vehicle.ftp._send_payload = lose_open_acks  # type: ignore[method-assign]
+        report = client.upload_verified(items)
+        assert len(dropped) == client.retries == 5
+        # ArduPilot's answer to the resend: FailErrno (AP_Filesystem_Mission::open's one
+        # upload at a time), with the errno the open left as it was.
+        assert refusals and {r[0] for r in refusals} == {ftp.FAIL_ERRNO}
+        assert report.transfer == "ftp" and _holds(vehicle, items)
+
+
+def _hold_the_mission_file(vehicle: MockVehicle) -> None:
+    """Another ground station (system 200) is uploading: its session holds mission.dat."""
+    other = (200, 190)
+    vehicle.ftp.sessions[(other, 77)] = ftp_server._Session(77, other, mode="write")
+
+
+def test_a_mission_file_another_upload_holds_sends_auto_to_the_mission_protocol():
+    items = _mission(30)
+    with _loopback(timeout=0.5) as (vehicle, client):
+        _hold_the_mission_file(vehicle)
+        report = client.upload_verified(items)
+        assert report.transfer == "mission" and _holds(vehicle, items)
+        assert vehicle.ftp.writes_stored == 0
+    with _loopback(transfer="ftp", timeout=0.5) as (vehicle, client):
+        _hold_the_mission_file(vehicle)
+        with pytest.raises(ftp.FtpBusy, match="refused 6 times.*another ground station"):
+            client.upload_verified(items)
+        assert vehicle.ftp.writes_stored == 0
+
+
 def test_the_read_back_by_ftp_tells_differs_from_could_not_read():
     items = _mission(20)
     with _loopback(transfer="ftp") as (vehicle, client):
@@ -419,6 +467,21 @@ def test_px4_falls_back_to_the_mission_protocol():
         assert client.upload_verified(items).transfer == "mission" and _holds(vehicle, items)
     with _loopback("px4", transfer="ftp") as (vehicle, client):
         with pytest.raises(LinkError, match="file not found"):
+            client.upload_verified(items)
+
+
+def test_an_ftp_that_never_answers_sends_auto_to_the_mission_protocol():
+    # At 30 % loss each way one FTP exchange in about 60 goes unanswered through its six
+    # attempts (0.51 ** 6); here every one does, and the capability still says FTP.
+    items = _mission(15)
+    with _loopback(transfer="auto", timeout=0.3, retries=2) as (vehicle, client):
+        vehicle.ftp.handle = lambda msg, peer: None  # type: ignore[method-assign]
+        report = client.upload_verified(items)
+        assert report.transfer == "mission" and _holds(vehicle, items)
+        assert vehicle.ftp.writes_stored == 0
+    with _loopback(transfer="ftp", timeout=0.3, retries=2) as (vehicle, client):
+        vehicle.ftp.handle = lambda msg, peer: None  # type: ignore[method-assign]
+        with pytest.raises(ftp.FtpQuiet, match="ResetSessions: no answer after 3 attempts"):
             client.upload_verified(items)
 
 

@@ -183,8 +183,15 @@ def test_download_over_a_lossy_radio_is_the_vehicles_mission():
         got = client.download()
         assert [(it.x, it.y, it.z) for it in got[1:]] == [(it.x, it.y, it.z) for it in items[1:]]
         assert client.window_used > 2  # the window opened to the link
-        # Nothing asked twice while its answer could still come: a resend per frame lost.
-        assert client.retry_count <= r.counts.broken_frames + 5
+        # A resend per frame lost, or per answer that came after all (the client counts the
+        # answers to an item it already held), later than a round-trip timeout through which
+        # nothing came: a machine that keeps the radio's or the vehicle's thread off the CPU
+        # makes answers late, not the client hasty.
+        assert client.retry_count <= r.counts.broken_frames + client.late_answers + 5
+        # Nothing asked twice while its answer could still come: no late answer is to a
+        # request asked again while one asked before it was unanswered (on this in-order link
+        # its answer was queued behind that one's), however slow the machine.
+        assert client.hasty_resends == 0
 
 
 def _fade_when(condition, radio: SikRadio, seconds: float, done: threading.Event) -> None:

@@ -49,8 +49,14 @@ DATA_MAX = 239  # data bytes in one payload
 WRITE_WINDOW = 6  # WriteFile requests out at once, at most
 FIRST_WAIT_S = 0.5
 SESSION_REOPENS = 2
-OPEN_ATTEMPTS = 3
 SESSION_LOST = (1, 4, 10)  # Fail, InvalidSession, FileNotFound: the session is gone
+# Refusals of an open that say the file or the sessions are in use, by an earlier copy of the
+# same open or by someone else, not that the file cannot be had: Fail (a file already open in
+# the session), FailErrno (AP_Filesystem_Mission::open allows one upload at a time and leaves
+# errno as it was, so GCS_FTP::error sends FailErrno with that errno, or FileExists where it
+# happens to be EEXIST), NoSessionsAvailable (every session answered in the last 3 s:
+# GCS_FTP::worker).
+OPEN_BUSY = (1, 2, 5, 8)
 PAYLOAD_LEN = 251
 _HEAD = struct.Struct("<HBBBBBxI")
 
@@ -61,6 +67,16 @@ class FtpError(LinkError):
     def __init__(self, message: str, code: int | None = None) -> None:
         super().__init__(message)
         self.code = code  # the NAK code when the vehicle refused
+
+
+class FtpQuiet(FtpError):
+    """The vehicle did not answer an FTP request through every resend (or a transfer made no
+    progress for as long)."""
+
+
+class FtpBusy(FtpError):
+    """The vehicle kept refusing to open a file as in use (or had no session free), after
+    each of our sessions was reset and a wait: someone else holds it."""
 
 
 @dataclass(frozen=True)
@@ -222,14 +238,14 @@ class FtpClient:
                 self._request(opcode, offset, data, size, seq=seq)
         raise self._quiet(what)
 
-    def _quiet(self, what: str) -> FtpError:
+    def _quiet(self, what: str) -> FtpQuiet:
         extra = ""
         if self.foreign_sessions:
             extra = (
                 f"; it answered for session(s) {sorted(self.foreign_sessions)}, not ours "
                 f"({self.session})"
             )
-        return FtpError(f"MAVFTP {what}: no answer after {self.retries + 1} attempts{extra}")
+        return FtpQuiet(f"MAVFTP {what}: no answer after {self.retries + 1} attempts{extra}")
 
     def _refused(self, p: Packet, what: str) -> FtpError:
         return FtpError(f"MAVFTP {what} refused: {p.nak_text()}", p.data[0] if p.data else 0)
@@ -245,23 +261,49 @@ class FtpClient:
             self.session = saved
 
     def _open(self, opcode: int, path: str) -> Packet:
-        self.session = 0
-        self.foreign_sessions.clear()
+        """Open ``path`` in a session the vehicle gives us; an open refused as busy is asked
+        again after ResetSessions, up to ``retries`` times, waiting longer each time the
+        refusal cannot have been our own doing.
+
+        A resent open is not a re-request to ArduPilot: each session-0 request is given a new
+        session before the re-request check (GCS_FTP::worker), so when the first copy's ACK
+        was lost that copy holds the file and the resend is refused (one upload at a time:
+        AP_Filesystem_Mission::open). At 30 % loss each way about three opens in ten are
+        refused so; ResetSessions closes the session of that first copy. A refusal without a
+        resend is someone else's upload, which frees when it ends or idles out (30 s,
+        AP_Filesystem_Mission.cpp IDLE_TIMEOUT_MS)."""
         name = path.encode()
-        for _ in range(OPEN_ATTEMPTS):
+        waits = 0  # refusals that were not our own doing
+        resent = False  # the last open was resent: its refusal can be our first copy's doing
+        for attempt in range(self.retries + 1):
+            if attempt:
+                self.retry_count += 1
+                self.reset()
+                if not resent:
+                    self._pause(min(self.resend_wait(0) * 2**waits, self.timeout))
+                    waits += 1
+            self.session = 0
+            self.foreign_sessions.clear()
             p = self._exchange(opcode, f"open {path}", data=name)
-            if p.opcode == ACK or not self.last_resent or (p.data[:1] or b"\0")[0] != 1:
-                break
-            # Refused ("failed") after a resend: the first copy opened the file in a session
-            # whose ACK was lost, and the resend (session 0 again) found it busy (GCS_FTP
-            # gives each session-0 request a new session; AP_Filesystem_Mission allows one
-            # upload at a time). ResetSessions closes ours, and the open goes again.
-            self.retry_count += 1
-            self.reset()
-        if p.opcode == NAK:
-            raise self._refused(p, f"open {path}")
-        self.session = p.session  # the vehicle allocates it (GCS_FTP::worker)
-        return p
+            resent = self.last_resent
+            if p.opcode == ACK:
+                self.session = p.session  # the vehicle allocates it (GCS_FTP::worker)
+                return p
+            if (p.data[:1] or b"\0")[0] not in OPEN_BUSY:
+                raise self._refused(p, f"open {path}")
+        raise FtpBusy(
+            f"MAVFTP open {path} refused {self.retries + 1} times, our sessions reset before "
+            f"each: {p.nak_text()} (another ground station's upload holds the file, or no "
+            "session is free)",
+            p.data[0] if p.data else 0,
+        )
+
+    def _pause(self, seconds: float) -> None:
+        """Wait ``seconds``, reading (and dropping) what comes meanwhile: late replies to
+        what was answered already; the mission client's receive keeps our heartbeat going."""
+        end = time.monotonic() + seconds
+        while (remaining := end - time.monotonic()) > 0:
+            self._recv(remaining)
 
     def terminate(self) -> Packet:
         p = self._exchange(TERMINATE_SESSION, "TerminateSession")

@@ -15,7 +15,8 @@ Missions can also travel by MAVLink FTP (:mod:`gcs_planner.link.ftp`,
 :mod:`gcs_planner.link.mission_ftp`): ``transfer="auto"`` writes and reads
 ``@MISSION/mission.dat`` when the vehicle's AUTOPILOT_VERSION sets MAV_PROTOCOL_CAPABILITY_FTP
 and it runs ArduPilot (PX4 sets the bit but serves no @MISSION), and falls back to the mission
-protocol when the vehicle answers that it has no such file; ``"ftp"`` and ``"mission"`` force
+protocol when the vehicle answers that it has no such file, or keeps the file busy (another
+ground station's upload holds it); ``"ftp"`` and ``"mission"`` force
 one; ``auto`` is the default, the library's as the command line's. The read-back
 goes the way the upload went, with the same verdicts (differs / could not read it back).
 
@@ -41,7 +42,15 @@ from typing import Any
 
 from gcs_planner.errors import InputError, LinkError
 from gcs_planner.link.connection import Link, mavlink
-from gcs_planner.link.ftp import FILE_NOT_FOUND, NAK, UNKNOWN_COMMAND, FtpClient, FtpError
+from gcs_planner.link.ftp import (
+    FILE_NOT_FOUND,
+    NAK,
+    UNKNOWN_COMMAND,
+    FtpBusy,
+    FtpClient,
+    FtpError,
+    FtpQuiet,
+)
 from gcs_planner.link.mission_ftp import (
     HEADER,
     ITEM,
@@ -199,6 +208,12 @@ class MissionClient:
             lambda label, total: Progress(label, total, enabled=False)
         )
         self.retry_count = 0  # resends done so far, for reports
+        # Downloads: answers to an item already held (its resend was not needed: the first
+        # answer was late, not lost), and of those the ones resent while a request asked
+        # before it was still unanswered (on an in-order link its answer was behind that one's:
+        # asked twice while its answer could still come).
+        self.late_answers = 0
+        self.hasty_resends = 0
         if window < 1:
             raise LinkError("the download window must be at least 1 request")
         self.window = window
@@ -637,6 +652,10 @@ class MissionClient:
         missing = [seq for seq in range(count) if seq not in got]
         next_new = 0  # index into missing
         stalls = 0  # timeouts in a row with no answer: the backoff of the whole link
+        behind: dict[int, bool] = {}  # seq -> resent while an earlier request was unanswered
+        # The timer resends only once a receive has found nothing waiting: a process kept off
+        # the CPU past the timer finds the answer it waited for already here, not lost.
+        drained = False
         try:
             while len(got) < count:
                 now = time.monotonic()
@@ -648,10 +667,11 @@ class MissionClient:
                 oldest = min(sent, key=ticket.__getitem__, default=None)
                 for seq, (when, asked) in list(sent.items()):
                     lost = overtaken[seq] >= REORDER_SLACK
-                    due = seq == oldest and now - when > self._resend_wait(stalls)
+                    due = seq == oldest and drained and now - when > self._resend_wait(stalls)
                     if not (lost or due) or congested:
                         continue
                     self.retry_count += 1
+                    behind[seq] = any(ticket[o] < ticket[seq] for o in sent if o != seq)
                     window.lost()
                     sent[seq] = (now, asked + 1)
                     ticket[seq], overtaken[seq] = next(tickets), 0
@@ -682,6 +702,7 @@ class MissionClient:
                     mission_type,
                 )
                 now = time.monotonic()
+                drained = msg is None
                 if msg is None:
                     if now - last_progress > self._stall_limit():
                         first = min(set(range(count)) - set(got))
@@ -692,8 +713,14 @@ class MissionClient:
                         continue  # leftovers of an earlier transfer
                     raise LinkError(f"download refused: {describe_result(msg.type)}")
                 seq = int(msg.seq)
-                if seq in got or not 0 <= seq < count:
-                    continue  # a duplicate or late answer to an earlier request
+                if seq in got:
+                    # The answer to a request asked again (the first answer was late, not
+                    # lost), or the resend's after it.
+                    self.late_answers += 1
+                    self.hasty_resends += behind.get(seq, False)
+                    continue
+                if not 0 <= seq < count:
+                    continue  # not an item of this mission
                 limited = len(sent) >= window.size
                 asked = sent.pop(seq, None)
                 mine = ticket.pop(seq, None)
@@ -928,8 +955,16 @@ class MissionClient:
 
     def _fallback(self, exc: FtpError) -> bool:
         """Whether an FTP failure sends an automatic choice back to the mission protocol: the
-        vehicle has no mission file (or no FTP) at all."""
-        return self.transfer == "auto" and exc.code in _NO_MISSION_FILE
+        vehicle has no mission file (or no FTP) at all; its file stayed busy through every
+        reset and wait (the mission protocol does not share AP_Filesystem_Mission's one
+        upload at a time); or one FTP request went unanswered through all its resends, which
+        at 30 % loss each way befalls about one exchange in 60 (0.51 ** 6), where the mission
+        protocol resends at the round trip's pace until nothing has come for its stall limit.
+        Nothing an upload failing so sent was stored: the vehicle stores the file when it is
+        closed, and a close whose answer was lost is not an FtpError (_Unconfirmed)."""
+        if self.transfer != "auto":
+            return False
+        return exc.code in _NO_MISSION_FILE or isinstance(exc, (FtpBusy, FtpQuiet))
 
     def _ftp_upload(self, items: Sequence[MissionItem]) -> None:
         data = encode_mission(items)
