@@ -5,15 +5,20 @@ FW_AIRSPD_TRIM) and so flies through the air at the true airspeed TAS = EAS * EA
 (sim/atmosphere.py, ISA). Its heading is where its nose points in the air; its course is where
 it goes over the ground: the air velocity plus the wind (sim/wind.py). The autopilot asks for a
 lateral acceleration (L1 and npfg both compute one from the ground velocity) and a climb rate;
-the aircraft flies the bank atan(a / g), clipped to the autopilot's roll limit (ArduPlane
-ROLL_LIMIT_DEG, PX4 FW_R_LIM), which turns its heading at g tan(bank) / TAS, and the climb rate
-clipped to the autopilot's climb and sink rates (ArduPlane TECS_CLMB_MAX / TECS_SINK_MAX, PX4
-in missions FW_T_CLMB_R_SP / FW_T_SINK_R_SP). No roll or pitch dynamics: what is asked is flown
-at once, within those limits.
+the aircraft asks for the bank atan(a / g), clipped to the autopilot's roll limit (ArduPlane
+ROLL_LIMIT_DEG, PX4 FW_R_LIM), and rolls towards it as a first-order lag of ROLL_TAU_S, at most
+ROLL_RATE_DEG_S (the bank is part of the state, carried from step to step); the bank reached
+turns its heading at g tan(bank) / TAS. The climb rate is clipped to the autopilot's climb and
+sink rates (ArduPlane TECS_CLMB_MAX / TECS_SINK_MAX, PX4 in missions FW_T_CLMB_R_SP /
+FW_T_SINK_R_SP) and flown at once: no pitch dynamics.
 
-A step integrates the air-relative motion exactly on the arc of constant heading rate and adds
-the wind's drift over the step, so a coarse fixed step (0.5 s at 25 m/s: 12.5 m) flies a circle
-in still air as a circle, and its trochoid in a steady wind as the trochoid.
+A step is flown in substeps of at most ROLL_SUBSTEP_S while the bank moves, each integrating the
+air-relative motion exactly on the arc of constant heading rate at the bank reached there, and
+adds the wind's drift over the step; once the bank is within ROLL_SETTLED_DEG of the one asked
+the rest of the step is one arc. So a coarse fixed step (0.5 s at 25 m/s: 12.5 m) flies a
+circle in still air as a circle, and its trochoid in a steady wind as the trochoid.
+``arc_step`` is the step at a bank taken at once (the model before the roll lag, kept for the
+cross-check and as the substep); sim/flight_kernel.py ``_step`` is the compiled twin of ``step``.
 """
 
 from __future__ import annotations
@@ -26,6 +31,25 @@ from gcs_planner.vehicle import G
 # With unlimited climb (the contest's model) the aircraft still cannot fly straight up: it keeps
 # this much of its airspeed horizontal.
 STEEPEST_DEG = 89.0
+
+# The roll-in (issue 31). Both autopilots' roll loops ask for a roll rate of the bank error over
+# a time constant: ArduPlane RLL2SRV_TCONST, 0.5 s by default (libraries/APM_Control/
+# AP_RollController.cpp, "time constant in seconds from demanded to achieved roll angle"), PX4
+# FW_R_TC, 0.4 s (src/modules/fw_att_control/fw_att_control_params.c), that rate limited by PX4
+# FW_R_RMAX, 70 deg/s by default (same file; ArduPlane's RLL2SRV_RMAX is off by default). That
+# is what the autopilot asks; the airframe's roll rate then lags the rate asked. The JSBSim
+# c172r under the same loops (sim/jsbsim_airframe.py) reaches 42 of 45 degrees of bank in about
+# 2 s: a first-order lag of 0.8 s (1 - exp(-2 / 0.8) = 92 %), which 0.4-0.5 s would reach in
+# under 1.3 s. So the bank follows the one asked as a first-order lag of ROLL_TAU_S = 0.8 s,
+# at most ROLL_RATE_DEG_S = 70 deg/s: the autopilots' time constant plus the airframe's lag,
+# measured, and PX4's rate limit.
+ROLL_TAU_S = 0.8
+ROLL_RATE_DEG_S = 70.0
+# The bank's substep while it moves (a 0.5 s step is ten), and how close to the bank asked it
+# counts as there (the rest of the step is one arc: a settled leg or circle costs one arc a
+# step; 0.001 deg of bank turns a 25 m/s aircraft by 0.0004 deg/s).
+ROLL_SUBSTEP_S = 0.05
+ROLL_SETTLED_DEG = 1e-3
 
 
 @dataclass(frozen=True)
@@ -75,7 +99,7 @@ class AircraftState:
             self.heading = self.course
 
 
-def step(
+def arc_step(
     s: AircraftState,
     env: Envelope,
     lateral_accel: float,
@@ -85,10 +109,10 @@ def step(
     eas2tas: float = 1.0,
     heading: float | None = None,
 ) -> AircraftState:
-    """Fly ``dt`` seconds asking for ``lateral_accel`` (m/s^2, positive to the left: a
-    counter-clockwise turn) and ``climb_rate`` (m/s), both clipped to the envelope, through air
-    moving at ``wind`` (east, north m/s) at EAS2TAS ``eas2tas``. An aircraft without a turn
-    limit (``env.free_turn``) takes ``heading`` as given instead."""
+    """Fly ``dt`` seconds at the bank of ``lateral_accel`` taken at once (m/s^2, positive to the
+    left: a counter-clockwise turn) and ``climb_rate`` (m/s), both clipped to the envelope,
+    through air moving at ``wind`` (east, north m/s) at EAS2TAS ``eas2tas``: one exact arc. An
+    aircraft without a turn limit (``env.free_turn``) takes ``heading`` as given instead."""
     v = env.airspeed * eas2tas
     vz = min(max(climb_rate, -env.sink_rate), env.climb_rate)
     vh = math.sqrt(max(v * v - vz * vz, 0.0))
@@ -130,64 +154,57 @@ def _wrap(a: float) -> float:
     return (a + math.pi) % (2 * math.pi) - math.pi
 
 
-# A turn entered as a real aircraft enters it (issue 31: JSBSim's c172r under the same inner
-# loops reaches 42 of 45 degrees of bank in about 2 s): the bank follows the one asked as a
-# first-order lag of ROLL_TAU_S, at most ROLL_RATE_DEG_S.
-ROLL_TAU_S = 0.8
-ROLL_RATE_DEG_S = 70.0
-ROLL_SUBSTEP_S = 0.05
+def step(
+    s: AircraftState,
+    env: Envelope,
+    lateral_accel: float,
+    climb_rate: float,
+    dt: float,
+    wind: tuple[float, float] = (0.0, 0.0),
+    eas2tas: float = 1.0,
+    heading: float | None = None,
+) -> AircraftState:
+    """Fly ``dt`` seconds asking for ``lateral_accel`` (m/s^2, positive to the left: a
+    counter-clockwise turn) and ``climb_rate`` (m/s), both clipped to the envelope, through air
+    moving at ``wind`` (east, north m/s) at EAS2TAS ``eas2tas``, the bank rolling from the
+    state's towards the one asked (module docstring). The bank is in the state, so a step can be
+    flown again from any state it returned, shorter (cut at a finish line) or longer. An
+    aircraft without a turn limit (``env.free_turn``) turns on the spot to ``heading``."""
+    if env.free_turn:
+        return arc_step(s, env, lateral_accel, climb_rate, dt, wind, eas2tas, heading)
+    limit = env.bank_limit_deg
+    asked = min(max(-math.degrees(math.atan(lateral_accel / G)), -limit), limit)
+    n = max(1, math.ceil(dt / ROLL_SUBSTEP_S - 1e-9))
+    h = dt / n
+    keep = 1.0 - math.exp(-h / ROLL_TAU_S)
+    most = ROLL_RATE_DEG_S * h
+    bank = s.bank_deg
+    out = s
+    for i in range(n):
+        if abs(asked - bank) <= ROLL_SETTLED_DEG:
+            # There: the rest of the step is one arc at the bank asked.
+            return arc_step(out, env, lateral_accel, climb_rate, dt - i * h, wind, eas2tas)
+        bank += min(max((asked - bank) * keep, -most), most)
+        # The arc at the bank reached: a = -g tan(bank) (a left turn is a left bank).
+        out = arc_step(out, env, -G * math.tan(math.radians(bank)), climb_rate, h, wind, eas2tas)
+    return out
 
 
-class RollLagPointMass:
-    """The point mass whose bank lags the one asked (an airframe for sim/navigators/base.py).
-    The bank is part of the state, so a step can be flown again from any state it returned
-    (``exact``); each step is flown in substeps of at most ROLL_SUBSTEP_S, each an exact arc at
-    the bank reached there. An aircraft without a turn limit turns on the spot as before."""
+class InstantBankPointMass:
+    """The point mass banking at once to the bank asked (``arc_step``): the model before the roll
+    lag, an airframe for sim/navigators/base.py kept for the cross-check."""
 
     exact = True
-
-    def __init__(self, tau: float = ROLL_TAU_S, rate_deg_s: float = ROLL_RATE_DEG_S) -> None:
-        self.tau = tau
-        self.rate = rate_deg_s
-
-    def step(
-        self,
-        s: AircraftState,
-        env: Envelope,
-        lateral_accel: float,
-        climb_rate: float,
-        dt: float,
-        wind: tuple[float, float] = (0.0, 0.0),
-        eas2tas: float = 1.0,
-        heading: float | None = None,
-    ) -> AircraftState:
-        if env.free_turn:
-            return step(s, env, lateral_accel, climb_rate, dt, wind, eas2tas, heading)
-        limit = env.bank_limit_deg
-        asked = min(max(-math.degrees(math.atan(lateral_accel / G)), -limit), limit)
-        n = max(1, math.ceil(dt / ROLL_SUBSTEP_S - 1e-9))
-        h = dt / n
-        bank = s.bank_deg
-        out = s
-        for _ in range(n):
-            change = (asked - bank) * (1.0 - math.exp(-h / self.tau))
-            bank += min(max(change, -self.rate * h), self.rate * h)
-            # The arc at the bank reached: a = -g tan(bank) (a left turn is a left bank).
-            a = -G * math.tan(math.radians(bank))
-            out = step(out, env, a, climb_rate, h, wind, eas2tas)
-        return out
+    step = staticmethod(arc_step)
 
 
-class RollLagFlightModel:
-    """The point mass with the roll lag as a dry run's flight model (no limits of its own)."""
+class InstantBankFlightModel:
+    """The instant-bank point mass as a dry run's flight model (no limits of its own)."""
 
-    name = "point mass, roll lag"
+    name = "point mass, instant bank"
 
     def describe(self) -> str:
-        return (
-            f"point mass with a roll lag (first order {ROLL_TAU_S:g} s, at most "
-            f"{ROLL_RATE_DEG_S:g} deg/s)"
-        )
+        return "point mass banking at once (no roll lag)"
 
     def airframe(
         self,
@@ -195,8 +212,8 @@ class RollLagFlightModel:
         airspeed: float,
         alt_offset: float,
         wind: tuple[float, float] = (0.0, 0.0),
-    ) -> RollLagPointMass:
-        return RollLagPointMass()
+    ) -> InstantBankPointMass:
+        return InstantBankPointMass()
 
     def limits(self, needs: object, eas: float) -> list[str]:
         return []

@@ -7,7 +7,7 @@ order, what makes most of a flight:
 
 * tracking a waypoint (``Navigator.tick``: the acceptance radius of the autopilot, the glide
   slope, L1 on the line, the coarse step of a settled leg, the step stopped on the finish line,
-  the aircraft step through the wind);
+  the aircraft step through the wind, rolling into its turns);
 * PX4 circling a waypoint for its altitude (``Navigator._tick_altitude_loiter``: PX4's
   NAV_LOITER_RAD circle, climbing at its rate, until the altitude is in and the course is on the
   next waypoint);
@@ -35,7 +35,13 @@ from numba import njit
 
 from gcs_planner.vehicle import G
 from sim import atmosphere
-from sim.aircraft import AircraftState
+from sim.aircraft import (
+    ROLL_RATE_DEG_S,
+    ROLL_SETTLED_DEG,
+    ROLL_SUBSTEP_S,
+    ROLL_TAU_S,
+    AircraftState,
+)
 from sim.navigators.base import ALTITUDE_TIME_CONSTANT_S, COARSE_STEPS, L1_DAMPING, L1_PERIOD_S
 from sim.navigators.px4 import ALTITUDE_ACCEPTANCE_M, EXIT_COURSE_DEG, EXIT_REACHABLE
 
@@ -59,8 +65,9 @@ STATE_SIZE = 16
 (P_AIRSPEED, P_BANK, P_CLIMB, P_SINK, P_ALT_OFFSET, P_DT, P_TAU, P_SIGMA, P_WX, P_WY,
  P_TIME_LIMIT, P_FLAVOUR, P_WP_RADIUS, P_ACC_RADIUS, P_LOITER_RADIUS, P_NPFG_PERIOD,
  P_NPFG_DAMPING, P_NPFG_MULT, P_LOITER_BANK, P_INS, P_INS_SCALE, P_V0, P_V_AT, P_H0, P_H_AT,
- P_V_SIGN, P_H_DIR, P_CAPTURE) = range(28)  # fmt: skip
-PARAM_SIZE = 28
+ P_V_SIGN, P_H_DIR, P_CAPTURE, P_ROLL_TAU, P_ROLL_RATE, P_ROLL_SUBSTEP,
+ P_ROLL_SETTLED) = range(32)  # fmt: skip
+PARAM_SIZE = 32
 
 # The active command (in): its position, the leg's start, the next waypoint.
 (C_X, C_Y, C_Z, C_PREV_X, C_PREV_Y, C_HAS_NEXT, C_NEXT_X, C_NEXT_Y, C_ACP, C_SEQ,
@@ -133,11 +140,11 @@ def _acceptance(s: np.ndarray, p: np.ndarray, c: np.ndarray, e2t: float) -> floa
 
 
 @njit(cache=True)
-def _step(s: np.ndarray, p: np.ndarray, lateral: float, climb: float, dt: float, wx: float,
-          wy: float, e2t: float, limit: float, out: np.ndarray) -> None:  # fmt: skip
-    """sim/aircraft.py step, for an aircraft with a turn limit (``limit``: its largest lateral
-    acceleration, _max_lateral of its roll limit); writes the new state's first ten fields into
-    ``out``."""
+def _arc(s: np.ndarray, p: np.ndarray, lateral: float, climb: float, dt: float, wx: float,
+         wy: float, e2t: float, limit: float, out: np.ndarray) -> None:  # fmt: skip
+    """sim/aircraft.py arc_step, for an aircraft with a turn limit (``limit``: its largest
+    lateral acceleration, _max_lateral of its roll limit); writes the new state's first ten
+    fields into ``out``, which may be ``s`` (each field is read before it is written)."""
     v = p[P_AIRSPEED] * e2t
     vz = min(max(climb, -p[P_SINK]), p[P_CLIMB])
     vh = math.sqrt(max(v * v - vz * vz, 0.0))
@@ -163,6 +170,28 @@ def _step(s: np.ndarray, p: np.ndarray, lateral: float, climb: float, dt: float,
     out[S_HEADING] = _wrap(psi1)
     out[S_TAS] = v
     out[S_GS] = math.hypot(gx, gy)
+
+
+@njit(cache=True)
+def _step(s: np.ndarray, p: np.ndarray, lateral: float, climb: float, dt: float, wx: float,
+          wy: float, e2t: float, limit: float, out: np.ndarray) -> None:  # fmt: skip
+    """sim/aircraft.py step (the bank rolling towards the one asked, in substeps), for an
+    aircraft with a turn limit; writes the new state's first ten fields into ``out``."""
+    bank_limit = p[P_BANK]
+    asked = min(max(-math.degrees(math.atan(lateral / G)), -bank_limit), bank_limit)
+    n = max(1, math.ceil(dt / p[P_ROLL_SUBSTEP] - 1e-9))
+    h = dt / n
+    keep = 1.0 - math.exp(-h / p[P_ROLL_TAU])
+    most = p[P_ROLL_RATE] * h
+    bank = s[S_BANK]
+    src = s
+    for i in range(n):
+        if abs(asked - bank) <= p[P_ROLL_SETTLED]:
+            _arc(src, p, lateral, climb, dt - i * h, wx, wy, e2t, limit, out)
+            return
+        bank += min(max((asked - bank) * keep, -most), most)
+        _arc(src, p, -G * math.tan(math.radians(bank)), climb, h, wx, wy, e2t, limit, out)
+        src = out
 
 
 @njit(cache=True)
@@ -557,6 +586,8 @@ def fly_plain_steps(pilot: object, time_limit: float, cache: dict) -> None:
         ap.npfg_switch_multiplier,
     )
     p[P_LOITER_BANK] = ap.loiter_bank_limit
+    p[P_ROLL_TAU], p[P_ROLL_RATE] = ROLL_TAU_S, ROLL_RATE_DEG_S
+    p[P_ROLL_SUBSTEP], p[P_ROLL_SETTLED] = ROLL_SUBSTEP_S, ROLL_SETTLED_DEG
     normals = _EMPTY
     k = 0
     if wind is not None:

@@ -27,7 +27,7 @@ from gcs_planner.mission.items import GLOBAL_AMSL_FRAMES, GLOBAL_RELATIVE_FRAMES
 from gcs_planner.scenario.georef import LocalFrame
 from gcs_planner.vehicle import G, VehicleProfile
 from sim import atmosphere, flight_kernel
-from sim.aircraft import AircraftState, RollLagFlightModel
+from sim.aircraft import AircraftState, InstantBankFlightModel
 from sim.jsbsim_airframe import AirframeLimit, FlightModel, LegNeed
 from sim.navigators import NAVIGATORS
 from sim.navigators.base import (
@@ -174,7 +174,7 @@ def fly(
     ins: object | None = None,
     compiled: bool = True,
     commands: Sequence[NavCommand] | None = None,
-    flight_model: FlightModel | RollLagFlightModel | None = None,
+    flight_model: FlightModel | InstantBankFlightModel | None = None,
 ) -> Flight:
     """Fly the stored ``items`` in mode AUTO from ``start`` (local frame) at ``profile``'s cruise
     airspeed (EAS) under ``flavour``'s navigator with the autopilot ``params`` (by default its
@@ -193,9 +193,11 @@ def fly(
     Monte Carlo flies one mission many times).
 
     ``flight_model`` (sim/jsbsim_airframe.py ``FlightModel``) flies the navigator's demands in
-    JSBSim instead of the point mass, all in Python: the legs are checked against the airframe
-    first (``Flight.limits``), and an airframe that cannot be trimmed at the start is not
-    flown (``ended`` "cannot be flown").
+    JSBSim instead of the point mass (sim/aircraft.py ``step``, rolling into its turns), all in
+    Python; sim/aircraft.py ``InstantBankFlightModel`` flies the point mass banking at once (the
+    model before issue 31, for the cross-check), in Python too. The legs are checked against
+    the airframe first (``Flight.limits``), and an airframe that cannot be trimmed at the start
+    is not flown (``ended`` "cannot be flown").
     """
     ap = params or AutopilotParams(flavour=flavour, loiter_radius=profile.turn_radius)
     if commands is None:
@@ -294,7 +296,7 @@ def _unflown(
     profile: VehicleProfile,
     ap: AutopilotParams,
     wind: WindModel | None,
-    model: FlightModel | RollLagFlightModel,
+    model: FlightModel | InstantBankFlightModel,
     limits: list[str],
 ) -> Flight:
     """The flight of an airframe that could not start: one sample where it stands."""

@@ -9,7 +9,8 @@ other times. They are compared at equal times (the kernel's track interpolated a
 one's samples): measured within 3 mm at the median and 1.4 m at worst (a coarse step's chord
 against fine steps), 6 mm at the end of a 230 km helix flight. TRACK_TOLERANCE_M allows 2.5 m,
 END_TOLERANCE_M 0.5 m; the decisions (events, corrections and outcomes, misses, verdict) must
-be the same.
+be the same. The bank, carried from step to step (the roll lag of sim/aircraft.py step), is
+compared at the times both tracks have: measured within 1e-4 deg, BANK_TOLERANCE_DEG 0.01.
 """
 
 from __future__ import annotations
@@ -26,12 +27,15 @@ from gcs_planner.mission.builder import build_mission
 from gcs_planner.plan_json import plan_to_dict
 from gcs_planner.scenario.readers import load_scenario
 from sim import flight_kernel
+from sim.aircraft import ROLL_RATE_DEG_S
 from sim.guidance import AutopilotParams
+from sim.navigators.base import LOITERS
 from sim.replay import replay
 from sim.wind import WindSpec
 
 TRACK_TOLERANCE_M = 2.5
 END_TOLERANCE_M = 0.5
+BANK_TOLERANCE_DEG = 0.01
 WINDS = {
     "still": WindSpec(),
     "wind": WindSpec(5.0, 250.0),
@@ -111,6 +115,13 @@ def assert_same_flight(ref, got) -> None:
         assert a.miss == pytest.approx(b.miss, abs=TRACK_TOLERANCE_M)
     if ref.monte_carlo is not None:
         assert got.monte_carlo == ref.monte_carlo
+    # Both roll into their turns (sim/aircraft.py step): the bank carried from step to step,
+    # never faster than the roll rate limit, the same at the samples both have.
+    for flight in (ref.flight, got.flight):
+        rate = np.abs(np.diff(flight.bank)) / np.maximum(np.diff(flight.t), 1e-9)
+        assert rate.max() <= ROLL_RATE_DEG_S + 1e-6
+    _, i, j = np.intersect1d(ref_t, got_t, return_indices=True)
+    assert np.abs(ref.flight.bank[i] - got.flight.bank[j]).max() <= BANK_TOLERANCE_DEG
 
 
 @pytest.mark.parametrize("wind", list(WINDS))
@@ -126,7 +137,13 @@ def test_helix_missions_fly_the_same_compiled(kernel_steps, flavour, wind, shipp
     ap = AutopilotParams(flavour, loiter_radius=200.0) if shipped else configured(s, flavour)
     ref, got = both(m.items, s, flavour, ap, WINDS[wind])
     assert_same_flight(ref, got)
-    assert sum(kernel_steps) > len(got.flight.t) // 3
+    # The kernel flies the steps outside the helices (the loiter items are the Python
+    # navigator's) but for the few at a landmark. (A share of all steps was asserted before;
+    # rolling into its turns, PX4's aircraft now passes V point 11 inside the capture radius
+    # where it missed it, and is lost there after two helices: few steps outside them.)
+    command = {item.seq: item.command for item in m.items}
+    outside = sum(1 for seq in got.flight.current if command.get(int(seq)) not in LOITERS)
+    assert sum(kernel_steps) >= 0.99 * outside > 0
 
 
 @pytest.mark.parametrize("flavour", ["ardupilot", "px4"])
