@@ -47,13 +47,17 @@ def test_a_sharp_turn_is_flown_at_the_autopilots_roll_limit_no_tighter(flavour):
     """The autopilot banks up to its roll limit (ROLL_LIMIT_DEG 45, FW_R_LIM 50), not to the bank
     of the planner's radius: a sharp corner is turned on V^2 / (g tan(limit)), tighter than the
     200 m plan, never tighter than that."""
+    # (The bank asked is clipped to the limit; the bank flown rolls towards it.)
     items = mission((16, (0, 0, 1000), {"param2": 1}), (16, (3000, 0, 1000), {"param2": 1}),
                     (16, (3000, 3000, 1000), {"param2": 1}))  # fmt: skip
     ap = AutopilotParams(flavour, acceptance_radius=1.0)
     f = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour=flavour, params=ap)
     assert f.ended == "mission end"
     limit = {"ardupilot": 45.0, "px4": 50.0}[flavour]
-    assert np.abs(f.bank).max() == pytest.approx(limit)
+    # Rolling into the turn (sim/aircraft.py step: a first-order lag of ROLL_TAU_S 0.8 s) with
+    # the limit asked for the ~3.5 s of the corner, more than three time constants: past 95 %
+    # of the limit (measured 44.95 and 48.86 deg), never beyond it.
+    assert limit * (1.0 - math.exp(-3.0)) < np.abs(f.bank).max() <= limit
     tightest = f.tas**2 / (9.80665 * math.tan(math.radians(limit)))
     assert np.all(turn_radii(f) >= tightest * (1 - 1e-9))
     assert turn_radii(f).min() < PROFILE.turn_radius / 2
