@@ -15,7 +15,8 @@ FW_T_SINK_R_SP) and flown at once: no pitch dynamics.
 A step is flown in substeps of at most ROLL_SUBSTEP_S while the bank moves, each integrating the
 air-relative motion exactly on the arc of constant heading rate at the bank reached there, and
 adds the wind's drift over the step; once the bank is within ROLL_SETTLED_DEG of the one asked
-the rest of the step is one arc. So a coarse fixed step (0.5 s at 25 m/s: 12.5 m) flies a
+the rest of the step is one arc, and within ROLL_ONE_ARC_DEG_S / dt the whole step is one arc at
+the lag's mean turn rate. So a coarse fixed step (0.5 s at 25 m/s: 12.5 m) flies a
 circle in still air as a circle, and its trochoid in a steady wind as the trochoid.
 ``arc_step`` is the step at a bank taken at once (the model before the roll lag, kept for the
 cross-check and as the substep); sim/flight_kernel.py ``_step`` is the compiled twin of ``step``.
@@ -50,6 +51,12 @@ ROLL_RATE_DEG_S = 70.0
 # step; 0.001 deg of bank turns a 25 m/s aircraft by 0.0004 deg/s).
 ROLL_SUBSTEP_S = 0.05
 ROLL_SETTLED_DEG = 1e-3
+# Within ROLL_ONE_ARC_DEG_S / dt of the bank asked (L1's corrections on a leg, a circle held: a
+# degree on a 0.5 s step, an eighth on a coarse 4 s one) the step is one arc at the bank whose
+# turn rate is the lag's mean over the step, ending at the bank the lag reaches: the heading is
+# the substeps' (tan is straight to 1e-4 over a degree) and the position within 3 cm (its error
+# grows as the gap times dt^2); the substeps cost ten arcs a 0.5 s step.
+ROLL_ONE_ARC_DEG_S = 0.5
 
 
 @dataclass(frozen=True)
@@ -179,6 +186,14 @@ def step(
     keep = 1.0 - math.exp(-h / ROLL_TAU_S)
     most = ROLL_RATE_DEG_S * h
     bank = s.bank_deg
+    gap = bank - asked
+    if ROLL_SETTLED_DEG < abs(gap) and abs(gap) * dt <= ROLL_ONE_ARC_DEG_S:
+        # The lag's bank asked + gap e^(-t / tau): its mean over the step, its end.
+        decay = math.exp(-dt / ROLL_TAU_S)
+        mean = asked + gap * ROLL_TAU_S * (1.0 - decay) / dt
+        out = arc_step(s, env, -G * math.tan(math.radians(mean)), climb_rate, dt, wind, eas2tas)
+        out.bank_deg = asked + gap * decay
+        return out
     out = s
     for i in range(n):
         if abs(asked - bank) <= ROLL_SETTLED_DEG:

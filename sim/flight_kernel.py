@@ -36,6 +36,7 @@ from numba import njit
 from gcs_planner.vehicle import G
 from sim import atmosphere
 from sim.aircraft import (
+    ROLL_ONE_ARC_DEG_S,
     ROLL_RATE_DEG_S,
     ROLL_SETTLED_DEG,
     ROLL_SUBSTEP_S,
@@ -66,8 +67,8 @@ STATE_SIZE = 16
  P_TIME_LIMIT, P_FLAVOUR, P_WP_RADIUS, P_ACC_RADIUS, P_LOITER_RADIUS, P_NPFG_PERIOD,
  P_NPFG_DAMPING, P_NPFG_MULT, P_LOITER_BANK, P_INS, P_INS_SCALE, P_V0, P_V_AT, P_H0, P_H_AT,
  P_V_SIGN, P_H_DIR, P_CAPTURE, P_ROLL_TAU, P_ROLL_RATE, P_ROLL_SUBSTEP,
- P_ROLL_SETTLED) = range(32)  # fmt: skip
-PARAM_SIZE = 32
+ P_ROLL_SETTLED, P_ROLL_ONE_ARC) = range(33)  # fmt: skip
+PARAM_SIZE = 33
 
 # The active command (in): its position, the leg's start, the next waypoint.
 (C_X, C_Y, C_Z, C_PREV_X, C_PREV_Y, C_HAS_NEXT, C_NEXT_X, C_NEXT_Y, C_ACP, C_SEQ,
@@ -184,6 +185,13 @@ def _step(s: np.ndarray, p: np.ndarray, lateral: float, climb: float, dt: float,
     keep = 1.0 - math.exp(-h / p[P_ROLL_TAU])
     most = p[P_ROLL_RATE] * h
     bank = s[S_BANK]
+    gap = bank - asked
+    if p[P_ROLL_SETTLED] < abs(gap) and abs(gap) * dt <= p[P_ROLL_ONE_ARC]:
+        decay = math.exp(-dt / p[P_ROLL_TAU])
+        mean = asked + gap * p[P_ROLL_TAU] * (1.0 - decay) / dt
+        _arc(s, p, -G * math.tan(math.radians(mean)), climb, dt, wx, wy, e2t, limit, out)
+        out[S_BANK] = asked + gap * decay
+        return
     src = s
     for i in range(n):
         if abs(asked - bank) <= p[P_ROLL_SETTLED]:
@@ -588,6 +596,7 @@ def fly_plain_steps(pilot: object, time_limit: float, cache: dict) -> None:
     p[P_LOITER_BANK] = ap.loiter_bank_limit
     p[P_ROLL_TAU], p[P_ROLL_RATE] = ROLL_TAU_S, ROLL_RATE_DEG_S
     p[P_ROLL_SUBSTEP], p[P_ROLL_SETTLED] = ROLL_SUBSTEP_S, ROLL_SETTLED_DEG
+    p[P_ROLL_ONE_ARC] = ROLL_ONE_ARC_DEG_S
     normals = _EMPTY
     k = 0
     if wind is not None:

@@ -12,6 +12,7 @@ import pytest
 from gcs_planner.vehicle import G
 from sim import flight_kernel as fk
 from sim.aircraft import (
+    ROLL_ONE_ARC_DEG_S,
     ROLL_RATE_DEG_S,
     ROLL_SETTLED_DEG,
     ROLL_SUBSTEP_S,
@@ -85,6 +86,7 @@ def _kernel_params(env: Envelope) -> np.ndarray:
         env.airspeed, env.bank_limit_deg, env.climb_rate, env.sink_rate)  # fmt: skip
     p[fk.P_ROLL_TAU], p[fk.P_ROLL_RATE] = ROLL_TAU_S, ROLL_RATE_DEG_S
     p[fk.P_ROLL_SUBSTEP], p[fk.P_ROLL_SETTLED] = ROLL_SUBSTEP_S, ROLL_SETTLED_DEG
+    p[fk.P_ROLL_ONE_ARC] = ROLL_ONE_ARC_DEG_S
     return p
 
 
@@ -101,11 +103,14 @@ def test_the_compiled_step_flies_the_python_step():
     for trial in range(300):
         x, y, z, course, heading = (float(v) for v in rng.uniform(-3, 3, 5) * (150, 150, 150, 1, 1))
         s = AircraftState(x, y, z, course, 10.0, float(rng.uniform(-35, 35)), heading=heading)
+        dt = float(rng.choice([0.5, 0.137, 4.0, 0.01]))
         lateral = float(rng.choice([0.0, rng.uniform(-12, 12), 25.0]))
         if trial % 7 == 0:
             lateral = -G * math.tan(math.radians(s.bank_deg))  # already at the bank asked
+        elif trial % 7 == 1:  # near it: one arc at the lag's mean turn rate
+            near = s.bank_deg + float(rng.uniform(-1, 1)) * ROLL_ONE_ARC_DEG_S / dt
+            lateral = -G * math.tan(math.radians(near))
         climb = float(rng.uniform(-6, 6))
-        dt = float(rng.choice([0.5, 0.137, 4.0, 0.01]))
         wx, wy = (float(w) for w in rng.uniform(-8, 8, 2))
         e2t = float(rng.uniform(1.0, 1.3))
         state = np.array([s.x, s.y, s.z, s.course, s.t, s.bank_deg, s.climb_rate, s.heading,
@@ -119,3 +124,25 @@ def test_the_compiled_step_flies_the_python_step():
             s, state = py, out.copy()
         settled_seen += abs(-math.degrees(math.atan(lateral / G)) - s.bank_deg) < 1e-6
     assert settled_seen > 20  # the settled case (one arc) was flown too
+
+
+def test_one_arc_near_the_bank_asked_is_the_substeps(monkeypatch):
+    """Within ROLL_ONE_ARC_DEG_S / dt of the bank asked a step is one arc at the lag's mean turn
+    rate: the exact lag's bank at its end, the heading and position of fine substeps."""
+    import sim.aircraft as aircraft
+
+    s0 = AircraftState(0.0, 0.0, 700.0, 0.2, bank_deg=-20.0)
+    for dt in (0.5, 4.0):
+        for share in (1.0, -0.5, 0.02):
+            gap = share * ROLL_ONE_ARC_DEG_S / dt
+            asked = -20.0 - gap
+            lateral = -G * math.tan(math.radians(asked))
+            one = step(s0, ENV, lateral, 0.0, dt, (3.0, -2.0))
+            assert one.bank_deg == pytest.approx(asked + gap * math.exp(-dt / ROLL_TAU_S))
+            with monkeypatch.context() as m:
+                m.setattr(aircraft, "ROLL_ONE_ARC_DEG_S", 0.0)
+                m.setattr(aircraft, "ROLL_SUBSTEP_S", 0.001)
+                fine = aircraft.step(s0, ENV, lateral, 0.0, dt, (3.0, -2.0))
+            assert one.bank_deg == pytest.approx(fine.bank_deg, abs=1e-3)
+            assert one.heading == pytest.approx(fine.heading, abs=2e-5)
+            assert math.hypot(one.x - fine.x, one.y - fine.y) < 0.03
