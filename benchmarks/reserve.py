@@ -73,6 +73,19 @@ def planned(dataset: int, firmware: str, wind: float, gust: float):
 def fly(result, firmware: str, wind: float, gust: float, seed: int) -> float | None:
     """The overrun of one flight of the chosen route (None when no stretch was flown)."""
     from gcs_planner.dry_run import stretch_overrun
+
+    met, flown_to_b = flown_at(result, firmware, wind, gust, seed)
+    rows = [
+        SimpleNamespace(point=i, distance=d, on_route=True, outcome="ok") for i, d in met.items()
+    ]
+    return stretch_overrun(result.route, rows, flown_to_b)
+
+
+def flown_at(
+    result, firmware: str, wind: float, gust: float, seed: int
+) -> tuple[dict[str, float], float | None]:
+    """One flight of the chosen route: (metres flown from A at each point of the route the
+    track met, metres flown to B or None)."""
     from gcs_planner.link.vehicle_check import needs
     from gcs_planner.mission.builder import build_mission
     from gcs_planner.plan_json import plan_to_dict
@@ -96,14 +109,9 @@ def fly(result, firmware: str, wind: float, gust: float, seed: int) -> float | N
         autopilot=AutopilotParams.from_parameters(firmware, params),
         wind=WindSpec(wind, None, gust), navigate_on_estimate=False,
     )  # fmt: skip
-    route = result.route
-    on_route = {s.id for s in route.stops}
+    on_route = {s.id for s in result.route.stops}
     met = {e.id: e.distance for e in report.encounters if e.id in on_route}
-    rows = [
-        SimpleNamespace(point=i, distance=d, on_route=True, outcome="ok") for i, d in met.items()
-    ]
-    flown_to_b = report.flown.length if report.flown is not None else None
-    return stretch_overrun(route, rows, flown_to_b)
+    return met, (report.flown.length if report.flown is not None else None)
 
 
 def measure(dataset: int, firmware: str, wind: float, gust: float, flights: int) -> Measured:
