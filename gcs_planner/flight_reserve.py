@@ -11,10 +11,11 @@ An aircraft under its autopilot flies more than the planned legs between two res
   (R = (V + W)^2 / (g tan phi)), so nothing is left to catch up with. How late is the
   autopilot's: ArduPlane's L1 controller steers at a point L1 = NAVL1_PERIOD * NAVL1_DAMPING *
   Vg / pi ahead on the chord of the densified arc it is flying (AP_L1_Control::update_waypoint),
-  so it trails the arc: d = L1 / 2 (the mock ArduPlane flies 0.18-0.36 L1 on the contest
-  routes at winds 0-10 m/s, the most in U-turns). PX4's npfg (npfg.cpp) steers along the path
-  within its track error bound and turns within a few metres of the arc (the mock: under
-  0.1 R): d = R / 2.
+  so it trails the arc: d = L1 / 2 (the mock ArduPlane, rolling into its turns, needs up to
+  0.42 L1 on the contest routes at winds 0-10 m/s and 0.55 L1 on dataset 2 at 10 m/s, where
+  the rule falls short: benchmarks/turn_entry.py). PX4's npfg (npfg.cpp) steers along the path
+  within its track error bound and turns within a few metres of the arc (the mock: d up to
+  0.14 R): d = R / 2.
   An autopilot not named: the larger of the two. The start at A (the aircraft's own heading)
   and each helix (a loiter entered and left where its guidance does; the mock: up to 0.9 R)
   count as one U-turn each.
