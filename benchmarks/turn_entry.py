@@ -50,8 +50,10 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     from gcs_planner.errors import InfeasibleError
 
-    print("| workbook | autopilot | wind, gusts | d (rule) | stretch most over its need: flown "
-          "beyond / need | d needed, turns of 60+ deg (share of d) | d needed, helices (share) |")
+    print(
+        "| workbook | autopilot | wind, gusts | d (rule) | stretch most over its need: flown "
+        "beyond / need | d needed, turns of 60+ deg (share of d) | d needed, helices (share) |"
+    )
     print("|---|---|---|---|---:|---:|---:|")  # fmt: skip
     for dataset in (1, 2):
         for firmware in ("ardupilot", "px4"):
@@ -78,8 +80,10 @@ def main(argv: list[str] | None = None) -> int:
                         if over > gusts and helices > 0:
                             helix = max(helix, (over - gusts) / coef)
                 d = basis.late
-                print(f"{case} {d:.1f} m ({basis.late_rule}) | {at[0]:.1f} / {at[1]:.1f} m | "
-                      f"{turns:.1f} m ({turns / d:.2f}) | {helix:.1f} m ({helix / d:.2f}) |")
+                print(
+                    f"{case} {d:.1f} m ({basis.late_rule}) | {at[0]:.1f} / {at[1]:.1f} m | "
+                    f"{turns:.1f} m ({turns / d:.2f}) | {helix:.1f} m ({helix / d:.2f}) |"
+                )
                 sys.stdout.flush()
     return 0
 

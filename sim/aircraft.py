@@ -55,7 +55,8 @@ ROLL_SETTLED_DEG = 1e-3
 # degree on a 0.5 s step, an eighth on a coarse 4 s one) the step is one arc at the bank whose
 # turn rate is the lag's mean over the step, ending at the bank the lag reaches: the heading is
 # the substeps' (tan is straight to 1e-4 over a degree) and the position within 3 cm (its error
-# grows as the gap times dt^2); the substeps cost ten arcs a 0.5 s step.
+# grows as the gap times dt^2); the substeps cost ten arcs a 0.5 s step. (Not where the rate
+# limit binds: a gap over ROLL_RATE_DEG_S * ROLL_TAU_S, on a short step cut at a finish line.)
 ROLL_ONE_ARC_DEG_S = 0.5
 
 
@@ -187,7 +188,10 @@ def step(
     most = ROLL_RATE_DEG_S * h
     bank = s.bank_deg
     gap = bank - asked
-    if ROLL_SETTLED_DEG < abs(gap) and abs(gap) * dt <= ROLL_ONE_ARC_DEG_S:
+    if (
+        ROLL_SETTLED_DEG < abs(gap) <= ROLL_RATE_DEG_S * ROLL_TAU_S
+        and abs(gap) * dt <= ROLL_ONE_ARC_DEG_S
+    ):
         # The lag's bank asked + gap e^(-t / tau): its mean over the step, its end.
         decay = math.exp(-dt / ROLL_TAU_S)
         mean = asked + gap * ROLL_TAU_S * (1.0 - decay) / dt

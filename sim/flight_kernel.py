@@ -186,7 +186,8 @@ def _step(s: np.ndarray, p: np.ndarray, lateral: float, climb: float, dt: float,
     most = p[P_ROLL_RATE] * h
     bank = s[S_BANK]
     gap = bank - asked
-    if p[P_ROLL_SETTLED] < abs(gap) and abs(gap) * dt <= p[P_ROLL_ONE_ARC]:
+    if (p[P_ROLL_SETTLED] < abs(gap) <= p[P_ROLL_RATE] * p[P_ROLL_TAU]
+            and abs(gap) * dt <= p[P_ROLL_ONE_ARC]):  # fmt: skip
         decay = math.exp(-dt / p[P_ROLL_TAU])
         mean = asked + gap * p[P_ROLL_TAU] * (1.0 - decay) / dt
         _arc(s, p, -G * math.tan(math.radians(mean)), climb, dt, wx, wy, e2t, limit, out)

@@ -54,6 +54,9 @@ def test_the_roll_rate_is_limited():
     s0 = AircraftState(0.0, 0.0, 700.0, 0.0, bank_deg=45.0)
     s = step(s0, ENV, G, 0.0, ROLL_SUBSTEP_S)
     assert s.bank_deg == pytest.approx(45.0 - ROLL_RATE_DEG_S * ROLL_SUBSTEP_S)
+    # A short step (cut at a finish line) too.
+    s = step(s0, ENV, G, 0.0, 0.004)
+    assert s.bank_deg == pytest.approx(45.0 - ROLL_RATE_DEG_S * 0.004)
 
 
 def test_a_step_flown_again_from_its_start_is_the_same():
