@@ -420,9 +420,11 @@ class FlightModel:
     rate_hz: float = RATE_HZ
     # The navigator's step (s). JSBSim cannot fly a step again to stop on a waypoint's
     # acceptance circle or finish line, so the autopilot switches up to one step late (23 m at
-    # 0.5 s). A 0.1 s step was tried (docs/jsbsim.md): PX4 then switches on time and passes B
-    # 8 m off, as the roll-lag point mass does; but in gusts its c172r then circled a waypoint
-    # for altitude until the time limit (not diagnosed), so the default stays the dry run's.
+    # 0.5 s). A 0.1 s step was tried (docs/jsbsim.md, again after the wind fix): PX4 then
+    # switches on time and is lost at B as the point mass is (8 m off); but in gusts the finer
+    # step draws other gusts, in which the c172r cannot make its climbs at full throttle
+    # (ArduPlane misses V2, PX4 circles a waypoint for altitude until the time limit), so the
+    # default stays the dry run's.
     outer_step: float = OUTER_STEP_S
     _cache: dict = field(default_factory=dict, repr=False)
 
