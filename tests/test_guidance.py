@@ -201,3 +201,26 @@ def test_px4_loiter_to_altitude_leaves_on_the_heading_only_when_param1_asks(head
         assert error <= math.radians(12.0)
     else:
         assert error > math.radians(30.0)  # it left where the altitude came in
+
+
+def test_the_instant_bank_model_is_kept_for_the_cross_check():
+    """sim.aircraft.InstantBankFlightModel flies the point mass banking at once (the model
+    before the roll lag; benchmarks/jsbsim_check.py compares it): on the sharp corner it jumps
+    to the roll limit within a step, where the default aircraft rolls at most 70 deg/s and
+    turns later, so its flight is longer."""
+    from sim.aircraft import ROLL_RATE_DEG_S, InstantBankFlightModel
+
+    items = mission((16, (0, 0, 1000), {"param2": 1}), (16, (3000, 0, 1000), {"param2": 1}),
+                    (16, (3000, 3000, 1000), {"param2": 1}))  # fmt: skip
+    ap = AutopilotParams("ardupilot", acceptance_radius=1.0)
+    instant = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, params=ap,
+                  flight_model=InstantBankFlightModel())  # fmt: skip
+    rolling = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, params=ap)
+    assert instant.ended == rolling.ended == "mission end"
+    assert instant.flight_model == "point mass banking at once (no roll lag)"
+    assert rolling.flight_model == "point mass"
+    assert np.abs(instant.bank).max() == pytest.approx(45.0)
+    rates = [np.abs(np.diff(f.bank)) / np.diff(f.t) for f in (instant, rolling)]
+    assert rates[0].max() > 2 * ROLL_RATE_DEG_S
+    assert rates[1].max() <= ROLL_RATE_DEG_S + 1e-6
+    assert rolling.cumulative[-1] > instant.cumulative[-1]
