@@ -368,6 +368,8 @@ def fly_plain(
                 and -p[P_SINK] < climb < p[P_CLIMB]
             ):
                 dt = coarse
+                # Navigator.tick: the altitude error flown out over the coarse step.
+                climb += alt_error * (1.0 / coarse - 1.0 / max(ALTITUDE_TIME_CONSTANT_S * 0.2, dt0))
         else:
             # PX4Navigator circling waypoint c on NAV_LOITER_RAD for its altitude.
             lr = p[P_LOITER_RADIUS]

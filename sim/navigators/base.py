@@ -395,7 +395,11 @@ class Navigator:
 
     # Altitude -----------------------------------------------------------------------------
     def climb_to(self, alt: float, feedforward: float = 0.0) -> float:
-        return feedforward + (alt - self.est[2]) / max(ALTITUDE_TIME_CONSTANT_S * 0.2, self.dt)
+        return feedforward + (alt - self.est[2]) / self._altitude_gain_dt()
+
+    def _altitude_gain_dt(self) -> float:
+        """The time over which climb_to asks to fly out an altitude error."""
+        return max(ALTITUDE_TIME_CONSTANT_S * 0.2, self.dt)
 
     def glide(self, a: tuple, b: tuple, end_dist: float) -> float:
         """Climb rate on the glide slope from a's altitude to b's, reached ``end_dist`` before b;
@@ -465,6 +469,12 @@ class Navigator:
                 and -self.env.sink_rate < climb < self.env.climb_rate
             ):
                 dt = coarse
+                # The altitude error flown out over the coarse step, as the fine steps would
+                # (to e^-4 in its 4 s), not the fine step's rate held 4 s: that put the aircraft
+                # three times the error past its target, then fine steps back down: ~1 m wiggles
+                # a minute on a long climbing leg, 1e-4 of its length once the aircraft rolls
+                # into its turns and switches between coarse and fine steps more often.
+                climb += self.alt_error * (1.0 / coarse - 1.0 / self._altitude_gain_dt())
         before, est0 = self.s, self.est
         wind = (0.0, 0.0) if self.wind is None else self.wind.step(dt)
         e2t = self.eas2tas(before.z)
