@@ -18,8 +18,22 @@ def test_sweep_benchmark_runs_all_three_ways_with_equal_fronts() -> None:
 
 
 def test_sweep_benchmark_runs_the_bundled_example_both_ways_with_equal_fronts(tmp_path) -> None:
-    timings, fronts = sweep_bench.run_example(tmp_path, workers=2)
-    assert [t.cells for t in timings] == [24, 24] and len(fronts) == 24
+    """The example's path through the benchmark, on a spec of the bundled example's shape (its
+    scenario file, a generated scenario, a grid, dry runs) cut to 4 cells: the bundled one's
+    24 cells of 50 dry runs each cost CI over a minute and test nothing more."""
+    example = sweep_bench.EXAMPLE_SPEC.read_text("utf-8")
+    scenario = (sweep_bench.EXAMPLE_SPEC.parent / "example" / "scenario.toml").as_posix()
+    assert 'file = "example/scenario.toml"' in example and "runs = 50" in example
+    spec = tmp_path / "small-example.toml"
+    spec.write_text(
+        example.replace('file = "example/scenario.toml"', f'file = "{scenario}"')
+        .replace("count = 3", "count = 1")
+        .replace("delta = [0.001, 0.00105, 0.0011]", "delta = [0.001]")
+        .replace("runs = 50", "runs = 5"),
+        "utf-8",
+    )
+    timings, fronts = sweep_bench.run_example(tmp_path, workers=2, spec_path=spec)
+    assert [t.cells for t in timings] == [4, 4] and len(fronts) == 4
     assert timings[1].start_stop > 0 and all(t.cpu_seconds > 0 for t in timings)
-    text = sweep_bench.render_example(timings)
-    assert text.count("\n| ") == 1 + 2 and "sweep-example.toml" in text
+    text = sweep_bench.render_example(timings, spec)
+    assert text.count("\n| ") == 1 + 2 and "small-example.toml" in text

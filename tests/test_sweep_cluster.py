@@ -778,3 +778,37 @@ def test_a_worker_with_another_version_joining_mid_sweep_stops_it(tmp_path: Path
         error
     )
     assert "cells saved" in str(error) and "resume with --resume" in str(error)
+
+
+def _worker_state() -> tuple[bool, bool, object, int]:
+    """On a worker: planner imported, numba not, SIGINT's handler, the parent process."""
+    return (
+        "gcs_planner.core.planner" in sys.modules,
+        "numba" in sys.modules,
+        signal.getsignal(signal.SIGINT),
+        os.getppid(),
+    )
+
+
+def test_local_workers_are_forked_with_the_planner_imported_and_sigint_ignored() -> None:
+    """The sweep's own cluster forks its workers from a forkserver that imported the planner
+    (gcs_planner/sweep/worker_start.py): before any cell they hold it, not numba (which would
+    change how a search flies its legs), and ignore SIGINT."""
+    from gcs_planner.sweep.worker_start import start_method
+
+    assert start_method() == "forkserver"  # Linux
+    client, cluster = runner._connect(None, 2, 1, "127.0.0.1:0")
+    try:
+        client.wait_for_workers(2, timeout=120)
+        first = client.run(_worker_state)
+        assert len(first) == 2, first
+        # forked by the forkserver, not spawned by a nanny in this process
+        for planner, numba, sigint, parent in first.values():
+            assert planner and not numba and sigint == signal.SIG_IGN, first
+            assert parent != os.getpid(), first
+        # a worker its nanny restarts is spawned, as Dask does, and ignores SIGINT alike
+        client.restart(timeout=120)
+        again = client.run(_worker_state)
+        assert len(again) == 2 and all(s[0] and s[2] == signal.SIG_IGN for s in again.values())
+    finally:
+        runner._disconnect(client, cluster)

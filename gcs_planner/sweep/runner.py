@@ -291,7 +291,11 @@ def _connect(
     if scheduler is None:
         # The scheduler reads these when it starts, each nanny hands them to its worker
         # process (and to a worker it restarts).
-        with dask.config.set({**LEAN_CLUSTER, **LOCAL_WORKERS}), _malloc_trim(_USER_MALLOC_TRIM):
+        from gcs_planner.sweep.worker_start import set_preload, worker_start_config
+
+        settings = {**LEAN_CLUSTER, **LOCAL_WORKERS, **worker_start_config()}
+        with dask.config.set(settings), _malloc_trim(_USER_MALLOC_TRIM):
+            set_preload()
             cluster = LocalCluster(
                 n_workers=workers,
                 threads_per_worker=threads,
