@@ -10,6 +10,7 @@ import json
 
 import pytest
 
+from gcs_planner.autopilot import effective
 from gcs_planner.cli import main
 from gcs_planner.dry_run import EXIT_LOST
 
@@ -60,14 +61,15 @@ def test_a_vehicle_not_set_up_for_the_plan_is_refused_by_the_dry_run(capsys, dat
 
 DS2 = ["--alpha1", "20", "--alpha2", "10", "--beta1", "15", "--beta2", "20", "--theta", "20",
        "--delta", "0.001"]  # fmt: skip
-# The autopilots' shipped envelopes (gcs_planner/autopilot.py's defaults), stated as a user
-# planning for them would: dry-run's --firmware names the flown autopilot only.
-SHIPPED = {
-    "ardupilot": ["--cruise-airspeed", "12", "--max-bank-angle", "45", "--max-climb-rate", "5",
-                  "--max-sink-rate", "5"],
-    "px4": ["--cruise-airspeed", "15", "--max-bank-angle", "50", "--max-climb-rate", "3",
-            "--max-sink-rate", "2"],
-}  # fmt: skip
+
+
+def shipped(firmware: str) -> list[str]:
+    """The autopilot's shipped envelope (gcs_planner/autopilot.py), stated as a user planning
+    for it would: dry-run's --firmware names the flown autopilot only."""
+    e = effective(firmware, {})
+    return ["--cruise-airspeed", f"{e.cruise_airspeed:g}", "--max-bank-angle",
+            f"{e.bank_limit:g}", "--max-climb-rate", f"{e.climb_rate:g}", "--max-sink-rate",
+            f"{e.sink_rate:g}"]  # fmt: skip
 
 
 @pytest.mark.parametrize(
@@ -81,7 +83,7 @@ def test_the_plan_for_a_10_ms_wind_is_never_lost_by_the_flight(
     flies helices. Planned for a 10 m/s design wind and flown in it from drawn directions by a
     vehicle set up for the plan, no run is lost by the flight (README, benchmarks.wind_flight,
     200 runs)."""
-    rc = main(["dry-run", str(dataset_paths[workbook]), *limits, *SHIPPED[firmware],
+    rc = main(["dry-run", str(dataset_paths[workbook]), *limits, *shipped(firmware),
                "--firmware", firmware, "--wind", "10", "--runs", "20", "--json", "--quiet",
                "--set-params"])  # fmt: skip
     d = json.loads(capsys.readouterr().out)
