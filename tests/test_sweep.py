@@ -334,3 +334,39 @@ def test_bad_swept_search_setting_names_the_field(tmp_path: Path) -> None:
         path = write_spec(tmp_path, f'[[scenarios]]\nfile = "{EXAMPLE_SCENARIO}"\n[grid]\n{text}\n')
         with pytest.raises(InputError, match=said.replace("(", r"\(").replace(")", r"\)")):
             read_spec(path)
+
+
+_ROWS_OF_CELLS = """
+import json, sys
+if sys.argv[2] == "numba-first":
+    import numba  # as after an earlier cell whose search loaded it
+from gcs_planner.sweep import expand, read_spec, run_cell
+rows = [row for cell in expand(read_spec(sys.argv[1])) for row in run_cell(cell)]
+when = ("plan_seconds", "cell_seconds", "worker", "finished_at")  # where and how long
+print(json.dumps([{k: v for k, v in r.items() if k not in when} for r in rows], default=str))
+"""
+
+
+def test_a_cells_rows_do_not_depend_on_what_its_process_planned_before(tmp_path: Path) -> None:
+    """Once numba is loaded a search flies its airplane legs compiled from the first label
+    (core/bnb/search.py), a few ulp from numpy's, which moved lower bounds and gaps; a cell
+    loads it itself before it plans, so a fresh worker, a reused one and the serial loop give
+    the same rows to the last bit."""
+    import json
+    import subprocess
+
+    spec = tmp_path / "spec.toml"
+    spec.write_text(
+        'name = "ulp"\n[[scenarios]]\ngenerate = "random"\ncorrections = 611\n'
+        'seeds = { first = 1, count = 4 }\nparameters = "dataset1"\n'
+        "[grid]\nturn_radius = [200]\n"
+    )
+    out = {}
+    for mode in ("fresh", "numba-first"):
+        done = subprocess.run(
+            [sys.executable, "-c", _ROWS_OF_CELLS, str(spec), mode],
+            capture_output=True, text=True, check=True, timeout=600,
+        )  # fmt: skip
+        out[mode] = json.loads(done.stdout)
+    assert all(r["status"] == "ok" for r in out["fresh"]), out["fresh"]
+    assert out["fresh"] == out["numba-first"]

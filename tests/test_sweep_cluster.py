@@ -781,10 +781,12 @@ def test_a_worker_with_another_version_joining_mid_sweep_stops_it(tmp_path: Path
 
 
 def _worker_state() -> tuple[bool, bool, object, int]:
-    """On a worker: planner imported, numba not, SIGINT's handler, the parent process."""
+    """On a worker: planner imported, the compiled airplane legs loaded, SIGINT's handler, the
+    parent process."""
+    kernel = sys.modules.get("gcs_planner.geometry.airplane_kernel")
     return (
         "gcs_planner.core.planner" in sys.modules,
-        "numba" in sys.modules,
+        kernel is not None and bool(kernel.airplane_lengths.signatures),
         signal.getsignal(signal.SIGINT),
         os.getppid(),
     )
@@ -792,8 +794,8 @@ def _worker_state() -> tuple[bool, bool, object, int]:
 
 def test_local_workers_are_forked_with_the_planner_imported_and_sigint_ignored() -> None:
     """The sweep's own cluster forks its workers from a forkserver that imported the planner
-    (gcs_planner/sweep/worker_start.py): before any cell they hold it, not numba (which would
-    change how a search flies its legs), and ignore SIGINT."""
+    (gcs_planner/sweep/worker_start.py): before any cell they hold it and the compiled airplane
+    legs every cell flies (gcs_planner/sweep/warm.py), and ignore SIGINT."""
     from gcs_planner.sweep.worker_start import start_method
 
     assert start_method() == "forkserver"  # Linux
@@ -803,8 +805,8 @@ def test_local_workers_are_forked_with_the_planner_imported_and_sigint_ignored()
         first = client.run(_worker_state)
         assert len(first) == 2, first
         # forked by the forkserver, not spawned by a nanny in this process
-        for planner, numba, sigint, parent in first.values():
-            assert planner and not numba and sigint == signal.SIG_IGN, first
+        for planner, legs, sigint, parent in first.values():
+            assert planner and legs and sigint == signal.SIG_IGN, first
             assert parent != os.getpid(), first
         # a worker its nanny restarts is spawned, as Dask does, and ignores SIGINT alike
         client.restart(timeout=120)
