@@ -101,7 +101,11 @@ def brute_cs_length(p, u, q, r, n=None, grid=20001) -> float:
         if gs[k] == 0.0:
             root = phis[k]
         elif gs[k] * gs[k + 1] < 0.0:
-            root = brentq(g, phis[k], phis[k + 1], xtol=1e-15, rtol=1e-15)
+            ga, gb = g(phis[k]), g(phis[k + 1])
+            if ga * gb < 0.0:
+                root = brentq(g, phis[k], phis[k + 1], xtol=1e-15, rtol=1e-15)
+            else:  # the grid's rounding and the scalar's disagree on a sign: the root is an end
+                root = phis[k] if abs(ga) <= abs(gb) else phis[k + 1]
         else:
             continue
         if ahead(root) > 0.0 or np.linalg.norm(q - arc(root)) < 1e-9:
