@@ -24,7 +24,10 @@ one route of its front into MAVLink mission items (MISSION_ITEM_INT semantics, c
   helix on the circle (it enters it from the correction point, tangent to its heading).
   ArduPlane: NAV_LOITER_TURNS at the altitude the plan reaches at the end of the helix, param1 the
   number of turns, counted from when it reaches the circle (verify_loiter_turns sums the heading
-  change); the arc's waypoints continue on the same circle after it.
+  change); the arc's waypoints continue on the same circle after it, from 45 degrees past the
+  helix's start on: ArduPlane leaves for a next waypoint on the circle as soon as its count is
+  done, and a count that ends late (the wind, a late capture) would find a nearer one behind it
+  and fly a lap back to it. With none left it leaves on the course to the target.
   PX4 has no loiter-turns item in missions. Its NAV_LOITER_TO_ALT (param2 the signed radius)
   counts no turns: TECS climbs or sinks at its limit and the loiter ends as soon as the altitude
   is within NAV_FW_ALT_RAD, wherever the aircraft is on the circle (mission_block.cpp), while the
@@ -108,6 +111,10 @@ END_ACTIONS = ("loiter", "rtl", "land")
 # asks for it only with this margin more.
 PX4_EXIT_HEADING_RANGE = 1.2
 PX4_EXIT_MARGIN = 1.05
+# How far past the helix's start ArduPlane's count of its turns may end (degrees): it sums the
+# ground course from where it met the circle, which the wind and a late capture move. No arc
+# waypoint is written closer than this after an ArduPlane helix (see build_mission).
+ARDUPLANE_LAP_SLACK_DEG = 45.0
 
 PLAN_FORMAT = "gcs-planner-plan"
 PLAN_VERSION = 1
@@ -554,6 +561,15 @@ def build_mission(
             add(MAV_CMD_NAV_WAYPOINT, mav_frame, note, param2=capture, **at(departure))
         helix = helix_loiter(leg)
         arc = arc_waypoints(leg)
+        if helix is not None and firmware == "ardupilot" and len(arc):
+            # ArduPlane ends the turns where its count says (ground course summed from where
+            # it met the circle) and, the next waypoint on the circle (within 1.05 radii of
+            # the centre), leaves at once for it: an arc waypoint that lies just past the
+            # helix's start may already be behind it, and it would fly a whole lap back to it
+            # (benchmarks.reserve, dataset 2 in 10 m/s). Arc waypoints start beyond the count's
+            # slack; with none left it leaves on the course to the target.
+            angles = leg.arc_angle * np.arange(1, len(arc) + 1) / len(arc)
+            arc = arc[angles > math.radians(ARDUPLANE_LAP_SLACK_DEG)]
         # A tangent point on the target itself (no straight part) is the target's own waypoint.
         if len(arc) and np.linalg.norm(arc[-1] - xyz[i + 1]) < 1.0:
             arc = arc[:-1]
