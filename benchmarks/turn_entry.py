@@ -4,10 +4,10 @@ The flights of benchmarks.reserve (each workbook's chosen route, the shipped env
 wind 0, 5, 10 m/s with 1.5 m/s gusts in wind, drawn wind directions, flown on the truth), each
 stretch between a reset of an error (or A) and a check of it split as
 gcs_planner/flight_reserve.py ``route_check`` splits it: what the stretch flew beyond the plan
-against its leg-by-leg need at the rule's d (ArduPlane L1/2, PX4 R/2), and the d that would
-make the need equal to what it flew, (overrun - gusts) / (sum of 1 - cos(turn) + 2 per helix
-and the start at A): the most over the stretches with 60 degrees of turn or more and no helix,
-and over those with a helix.
+against its leg-by-leg need at the rule's d (ArduPlane L1/2 + its roll-in, PX4 R/2) and each
+leg's own gusts, and the d that would make the need equal to what it flew, (overrun - gusts) /
+(sum of 1 - cos(turn) + 2 per helix and the start at A): the most over the stretches with 60
+degrees of turn or more and no helix, and over those with a helix.
 
     python -m benchmarks.turn_entry [--flights N]
 """
@@ -19,12 +19,23 @@ import math
 import sys
 
 from benchmarks.reserve import GUST, flown_at, planned
+from gcs_planner.flight_reserve import altitude_of
 
 
-def stretches(route, flown: dict[str, float], basis) -> list[tuple[float, float, float, int]]:
-    """(flown beyond the plan, turn coefficient, gust term, helices) of each stretch flown."""
+def stretches(
+    route, flown: dict[str, float], basis, altitude=None
+) -> list[tuple[float, float, float, int]]:
+    """(flown beyond the plan, turn coefficient, gust term, helices) of each stretch flown;
+    ``altitude``: a point's altitude by id, for each leg's own gusts (route_check's)."""
     out = []
     stops = route.stops
+    leg_gusts = [0.0] + [
+        basis.leg_gusts(
+            s.leg.length,
+            None if altitude is None else min(altitude(stops[k].id), altitude(s.id)),
+        )
+        for k, s in enumerate(stops[1:])
+    ]
     last = {"V": 0, "H": 0}
     for k in range(1, len(stops)):
         if stops[k].id not in flown:
@@ -37,7 +48,7 @@ def stretches(route, flown: dict[str, float], basis) -> list[tuple[float, float,
             # The leg from A has no turn of its own: the start counts as a U-turn (route_check).
             coef = sum(1.0 - math.cos(min(abs(leg.turn_angle), math.pi)) for leg in legs)
             coef += 2.0 * (helices + (1 if start == 0 else 0))
-            gusts = basis.gust_share * sum(leg.length for leg in legs)
+            gusts = sum(leg_gusts[start + 1 : k + 1])
             out.append((over, coef, gusts, helices))
         if stops[k].kind.name in last:
             last[stops[k].kind.name] = k
@@ -71,7 +82,9 @@ def main(argv: list[str] | None = None) -> int:
                     met, to_b = flown_at(result, firmware, wind, gust, seed)
                     if to_b is not None:
                         met[result.route.stops[-1].id] = to_b
-                    for over, coef, gusts, helices in stretches(result.route, met, basis):
+                    for over, coef, gusts, helices in stretches(
+                        result.route, met, basis, altitude_of(result.scenario)
+                    ):
                         need = basis.late * coef + gusts
                         if over - need > margin:
                             margin, at = over - need, (over, need)

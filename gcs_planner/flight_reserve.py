@@ -11,17 +11,33 @@ An aircraft under its autopilot flies more than the planned legs between two res
   (R = (V + W)^2 / (g tan phi)), so nothing is left to catch up with. How late is the
   autopilot's: ArduPlane's L1 controller steers at a point L1 = NAVL1_PERIOD * NAVL1_DAMPING *
   Vg / pi ahead on the chord of the densified arc it is flying (AP_L1_Control::update_waypoint),
-  so it trails the arc: d = L1 / 2 (the mock ArduPlane, rolling into its turns, needs up to
-  0.42 L1 on the contest routes at winds 0-10 m/s and 0.55 L1 on dataset 2 at 10 m/s, where
-  the rule falls short: benchmarks/turn_entry.py). PX4's npfg (npfg.cpp) steers along the path
-  within its track error bound and turns within a few metres of the arc (the mock: d up to
-  0.14 R): d = R / 2.
+  so it trails the arc by L1 / 2, and the aircraft's bank follows the bank asked as a lag of
+  tau = ROLL_RESPONSE_S (gcs_planner/vehicle.py), which starts each turn about tau late:
+  d = L1 / 2 + tau Vg. (L1 / 2 alone fell short once the mock rolled into its turns: dataset 2
+  at 10 m/s needed 0.55 L1 in its turns; benchmarks/turn_entry.py.)
+  PX4's npfg (npfg.cpp) steers along the path within its track error bound and turns within a
+  few metres of the arc, rolling in included (the mock: d up to 0.14 R): d = R / 2.
   An autopilot not named: the larger of the two. The start at A (the aircraft's own heading)
   and each helix (a loiter entered and left where its guidance does; the mock: up to 0.9 R)
   count as one U-turn each.
-* **Gusts.** A cross gust of sigma m/s turns the track by about sigma / V, and the guidance
-  brings it back: the wandering track is longer than its line by the mean of 1/cos of that
-  angle, (sigma / V)^2 / 2 of its length, over the longest stretch the limits allow.
+* **Gusts.** A cross gust moves the aircraft off its line at up to its own speed, and the
+  guidance brings it back: the track's slope off the line is its cross-track rate over the
+  *ground* speed Vg, and the wandering track is longer than its line by the mean of 1/cos of
+  that slope, E[(y' / Vg)^2] / 2 of its length. The cross-track rate is the gust filtered by
+  the closed loop (:func:`track_wander`): the autopilot's path follower is a second-order loop
+  of natural frequency 2 pi / period and its damping (ArduPlane's L1 with NAVL1_PERIOD and
+  NAVL1_DAMPING: linearised, y'' = -(2 pi / P)^2 y - 2 zeta (2 pi / P) y'; PX4's npfg with
+  NPFG_PERIOD and NPFG_DAMPING), which acts through the aircraft's roll response
+  (ROLL_RESPONSE_S), on a gust of Dryden's first-order spectrum (standard deviation sigma,
+  correlation time L / TAS, L = DRYDEN_SCALE_LENGTH_M), so E[y'^2] = F sigma^2 with F the
+  loop's share of the gust (0.07-0.15 at the shipped loops, F at the fastest TAS taken). The
+  share taken is GUST_MARGIN F (sigma / Vg)^2 / 2 (0.25 for ArduPlane, 0.29 for PX4 at the
+  workbooks' 10 km): the mock vehicle's straight legs flew 0.11-0.15 (sigma / Vg)^2 / 2 on
+  average in every band of ground speed, 0.30 at most on one leg of 907
+  (benchmarks/gust_wander.py). Vg is the slowest: the TAS at the scenario's lowest point into
+  a headwind of the design wind (in the leg-by-leg check, each leg's own lowest point), over
+  the longest stretch the limits allow. (sigma / TAS)^2 / 2, the rule before, held in still
+  air but fell to half the wander of a leg flown into the wind.
 
 The planner keeps one reserve rho for every stretch (every limit becomes limit / delta - rho:
 exact and cheap), so rho covers the turns of ``TURNS_PER_STRETCH`` legs (a stretch between two
@@ -37,13 +53,22 @@ import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-from gcs_planner.vehicle import DEFAULT_RESERVE_MAX_SHARE
+from gcs_planner.vehicle import (
+    DEFAULT_RESERVE_MAX_SHARE,
+    DRYDEN_SCALE_LENGTH_M,
+    ROLL_RESPONSE_S,
+)
 
 if TYPE_CHECKING:
+    from collections.abc import Callable
+
     from gcs_planner.core.route import Route
+    from gcs_planner.scenario.model import Scenario
 
 # The turns a stretch between two resets of one error is planned to hold (see the docstring).
 TURNS_PER_STRETCH = 2
+# The gusts' wander is taken at this many times the closed loop's estimate (module docstring).
+GUST_MARGIN = 2.0
 # The derived reserve, like the constant default, never takes more than this share of the
 # tightest limit.
 MAX_SHARE = DEFAULT_RESERVE_MAX_SHARE
@@ -57,6 +82,9 @@ class DerivedReserve:
     largest ground speed ``ground_speed`` (TAS ``tas`` plus the design wind); ``gust``: the
     design gust (standard deviation per horizontal axis); ``stretch``: the longest stretch the
     limits allow (the largest limit over delta); ``cap``: MAX_SHARE of the tightest limit.
+    Gusts wander the track by ``wander`` (sigma / Vg)^2 / 2 of its length (track_wander() with
+    GUST_MARGIN), Vg the TAS less the design ``wind``: ``slowest_tas`` (the scenario's lowest
+    point; 0: ``tas``) for rho, each leg's own (from ``eas``) in the leg-by-leg check.
     """
 
     turn_radius: float
@@ -71,6 +99,11 @@ class DerivedReserve:
     late: float = 0.0
     late_rule: str = ""
     turns: int = TURNS_PER_STRETCH
+    wind: float = 0.0
+    slowest_tas: float = 0.0
+    eas: float = 0.0
+    wander: float = 1.0
+    wander_rule: str = ""
 
     @property
     def per_turn(self) -> float:
@@ -82,9 +115,24 @@ class DerivedReserve:
         return self.turns * self.per_turn
 
     @property
+    def slowest_ground_speed(self) -> float:
+        """The TAS at the scenario's lowest point into a headwind of the design wind."""
+        return (self.slowest_tas or self.tas) - self.wind
+
+    def gust_share_at(self, tas: float) -> float:
+        """The share of a length flown at ``tas`` into a headwind that gusts add:
+        wander (sigma / Vg)^2 / 2; infinite when the wind leaves no way over the ground."""
+        if self.gust <= 0:
+            return 0.0
+        ground = tas - self.wind
+        if ground <= 0:
+            return math.inf
+        return self.wander * 0.5 * (self.gust / ground) ** 2
+
+    @property
     def gust_share(self) -> float:
-        """The share of a stretch's length that gusts add: (sigma / V)^2 / 2."""
-        return 0.5 * (self.gust / self.tas) ** 2 if self.tas > 0 else 0.0
+        """The share of a stretch's length that gusts add, at the slowest ground speed."""
+        return self.gust_share_at(self.slowest_tas or self.tas)
 
     @property
     def gust_term(self) -> float:
@@ -108,21 +156,46 @@ class DerivedReserve:
         return self.late * (1.0 - math.cos(min(abs(turn_rad), math.pi)))
 
     def stretch_need(
-        self, turns_rad: list[float], helices: int, starts: bool, length: float
+        self,
+        turns_rad: list[float],
+        helices: int,
+        starts: bool,
+        length: float,
+        gust_m: float | None = None,
     ) -> float:
         """What one stretch needs: its turns, its helices and the start at A (each one U-turn)
-        and gusts over its ``length`` metres."""
+        and gusts over its ``length`` metres (``gust_m``: their metres worked out leg by leg;
+        None: the share at the slowest ground speed)."""
         n_whole = helices + (1 if starts else 0)
-        return (
-            sum(self.turn_extra(t) for t in turns_rad)
-            + n_whole * self.per_turn
-            + self.gust_share * length
-        )
+        gusts = self.gust_share * length if gust_m is None else gust_m
+        return sum(self.turn_extra(t) for t in turns_rad) + n_whole * self.per_turn + gusts
 
-    def route_check(self, route: Route) -> tuple[float, str, str]:
+    def leg_gusts(self, length: float, low_altitude: float | None) -> float:
+        """What gusts add to a leg of ``length`` metres whose lowest point is at
+        ``low_altitude`` (None: the scenario's lowest), flown into the design wind."""
+        if low_altitude is None or self.eas <= 0:
+            return self.gust_share * length
+        from gcs_planner.vehicle import tas_from_eas
+
+        return self.gust_share_at(tas_from_eas(self.eas, low_altitude)) * length
+
+    def route_check(
+        self, route: Route, altitude_of: Callable[[str], float] | None = None
+    ) -> tuple[float, str, str]:
         """(the most one stretch of ``route`` needs, its first and last point): each stretch
-        between a reset of an error (or A) and a check of it, leg by leg."""
+        between a reset of an error (or A) and a check of it, leg by leg; ``altitude_of`` a
+        point's altitude (m, above sea level) for each leg's own gusts."""
         stops = route.stops
+        gusts = [0.0] * len(stops)  # what gusts add to the leg into stop k
+        for k in range(1, len(stops)):
+            leg = stops[k].leg
+            if leg is not None:
+                low = (
+                    None
+                    if altitude_of is None
+                    else min(altitude_of(stops[k - 1].id), altitude_of(stops[k].id))
+                )
+                gusts[k] = self.leg_gusts(leg.length, low)
         worst, frm, to = 0.0, stops[0].id, stops[0].id
         last = {"V": 0, "H": 0}  # index of the stop where each error was last reset
         for k in range(1, len(stops)):
@@ -134,6 +207,7 @@ class DerivedReserve:
                     sum(1 for leg in legs if leg.helix_turns > 0),
                     start == 0,
                     sum(leg.length for leg in legs),
+                    sum(gusts[start + 1 : k + 1]),
                 )
                 if need > worst:
                     worst, frm, to = need, stops[start].id, stops[k].id
@@ -152,9 +226,12 @@ class DerivedReserve:
             f"{self.tas:.1f} m/s TAS, {self.bank_deg:.4g} deg bank)"
         )
         if self.gust > 0:
+            slowest = self.slowest_tas or self.tas
             text += (
-                f" + gusts {self.gust:g} m/s over {self.stretch / 1000:,.1f} km "
-                f"((sigma/V)^2/2 = {100 * self.gust_share:.3g} %: {self.gust_term:.0f} m)"
+                f" + gusts {self.gust:g} m/s over {self.stretch / 1000:,.1f} km at "
+                f"{self.slowest_ground_speed:.1f} m/s ground speed ({slowest:.1f} m/s TAS at "
+                f"the lowest point into {self.wind:g} m/s; {self.wander:.2f} (sigma/Vg)^2/2 = "
+                f"{100 * self.gust_share:.3g} %: {self.gust_term:.0f} m; {self.wander_rule})"
             )
         else:
             text += " + no gusts (--gust SPEED adds them)"
@@ -180,25 +257,94 @@ class DerivedReserve:
             "turns": self.turns,
             "turn_term_m": self.turn_term,
             "gust": self.gust,
+            "design_wind": self.wind,
+            "slowest_tas": self.slowest_tas or self.tas,
+            "slowest_ground_speed": self.slowest_ground_speed,
+            "gust_wander": self.wander,
+            "gust_wander_rule": self.wander_rule,
             "gust_share": self.gust_share,
             "stretch_m": self.stretch,
             "gust_term_m": self.gust_term,
-            "derivation": "turns x 2d + (gust / TAS)^2 / 2 x longest stretch (a turn of theta "
-            "entered d late flies d (1 - cos theta) more), at most 5 % of the tightest limit",
+            "derivation": "turns x 2d + wander (gust / Vg)^2 / 2 x longest stretch, Vg the "
+            "slowest ground speed (a turn of theta entered d late flies d (1 - cos theta) "
+            "more), at most 5 % of the tightest limit",
         }
 
 
 def late_entry(autopilot: str | None, turn_radius: float, ground_speed: float) -> tuple[float, str]:
     """(d, its rule): how late ``autopilot`` enters a turn of ``turn_radius`` metres flown at
     ``ground_speed`` m/s (see the module docstring); None: the larger of both autopilots'."""
+    # ArduPlane's L1 trails the arc; both autopilots' aircraft roll in over ROLL_RESPONSE_S,
+    # which npfg's R/2 already holds (it turns within a few metres of the arc).
     from gcs_planner.autopilot import effective
 
     l1 = effective("ardupilot", {}).settle_distance(ground_speed)
-    ardupilot = (l1 / 2.0, f"ArduPlane's L1 = {l1:.0f} m, d = L1/2")
+    roll_in = ROLL_RESPONSE_S * ground_speed
+    ardupilot = (
+        l1 / 2.0 + roll_in,
+        f"ArduPlane's L1 = {l1:.0f} m, d = L1/2 + {ROLL_RESPONSE_S:g} s of roll-in x "
+        f"{ground_speed:.1f} m/s",
+    )
     px4 = (turn_radius / 2.0, "PX4's npfg, d = R/2")
     if autopilot == "ardupilot":
         return ardupilot
     if autopilot == "px4":
         return px4
     d, rule = max(ardupilot, px4)
-    return d, f"the autopilot not named: the larger of ArduPlane's L1/2 and PX4's R/2, {rule}"
+    return d, f"the autopilot not named: the larger of ArduPlane's and PX4's, {rule}"
+
+
+def track_wander(
+    period: float, damping: float, correlation_time: float, roll_response: float = ROLL_RESPONSE_S
+) -> float:
+    """E[y'^2] / sigma^2: the share of a gust's power that reaches the cross-track rate y' of an
+    aircraft whose path follower is the linear loop y'' = -w^2 y - 2 zeta w y' (w = 2 pi /
+    ``period``, zeta = ``damping``), its lateral acceleration following the command as a
+    first-order lag of ``roll_response`` s, in a gust of first-order (Dryden) spectrum with
+    ``correlation_time`` s. The gust enters the ground velocity directly, so y' / v =
+    s^2 (1 + T s) / (T s^3 + s^2 + 2 zeta w s + w^2); infinite when that loop is unstable."""
+    from scipy.integrate import quad
+
+    w0 = 2.0 * math.pi / period
+    tr, tau = roll_response, correlation_time
+    if 2.0 * damping * w0 <= tr * w0 * w0:  # Routh: the lagged loop does not settle
+        return math.inf
+
+    def power(w: float) -> float:
+        s = 1j * w
+        h = s * s * (1 + tr * s) / (tr * s**3 + s * s + 2 * damping * w0 * s + w0 * w0)
+        return abs(h) ** 2 * 2.0 * tau / (1.0 + (w * tau) ** 2) / math.pi
+
+    # Split where the loop and the gust live: quad meets both peaks.
+    knees = sorted({1.0 / tau, w0, 1.0 / tr if tr > 0 else w0})
+    edges = [0.0, *knees, 10.0 * knees[-1]]
+    total = sum(quad(power, a, b, limit=200)[0] for a, b in zip(edges, edges[1:], strict=False))
+    return total + quad(power, edges[-1], math.inf, limit=200)[0]
+
+
+def gust_wander(autopilot: str | None, tas: float) -> tuple[float, str]:
+    """(the factor on (sigma / Vg)^2 / 2, its rule) for ``autopilot``'s shipped path follower
+    at ``tas`` (the fastest TAS: the gust's correlation time L / TAS is then shortest and the
+    loop passes most of it); None: the larger of both autopilots'."""
+    from gcs_planner.autopilot import effective
+
+    tau = DRYDEN_SCALE_LENGTH_M / max(tas, 1.0)
+    ap = effective("ardupilot", {})
+    px = effective("px4", {})
+    assert ap.l1_period and ap.l1_damping and px.npfg_period and px.npfg_damping
+    found = {
+        "ardupilot": (track_wander(ap.l1_period, ap.l1_damping, tau), "ArduPlane's L1"),
+        "px4": (track_wander(px.npfg_period, px.npfg_damping, tau), "PX4's npfg"),
+    }
+    if autopilot in found:
+        f, who = found[autopilot]
+    else:
+        f, who = max(found.values())
+    rule = f"{who} passes F = {f:.3f} of the gust's power at {tas:.1f} m/s TAS, x {GUST_MARGIN:g}"
+    return GUST_MARGIN * f, rule
+
+
+def altitude_of(scenario: Scenario) -> Callable[[str], float]:
+    """A point's altitude above sea level (m) by its id, as the envelope's TAS takes it."""
+    base = scenario.origin.alt if scenario.origin else 0.0
+    return lambda point_id: float(scenario.xyz[scenario.index_of(point_id), 2]) + base

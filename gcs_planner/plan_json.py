@@ -14,6 +14,7 @@ from gcs_planner.core.capture import capture_check, capture_warning
 from gcs_planner.core.planner import Plan
 from gcs_planner.core.route import Route
 from gcs_planner.errors import InputError
+from gcs_planner.flight_reserve import altitude_of
 from gcs_planner.geometry.trajectory import leg_to_dict, scenario_trajectory
 from gcs_planner.scenario.model import Kind, Scenario
 from gcs_planner.vehicle import TRACKING_ALLOWANCE_M
@@ -88,7 +89,7 @@ def reserve_of(plan: Plan) -> dict[str, Any]:
         out.update(basis.to_dict())
         out["metres"] = metres
         if plan.routes:
-            need, frm, to = basis.route_check(plan.route)
+            need, frm, to = basis.route_check(plan.route, altitude_of(s))
             out["chosen_route"] = {
                 "need_m": need, "from": frm, "to": to, "covered": need <= metres + 1e-9,
             }  # fmt: skip

@@ -24,6 +24,17 @@ from gcs_planner.autopilot import PARAM_TYPE_REAL32 as PARAM_TYPE_REAL32
 
 # Standard gravity (m/s^2), as both autopilots use for the bank/turn-rate relation.
 G = 9.80665
+# How the aircraft's bank follows the bank its autopilot asks: a first-order lag of this time
+# constant (s). The autopilots' roll loops ask for it over ArduPlane RLL2SRV_TCONST 0.5 s and
+# PX4 FW_R_TC 0.4 s; the airframe lags the rate asked (JSBSim's c172r under those loops: 0.8 s,
+# sim/aircraft.py). The mock vehicle rolls at it, and a turn is entered about this long late
+# (the derived reserve, gcs_planner/flight_reserve.py).
+ROLL_RESPONSE_S = 0.8
+# The gusts' scale length (m): MIL-F-8785C's Dryden model above 2,000 ft (1,750 ft). A gust
+# stays correlated for this many metres of air flown through (its time, L / TAS); the dry run
+# draws its gusts with it (sim/wind.py) and the derived reserve counts their wander with it
+# (gcs_planner/flight_reserve.py).
+DRYDEN_SCALE_LENGTH_M = 533.0
 
 # The leg models (docs/model.md, "Leg geometry"). "airplane" is the default whenever R > 0;
 # "cs3d" is the tilted-plane Dubins leg kept to reproduce earlier figures; with R = 0 legs are
@@ -272,10 +283,19 @@ class DerivedEnvelope:
     approach: float = 0.0
     departure: float = 0.0
     runs_source: str = ""
+    # The scenario's lowest altitude (m; None: ``altitude``), where the TAS is slowest: gusts
+    # wander the track most, and a headwind leaves least ground speed, there.
+    low_altitude: float | None = None
 
     @property
     def tas(self) -> float:
         return tas_from_eas(self.eas, self.altitude)
+
+    @property
+    def tas_low(self) -> float:
+        """The TAS at the scenario's lowest altitude (the slowest over the ground)."""
+        low = self.altitude if self.low_altitude is None else self.low_altitude
+        return tas_from_eas(self.eas, low)
 
     @property
     def ground_speed_max(self) -> float:
@@ -309,13 +329,15 @@ class DerivedEnvelope:
                 bad.append((name, f"must be a rate > 0 m/s (got {v!r})"))
         if not (math.isfinite(self.wind) and self.wind >= 0):
             bad.append(("wind", f"must be a speed >= 0 m/s (got {self.wind!r})"))
-        elif math.isfinite(self.eas) and self.eas > 0 and self.wind >= self.tas:
+        elif math.isfinite(self.eas) and self.eas > 0 and self.wind >= self.tas_low:
+            # The slowest TAS: at the lowest point a headwind leaves the least ground speed.
+            low = self.altitude if self.low_altitude is None else self.low_altitude
             bad.append(
                 (
                     "wind",
-                    f"{self.wind:g} m/s is not below the true airspeed {self.tas:.1f} m/s "
-                    f"({self.eas:g} m/s EAS at {self.altitude:.0f} m): the aircraft cannot "
-                    "make way against it",
+                    f"{self.wind:g} m/s is not below the true airspeed {self.tas_low:.1f} m/s "
+                    f"({self.eas:g} m/s EAS at {low:.0f} m, the scenario's lowest point): the "
+                    "aircraft cannot make way against it",
                 )
             )
         return bad
@@ -367,6 +389,8 @@ class DerivedEnvelope:
             "cruise_eas": self.eas,
             "altitude_m": self.altitude,
             "tas": self.tas,
+            "low_altitude_m": self.altitude if self.low_altitude is None else self.low_altitude,
+            "tas_low": self.tas_low,
             "bank_limit_deg": self.bank_deg,
             "climb_rate": num(self.climb_rate),
             "sink_rate": num(self.sink_rate),

@@ -19,7 +19,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-DRYDEN_SCALE_LENGTH_M = 533.0
+from gcs_planner.vehicle import DRYDEN_SCALE_LENGTH_M
+
 _BATCH = 4096
 
 

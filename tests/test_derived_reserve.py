@@ -12,9 +12,10 @@ from dataclasses import replace
 import pytest
 from conftest import DATA
 
-from benchmarks.reserve import SHIPPED, TABLE2, fly, planned
+from benchmarks.reserve import SHIPPED, TABLE2, flown_at, fly, planned
 from gcs_planner.cli import main
-from gcs_planner.flight_reserve import MAX_SHARE, DerivedReserve
+from gcs_planner.flight_reserve import GUST_MARGIN, MAX_SHARE, DerivedReserve, track_wander
+from gcs_planner.vehicle import DRYDEN_SCALE_LENGTH_M, ROLL_RESPONSE_S
 
 DS1 = [f"--{k}={v:g}" for k, v in TABLE2[1].items()]
 AP = [f"--{k.replace('_', '-')}={v:g}" for k, v in SHIPPED["ardupilot"].items()]
@@ -59,9 +60,15 @@ def test_plan_derives_the_reserve_prints_it_with_its_reason_and_writes_it(capsys
     r = d["reserve"]
     env = d["vehicle"]["envelope"]
     assert r["source"] == "derived" and r["metres"] == d["parameters"]["reserve"]
-    # 2 turns x 2d, d = L1/2 (ArduPlane's L1 distance is its run-in); gusts (sigma/TAS)^2/2
-    # over the longest stretch, 30 km
-    want = 2 * env["approach_m"] + 0.5 * (1.5 / env["tas"]) ** 2 * 30 / 0.001
+    # 2 turns x 2d, d = L1/2 (ArduPlane's L1 distance is its run-in) + the roll-in's lag at
+    # the ground speed; gusts wander (sigma/Vg)^2/2 over the longest stretch, 30 km, Vg the
+    # TAS at the lowest point into the 5 m/s wind
+    d = env["approach_m"] / 2 + ROLL_RESPONSE_S * r["ground_speed"]
+    assert r["slowest_ground_speed"] == pytest.approx(env["tas_low"] - 5.0)
+    assert env["tas_low"] < env["tas"]
+    wander = GUST_MARGIN * track_wander(17.0, 0.75, DRYDEN_SCALE_LENGTH_M / env["tas"])
+    assert r["gust_wander"] == pytest.approx(wander)
+    want = 4 * d + wander * 0.5 * (1.5 / (env["tas_low"] - 5.0)) ** 2 * 30 / 0.001
     assert r["metres"] == pytest.approx(want)
     assert r["metres"] != 200.0  # not the constant default
     check = r["chosen_route"]
@@ -109,7 +116,7 @@ def test_the_derived_reserve_keeps_the_default_cap() -> None:
 # (workbook, autopilot, design wind, gusts): still air, wind and gusts on both autopilots,
 # dataset 2's tighter limits.
 FLOWN = [(1, "ardupilot", 0.0, 0.0), (1, "ardupilot", 10.0, 1.5), (1, "px4", 10.0, 1.5),
-         (2, "ardupilot", 5.0, 1.5)]  # fmt: skip
+         (2, "ardupilot", 5.0, 1.5), (2, "ardupilot", 10.0, 1.5)]  # fmt: skip
 
 
 @pytest.mark.parametrize(("dataset", "firmware", "wind", "gust"), FLOWN)
@@ -120,6 +127,8 @@ def test_the_mock_vehicle_flies_no_stretch_longer_than_the_derived_reserve_cover
     wind from two drawn directions: the most it flies beyond the plan between a reset and a
     check of an error stays within the derived reserve, and within the route's own leg-by-leg
     need (its turns, helices and gusts)."""
+    from benchmarks.turn_entry import stretches
+    from gcs_planner.flight_reserve import altitude_of
     from gcs_planner.plan_json import reserve_of
 
     result = planned(dataset, firmware, wind, gust)
@@ -131,20 +140,33 @@ def test_the_mock_vehicle_flies_no_stretch_longer_than_the_derived_reserve_cover
     assert worst > 0  # the flights do fly beyond the plan: the check measures something
     assert worst <= reserve, (worst, reserve)
     assert worst <= need, (worst, need)
+    # and stretch by stretch, each within its own need (its turns, helices and gusts)
+    basis = result.scenario.reserve_basis
+    for seed in range(2):
+        met, to_b = flown_at(result, firmware, wind, gust, seed)
+        if to_b is not None:
+            met[result.route.stops[-1].id] = to_b
+        rows = stretches(result.route, met, basis, altitude_of(result.scenario))
+        assert rows
+        for over, coef, gusts, _ in rows:
+            # 1 m: what the written mission rounds away (1e-7 degree per waypoint and axis)
+            assert over <= basis.late * coef + gusts + 1.0, (seed, over, coef, gusts)
 
 
 def test_each_autopilot_enters_its_turns_as_late_as_its_guidance() -> None:
-    """ArduPlane trails by half its L1 distance (the run-in it settles over), PX4 by half the
-    radius; an autopilot not named by the larger, so it holds for either."""
+    """ArduPlane trails by half its L1 distance (the run-in it settles over) and the roll-in's
+    lag at the ground speed, PX4 by half the radius; an autopilot not named by the larger, so
+    it holds for either."""
     from gcs_planner.autopilot import effective
     from gcs_planner.flight_reserve import late_entry
 
     for radius, speed in ((44.0, 20.7), (96.0, 30.7), (400.0, 30.7)):
         l1 = effective("ardupilot", {}).settle_distance(speed)
-        assert late_entry("ardupilot", radius, speed)[0] == pytest.approx(l1 / 2)
+        ardupilot = l1 / 2 + ROLL_RESPONSE_S * speed
+        assert late_entry("ardupilot", radius, speed)[0] == pytest.approx(ardupilot)
         assert late_entry("px4", radius, speed)[0] == pytest.approx(radius / 2)
         either = late_entry(None, radius, speed)[0]
-        assert either == max(l1 / 2, radius / 2)
+        assert either == pytest.approx(max(ardupilot, radius / 2))
 
 
 def _scenario_toml(tmp_path, environment: str) -> str:
@@ -177,3 +199,69 @@ def test_the_scenario_file_states_the_design_gust(tmp_path, capsys) -> None:
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "gusty.toml" in err[0] and "environment.gust" in err[0]
     assert "Traceback" not in err[0]
+
+
+def test_a_stretch_needs_its_own_turns_and_one_u_turn_per_helix_and_for_the_start() -> None:
+    """A stretch's leg-by-leg need: each turn's d (1 - cos theta), each helix (a loiter joined
+    and left where its guidance does) and the start at A (its heading is free) a U-turn."""
+    b = basis(gust=0.0)
+    assert b.stretch_need([], 0, False, 1000.0) == 0.0
+    assert b.stretch_need([], 1, False, 1000.0) == pytest.approx(b.per_turn)
+    assert b.stretch_need([], 0, True, 1000.0) == pytest.approx(b.per_turn)
+    quarter = math.radians(90)
+    assert b.stretch_need([quarter], 1, True, 1000.0) == pytest.approx(
+        b.turn_extra(quarter) + 2 * b.per_turn
+    )
+    gusty = basis()
+    assert gusty.stretch_need([], 0, False, 10_000.0) == pytest.approx(gusty.gust_share * 10_000.0)
+
+
+def _simulated_wander(period: float, damping: float, tau: float, roll: float) -> float:
+    """E[y'^2] / sigma^2 of the same loop integrated in time (0.01 s steps over 20,000 s, a
+    unit first-order gust drawn exactly per step): an independent check of the integral."""
+    import numpy as np
+
+    rng = np.random.default_rng(7)
+    dt, n = 0.01, 2_000_000
+    w0 = 2 * math.pi / period
+    a = math.exp(-dt / tau)
+    kick = math.sqrt(1 - a * a) * rng.standard_normal(n)
+    y = vy_air = acc = 0.0
+    v = float(rng.standard_normal())
+    total = 0.0
+    for k in range(n):  # the loop's few states, stepped as the equations say
+        v = v * a + kick[k]
+        rate = vy_air + v  # the cross-track rate over the ground: the air's and the gust's
+        command = -(w0 * w0 * y + 2 * damping * w0 * rate)
+        acc = command if roll <= 0 else acc + (command - acc) * dt / roll
+        vy_air += acc * dt
+        y += rate * dt
+        total += rate * rate
+    return total / n
+
+
+@pytest.mark.parametrize(("period", "damping", "tau"), [(17.0, 0.75, 30.0), (10.0, 0.7, 20.0)])
+def test_the_gusts_wander_is_the_closed_loops_share_of_their_power(period, damping, tau) -> None:
+    """track_wander's frequency integral against the loop flown in time, and its limits: a
+    gust far faster than the loop passes whole, one far slower is steered out."""
+    f = track_wander(period, damping, tau, ROLL_RESPONSE_S)
+    assert f == pytest.approx(_simulated_wander(period, damping, tau, ROLL_RESPONSE_S), rel=0.05)
+    assert track_wander(period, damping, 0.01, ROLL_RESPONSE_S) > 0.95
+    assert track_wander(period, damping, 1e5, ROLL_RESPONSE_S) < 1e-3
+    assert track_wander(period, damping, tau, 0.0) < f  # the roll response lets more through
+    # a loop the roll response cannot follow does not settle: no finite wander
+    assert math.isinf(track_wander(1.0, 0.3, tau, ROLL_RESPONSE_S))
+
+
+def test_gusts_wander_most_into_a_headwind_at_the_lowest_point() -> None:
+    """The share is taken at the slowest ground speed: the lowest point's TAS into the wind."""
+    from gcs_planner.vehicle import tas_from_eas
+
+    b = basis(wind=10.0, slowest_tas=15.0, eas=12.0, wander=0.2)
+    assert b.slowest_ground_speed == pytest.approx(5.0)
+    assert b.gust_share == pytest.approx(0.2 * 0.5 * (1.5 / 5.0) ** 2)
+    assert b.gust_share_at(20.7) < b.gust_share  # a faster leg wanders less
+    assert basis(wind=10.0, slowest_tas=10.0, eas=12.0).gust_share == math.inf
+    # a leg's own: its lowest point's TAS (12 m/s EAS at 5 km) into the wind
+    leg = b.leg_gusts(1000.0, 5000.0)
+    assert leg == pytest.approx(1000.0 * b.gust_share_at(tas_from_eas(12.0, 5000.0)))

@@ -15,7 +15,7 @@ from dataclasses import replace
 
 from gcs_planner.autopilot import autopilot_for, effective
 from gcs_planner.errors import InputError
-from gcs_planner.flight_reserve import MAX_SHARE, DerivedReserve, late_entry
+from gcs_planner.flight_reserve import MAX_SHARE, DerivedReserve, gust_wander, late_entry
 from gcs_planner.scenario.model import Scenario
 from gcs_planner.vehicle import FIRMWARES, DerivedEnvelope, bank_angle_for, parse_wind
 
@@ -210,7 +210,9 @@ def derive_envelope(
             return float(default)
         return None
 
-    altitude = float(scenario.xyz[:, 2].max()) + (scenario.origin.alt if scenario.origin else 0.0)
+    base = scenario.origin.alt if scenario.origin else 0.0
+    altitude = float(scenario.xyz[:, 2].max()) + base
+    low_altitude = float(scenario.xyz[:, 2].min()) + base
     eas_flag = getattr(args, "cruise_airspeed", None)
     if eas_flag is None and shipped is None:
         eas = scenario.cruise_airspeed
@@ -248,6 +250,7 @@ def derive_envelope(
         altitude=altitude,
         autopilot=firmware,
         sources=tuple(sources),
+        low_altitude=low_altitude,
     )
     flier = shipped if shipped is not None or flown_by is None else effective(flown_by, {})
     env = _with_runs(env, args, scenario, flier)
@@ -310,6 +313,7 @@ def with_derived_reserve(
     # The arcs are flown at the larger of the planned radius and the roll limit's at V + W.
     radius = max(p.turn_radius, env.turn_radius)
     late, rule = late_entry(autopilot, radius, env.ground_speed_max)
+    wander, wander_rule = gust_wander(autopilot, env.tas) if gust > 0 else (0.0, "")
     basis = DerivedReserve(
         turn_radius=radius,
         late=late,
@@ -321,6 +325,11 @@ def with_derived_reserve(
         gust=gust,
         stretch=max(limits) / p.delta,
         cap=MAX_SHARE * min(limits) / p.delta,
+        wind=env.wind,
+        slowest_tas=env.tas_low,
+        eas=env.eas,
+        wander=wander,
+        wander_rule=wander_rule,
     )
     out = scenario.with_params(reserve=basis.metres)
     return out.with_vehicle(reserve_source="derived", reserve_basis=basis)
