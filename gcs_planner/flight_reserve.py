@@ -33,7 +33,7 @@ An aircraft under its autopilot flies more than the planned legs between two res
   loop's share of the gust (0.07-0.15 at the shipped loops, F at the fastest TAS taken). The
   share taken is GUST_MARGIN F (sigma / Vg)^2 / 2 (0.25 for ArduPlane, 0.29 for PX4 at the
   workbooks' 10 km): the mock vehicle's straight legs flew 0.11-0.15 (sigma / Vg)^2 / 2 on
-  average in every band of ground speed, 0.30 at most on one leg of 907
+  average in every band of ground speed, above the factor on four legs of 867 (0.26-0.30)
   (benchmarks/gust_wander.py). Vg is the slowest: the TAS at the scenario's lowest point into
   a headwind of the design wind (in the leg-by-leg check, each leg's own lowest point), over
   the longest stretch the limits allow. (sigma / TAS)^2 / 2, the rule before, held in still
