@@ -91,3 +91,21 @@ def test_the_plan_for_a_10_ms_wind_is_never_lost_by_the_flight(
     assert d["flight_losses"] == 0, d["lost_runs"]
     assert d["correction_losses"] == round(20 * (1 - d["success_rate"]))
     assert rc == 0
+
+
+def test_a_wind_the_aircraft_cannot_make_way_against_at_the_lowest_point_is_refused(
+    capsys, dataset_paths
+):
+    """12 m/s EAS is 20.7 m/s TAS at dataset 1's highest point (10 km) but 12.0 m/s at its
+    lowest (9 m): a 12.5 m/s design wind leaves no way over the ground there, so the plan is
+    refused with the flag, the speeds and the altitude named; 11.5 m/s plans."""
+    rc = main(["plan", str(dataset_paths[1]), *DS1, "--firmware", "ardupilot", "--wind", "12.5",
+               "--quiet"])  # fmt: skip
+    err = capsys.readouterr().err
+    assert rc == 2 and "Traceback" not in err
+    assert "--wind" in err and "12.0 m/s" in err and "lowest point" in err and " 9 m" in err
+    rc = main(["plan", str(dataset_paths[1]), *DS1, "--firmware", "ardupilot", "--wind", "11.5",
+               "--quiet", "--json"])  # fmt: skip
+    assert rc == 0
+    envelope = json.loads(capsys.readouterr().out)["vehicle"]["envelope"]
+    assert envelope["tas_low"] == pytest.approx(12.0, abs=0.01) and envelope["tas"] > 20
