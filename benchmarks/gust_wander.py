@@ -20,7 +20,7 @@ import sys
 
 import numpy as np
 
-from benchmarks.reserve import GUST, flown_at, planned
+from benchmarks.reserve import GUST, flight, planned
 
 WIND = 10.0
 BANDS = (2.0, 5.0, 8.0, 11.0, 14.0, 17.0, 20.0, 23.0, 26.0, 29.0, 32.0)
@@ -28,24 +28,9 @@ BANDS = (2.0, 5.0, 8.0, 11.0, 14.0, 17.0, 20.0, 23.0, 26.0, 29.0, 32.0)
 
 def straight_legs(result, firmware: str, from_deg: float, seed: int) -> list[tuple[float, float]]:
     """(ground speed, share the track is longer than its chord) of each long straight leg."""
-    import sim.replay as replay_module
     from gcs_planner.vehicle import tas_from_eas
-    from sim.wind import WindSpec
 
-    seen = {}
-    real = replay_module.replay
-
-    def spy(*args, **kwargs):
-        kwargs["wind"] = WindSpec(WIND, from_deg, GUST)
-        seen["report"] = real(*args, **kwargs)
-        return seen["report"]
-
-    replay_module.replay = spy
-    try:
-        flown_at(result, firmware, WIND, GUST, seed)
-    finally:
-        replay_module.replay = real
-    path = seen["report"].flown
+    path = flight(result, firmware, WIND, GUST, seed, from_deg).flown
     pts, seqs = path.points, np.asarray(path.seqs)
     a_from = math.radians(from_deg)
     towards = np.array([-WIND * math.sin(a_from), -WIND * math.cos(a_from)])

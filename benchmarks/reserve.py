@@ -86,6 +86,15 @@ def flown_at(
 ) -> tuple[dict[str, float], float | None]:
     """One flight of the chosen route: (metres flown from A at each point of the route the
     track met, metres flown to B or None)."""
+    report = flight(result, firmware, wind, gust, seed)
+    on_route = {s.id for s in result.route.stops}
+    met = {e.id: e.distance for e in report.encounters if e.id in on_route}
+    return met, (report.flown.length if report.flown is not None else None)
+
+
+def flight(result, firmware: str, wind: float, gust: float, seed: int, from_deg=None):
+    """The replay report of one flight of the chosen route, the wind from ``from_deg`` (None:
+    a direction drawn from ``seed``)."""
     from gcs_planner.link.vehicle_check import needs
     from gcs_planner.mission.builder import build_mission
     from gcs_planner.plan_json import plan_to_dict
@@ -107,11 +116,9 @@ def flown_at(
         mission.items, result.scenario, seed=seed, home_at_seq0=firmware == "ardupilot",
         cruise_speed=eas, flavour=firmware,
         autopilot=AutopilotParams.from_parameters(firmware, params),
-        wind=WindSpec(wind, None, gust), navigate_on_estimate=False,
+        wind=WindSpec(wind, from_deg, gust), navigate_on_estimate=False,
     )  # fmt: skip
-    on_route = {s.id for s in result.route.stops}
-    met = {e.id: e.distance for e in report.encounters if e.id in on_route}
-    return met, (report.flown.length if report.flown is not None else None)
+    return report
 
 
 def measure(dataset: int, firmware: str, wind: float, gust: float, flights: int) -> Measured:

@@ -29,13 +29,7 @@ def stretches(
     ``altitude``: a point's altitude by id, for each leg's own gusts (route_check's)."""
     out = []
     stops = route.stops
-    leg_gusts = [0.0] + [
-        basis.leg_gusts(
-            s.leg.length,
-            None if altitude is None else min(altitude(stops[k].id), altitude(s.id)),
-        )
-        for k, s in enumerate(stops[1:])
-    ]
+    leg_gusts = basis.route_gusts(route, altitude)
     last = {"V": 0, "H": 0}
     for k in range(1, len(stops)):
         if stops[k].id not in flown:

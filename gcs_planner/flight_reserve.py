@@ -179,14 +179,14 @@ class DerivedReserve:
 
         return self.gust_share_at(tas_from_eas(self.eas, low_altitude)) * length
 
-    def route_check(
+    def route_gusts(
         self, route: Route, altitude_of: Callable[[str], float] | None = None
-    ) -> tuple[float, str, str]:
-        """(the most one stretch of ``route`` needs, its first and last point): each stretch
-        between a reset of an error (or A) and a check of it, leg by leg; ``altitude_of`` a
-        point's altitude (m, above sea level) for each leg's own gusts."""
+    ) -> list[float]:
+        """What gusts add to each leg of ``route``, by the stop it leads to (0 at A), each at
+        its own lowest point (``altitude_of`` a point's altitude; None: the scenario's
+        lowest)."""
         stops = route.stops
-        gusts = [0.0] * len(stops)  # what gusts add to the leg into stop k
+        gusts = [0.0] * len(stops)
         for k in range(1, len(stops)):
             leg = stops[k].leg
             if leg is not None:
@@ -196,6 +196,16 @@ class DerivedReserve:
                     else min(altitude_of(stops[k - 1].id), altitude_of(stops[k].id))
                 )
                 gusts[k] = self.leg_gusts(leg.length, low)
+        return gusts
+
+    def route_check(
+        self, route: Route, altitude_of: Callable[[str], float] | None = None
+    ) -> tuple[float, str, str]:
+        """(the most one stretch of ``route`` needs, its first and last point): each stretch
+        between a reset of an error (or A) and a check of it, leg by leg; ``altitude_of`` a
+        point's altitude (m, above sea level) for each leg's own gusts."""
+        stops = route.stops
+        gusts = self.route_gusts(route, altitude_of)
         worst, frm, to = 0.0, stops[0].id, stops[0].id
         last = {"V": 0, "H": 0}  # index of the stop where each error was last reset
         for k in range(1, len(stops)):
