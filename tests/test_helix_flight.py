@@ -184,3 +184,35 @@ def test_px4_helix_beside_its_target_is_written_as_waypoints():
     assert all(a < b for a, b in zip(zs, zs[1:]))  # climbing all the way
     x, y, _ = frame.to_local(helix[-1].lat, helix[-1].lon, helix[-1].z)
     assert math.hypot(x - 10000.0, y) < 0.05  # whole turns: above the correction point it left
+
+
+def test_no_arduplane_arc_waypoint_lies_within_the_lap_counts_slack_after_a_helix(ds2_route):
+    """ArduPlane leaves a loiter for a next waypoint on its circle the moment its count of turns
+    is done; the count ends where the wind and the capture put it, so the first arc waypoint
+    after each helix lies at least ARDUPLANE_LAP_SLACK_DEG past the helix's start (the end of
+    the run-out, where the helix begins), or there is none and the target follows."""
+    from gcs_planner.mission.builder import (
+        ARDUPLANE_LAP_SLACK_DEG,
+        MAV_CMD_NAV_LOITER_TURNS,
+        route_entry,
+    )
+
+    _, _, plan_dict = ds2_route
+    m = build_mission(plan_dict, firmware="ardupilot", acceptance_radius=1)
+    frame = LocalFrame(m.origin)
+    legs = [leg for leg in route_legs(route_entry(plan_dict)[1]) if leg.helix_turns > 0]
+    loiters = [k for k, it in enumerate(m.items) if it.command == MAV_CMD_NAV_LOITER_TURNS]
+    assert len(loiters) == len(legs) > 0
+    checked = 0
+    for k, leg in zip(loiters, legs, strict=True):
+        after = m.items[k + 1]
+        if "arc" not in after.note:
+            continue  # the target's own waypoint: ArduPlane leaves on the course to it
+        p = np.array(frame.to_local(after.x / 1e7, after.y / 1e7, after.z))[:2]
+        start = leg.point_at_horizontal(leg.run_out)[:2]
+        c = np.asarray(leg.centre[:2])
+        a0, a1 = np.arctan2(*(start - c)[::-1]), np.arctan2(*(p - c)[::-1])
+        swept = abs(math.remainder(a1 - a0, 2 * math.pi))
+        assert swept >= math.radians(ARDUPLANE_LAP_SLACK_DEG) - 1e-6, (after.note, swept)
+        checked += 1
+    assert checked > 0  # some helix is followed by the rest of its arc
