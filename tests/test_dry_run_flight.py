@@ -195,3 +195,18 @@ def test_steep_cs3d_mission_is_caught_through_mock_vehicle_and_upload_processes(
         proc.communicate(timeout=60)
     assert any("MISSED" in t for t in texts), texts
     assert any("INS LOST" in t for t in texts), texts
+
+
+def test_px4_overflies_b_of_a_plan_without_run_outs(capsys):
+    """missions/jsbsim states its envelope (no run-outs): PX4 switches to the end action at
+    npfg's switch distance, ~100 m before B, and without the exporter's run-out beyond B it
+    turned away and passed B 7.9 m off (lost, outside the 5 m capture radius). Now it arrives:
+    every correction made and B passed within the capture radius."""
+    from pathlib import Path
+
+    scenario = Path(__file__).resolve().parents[1] / "missions" / "jsbsim" / "scenario.toml"
+    rc = main(["dry-run", str(scenario), "--firmware", "px4", "--json", "--quiet"])
+    d = json.loads(capsys.readouterr().out)
+    assert rc == 0 and d["verified"] and d["arrived"] and d["ok"], (d["route"], d["why"])
+    assert d["corrections_as_planned"] and d["flown_to_b"] is not None
+    assert all(r["outcome"] == "ok" for r in d["rows"])

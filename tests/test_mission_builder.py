@@ -26,6 +26,8 @@ from gcs_planner.mission.builder import (
     arc_step,
     arc_waypoints,
     build_mission,
+    route_entry,
+    route_legs,
 )
 from gcs_planner.mission.items import (
     MAV_CMD_DO_CHANGE_SPEED,
@@ -176,12 +178,20 @@ def test_ardupilot_mission_layout():
 
 
 def test_px4_has_no_home_and_every_seq_shifts_by_one():
+    """PX4's mission is ArduPlane's without the home item, every seq one lower, and for a plan
+    with no run-out one waypoint more: straight on beyond B before the end action (next test)."""
     plan = make_plan()
     ap = build_mission(plan, firmware="ardupilot")
     px4 = build_mission(plan, firmware="px4")
-    assert len(px4.items) == len(ap.items) - 1
+    assert len(px4.items) == len(ap.items)
     assert px4.items[0].command == MAV_CMD_DO_CHANGE_SPEED
-    for a, b in zip(ap.items[1:], px4.items, strict=True):
+    b_seq = px4.seq_of(plan["front"][0]["route"][-1])
+    beyond, end = px4.items[b_seq + 1], px4.items[b_seq + 2]
+    assert beyond.command == MAV_CMD_NAV_WAYPOINT and beyond.note.startswith("departure")
+    assert (end.command, end.x, end.y, end.z) == (
+        ap.items[-1].command, ap.items[-1].x, ap.items[-1].y, ap.items[-1].z
+    )  # fmt: skip
+    for a, b in zip(ap.items[1 : b_seq + 2], px4.items[: b_seq + 1], strict=True):
         assert b.seq == a.seq - 1
         assert (a.command, a.frame, a.x, a.y, a.z, a.param2, a.param3) == (
             b.command,
@@ -195,6 +205,34 @@ def test_px4_has_no_home_and_every_seq_shifts_by_one():
     for pid in plan["front"][0]["route"]:
         assert px4.seq_of(pid) == ap.seq_of(pid) - 1
     assert px4.loiter_param == ("NAV_LOITER_RAD", 200.0)
+
+
+def test_px4_flies_straight_on_beyond_b_when_the_plan_has_no_run_out():
+    """PX4 switches to the end action npfg's switch distance before B (Navigator::
+    get_acceptance_radius): the exporter continues the last leg beyond B, on its arrival
+    heading at B's altitude, for npfg's settle distance at B's true airspeed (the run-out a
+    derived plan keeps at every landmark). A plan with its own run-out keeps it."""
+    from gcs_planner.autopilot import effective
+    from gcs_planner.vehicle import tas_from_eas
+
+    plan = make_plan()
+    assert plan["parameters"]["departure"] == 0
+    px4 = build_mission(plan, firmware="px4")
+    frame = LocalFrame(px4.origin)
+    b_seq = px4.seq_of(plan["front"][0]["route"][-1])
+    b, beyond = px4.items[b_seq], px4.items[b_seq + 1]
+    bx, by, bz = frame.to_local(b.x / 1e7, b.y / 1e7, b.z)
+    ox, oy, oz = frame.to_local(beyond.x / 1e7, beyond.y / 1e7, beyond.z)
+    eas = px4.cruise_speed  # the plan's cruise airspeed (EAS)
+    want = effective("px4", {}).settle_distance(tas_from_eas(eas, b.z))
+    assert math.hypot(ox - bx, oy - by) == pytest.approx(want, abs=0.05)
+    assert oz == pytest.approx(bz, abs=1e-6)
+    last = route_legs(route_entry(plan)[1])[-1]
+    heading = math.atan2(oy - by, ox - bx)
+    assert heading == pytest.approx(math.atan2(last.heading_out[1], last.heading_out[0]), abs=1e-4)
+    # ArduPlane accepts B at the item's radius: no run-out added for it
+    ap = build_mission(plan, firmware="ardupilot")
+    assert not any(it.note.startswith("departure") for it in ap.items)
 
 
 def test_correction_waypoints_are_on_the_true_wgs84_positions():

@@ -627,6 +627,8 @@ def build_mission(
         point_seqs.append((ids[i + 1], seq))
 
     beyond = _departure_beyond_b(params, legs[-1], radius, source)
+    if beyond is None and firmware == "px4":
+        beyond = _px4_run_out_beyond_b(plan, legs[-1], radius, speed, org.alt)
     if beyond is not None:
         # B overflown straight on too: an autopilot that switches to the end action early (PX4
         # turns into its loiter at its switch distance) would pass B outside its capture radius.
@@ -677,6 +679,31 @@ def _departure_beyond_b(
         return None
     out = np.asarray(last.heading_out, dtype=float)
     return np.array([*(last.end[:2] + departure * out[:2]), last.end[2]])
+
+
+def _px4_run_out_beyond_b(
+    plan: dict, last: FlownLeg, radius: float, eas: float, base_alt: float
+) -> np.ndarray | None:
+    """Where a run-out beyond B ends for PX4 when the plan has none: PX4 switches to its next
+    item npfg's switch distance early (Navigator::get_acceptance_radius), so with the end
+    action next it turns away before B and passes it outside the capture radius (the bundled
+    missions/jsbsim in still air: 7.9 m off). Nothing is planned after B, so the run-out costs
+    the plan nothing: npfg's settle distance (its track error bound, as a derived plan's run-out
+    at every landmark) at the ground speed, B's TAS for ``eas`` plus the plan's design wind.
+    None for straight legs."""
+    if radius <= 0 or not isinstance(last, AirplaneLeg):
+        return None
+    from gcs_planner.autopilot import effective
+    from gcs_planner.vehicle import tas_from_eas
+
+    vehicle = plan.get("vehicle") if isinstance(plan.get("vehicle"), dict) else {}
+    envelope = vehicle.get("envelope") if isinstance(vehicle.get("envelope"), dict) else {}
+    wind = envelope.get("design_wind", 0.0)
+    wind = float(wind) if isinstance(wind, (int, float)) and math.isfinite(wind) else 0.0
+    ground_speed = tas_from_eas(eas, float(last.end[2]) + base_alt) + max(wind, 0.0)
+    run_out = effective("px4", {}).settle_distance(ground_speed)
+    out = np.asarray(last.heading_out, dtype=float)
+    return np.array([*(last.end[:2] + run_out * out[:2]), last.end[2]])
 
 
 def _arc_acceptance(leg: FlownLeg, capture: int) -> float:
