@@ -677,8 +677,14 @@ def _departure_beyond_b(
         raise _bad(f"parameters.departure must be >= 0, got {departure!r}", source, "departure")
     if departure <= 0 or radius <= 0 or not isinstance(last, AirplaneLeg):
         return None
+    return _straight_on_beyond_b(last, departure)
+
+
+def _straight_on_beyond_b(last: FlownLeg, run_out: float) -> np.ndarray:
+    """The point ``run_out`` metres beyond B on the heading the last leg arrives with, at B's
+    altitude."""
     out = np.asarray(last.heading_out, dtype=float)
-    return np.array([*(last.end[:2] + departure * out[:2]), last.end[2]])
+    return np.array([*(last.end[:2] + run_out * out[:2]), last.end[2]])
 
 
 def _px4_run_out_beyond_b(
@@ -701,9 +707,7 @@ def _px4_run_out_beyond_b(
     wind = envelope.get("design_wind", 0.0)
     wind = float(wind) if isinstance(wind, (int, float)) and math.isfinite(wind) else 0.0
     ground_speed = tas_from_eas(eas, float(last.end[2]) + base_alt) + max(wind, 0.0)
-    run_out = effective("px4", {}).settle_distance(ground_speed)
-    out = np.asarray(last.heading_out, dtype=float)
-    return np.array([*(last.end[:2] + run_out * out[:2]), last.end[2]])
+    return _straight_on_beyond_b(last, effective("px4", {}).settle_distance(ground_speed))
 
 
 def _arc_acceptance(leg: FlownLeg, capture: int) -> float:
