@@ -57,6 +57,7 @@ from gcs_planner.vehicle import (
     DEFAULT_RESERVE_MAX_SHARE,
     DRYDEN_SCALE_LENGTH_M,
     ROLL_RESPONSE_S,
+    tas_from_eas,
 )
 
 if TYPE_CHECKING:
@@ -115,9 +116,14 @@ class DerivedReserve:
         return self.turns * self.per_turn
 
     @property
+    def lowest_tas(self) -> float:
+        """The TAS at the scenario's lowest point (``tas`` when not given)."""
+        return self.slowest_tas or self.tas
+
+    @property
     def slowest_ground_speed(self) -> float:
         """The TAS at the scenario's lowest point into a headwind of the design wind."""
-        return (self.slowest_tas or self.tas) - self.wind
+        return self.lowest_tas - self.wind
 
     def gust_share_at(self, tas: float) -> float:
         """The share of a length flown at ``tas`` into a headwind that gusts add:
@@ -132,7 +138,7 @@ class DerivedReserve:
     @property
     def gust_share(self) -> float:
         """The share of a stretch's length that gusts add, at the slowest ground speed."""
-        return self.gust_share_at(self.slowest_tas or self.tas)
+        return self.gust_share_at(self.lowest_tas)
 
     @property
     def gust_term(self) -> float:
@@ -175,8 +181,6 @@ class DerivedReserve:
         ``low_altitude`` (None: the scenario's lowest), flown into the design wind."""
         if low_altitude is None or self.eas <= 0:
             return self.gust_share * length
-        from gcs_planner.vehicle import tas_from_eas
-
         return self.gust_share_at(tas_from_eas(self.eas, low_altitude)) * length
 
     def route_gusts(
@@ -236,12 +240,12 @@ class DerivedReserve:
             f"{self.tas:.1f} m/s TAS, {self.bank_deg:.4g} deg bank)"
         )
         if self.gust > 0:
-            slowest = self.slowest_tas or self.tas
             text += (
                 f" + gusts {self.gust:g} m/s over {self.stretch / 1000:,.1f} km at "
-                f"{self.slowest_ground_speed:.1f} m/s ground speed ({slowest:.1f} m/s TAS at "
-                f"the lowest point into {self.wind:g} m/s; {self.wander:.2f} (sigma/Vg)^2/2 = "
-                f"{100 * self.gust_share:.3g} %: {self.gust_term:.0f} m; {self.wander_rule})"
+                f"{self.slowest_ground_speed:.1f} m/s ground speed ({self.lowest_tas:.1f} m/s "
+                f"TAS at the lowest point into {self.wind:g} m/s; {self.wander:.2f} "
+                f"(sigma/Vg)^2/2 = {100 * self.gust_share:.3g} %: {self.gust_term:.0f} m; "
+                f"{self.wander_rule})"
             )
         else:
             text += " + no gusts (--gust SPEED adds them)"
@@ -268,7 +272,7 @@ class DerivedReserve:
             "turn_term_m": self.turn_term,
             "gust": self.gust,
             "design_wind": self.wind,
-            "slowest_tas": self.slowest_tas or self.tas,
+            "slowest_tas": self.lowest_tas,
             "slowest_ground_speed": self.slowest_ground_speed,
             "gust_wander": self.wander,
             "gust_wander_rule": self.wander_rule,

@@ -292,10 +292,14 @@ class DerivedEnvelope:
         return tas_from_eas(self.eas, self.altitude)
 
     @property
+    def lowest_altitude(self) -> float:
+        """The scenario's lowest altitude (m AMSL; ``altitude`` when not given)."""
+        return self.altitude if self.low_altitude is None else self.low_altitude
+
+    @property
     def tas_low(self) -> float:
         """The TAS at the scenario's lowest altitude (the slowest over the ground)."""
-        low = self.altitude if self.low_altitude is None else self.low_altitude
-        return tas_from_eas(self.eas, low)
+        return tas_from_eas(self.eas, self.lowest_altitude)
 
     @property
     def ground_speed_max(self) -> float:
@@ -331,12 +335,12 @@ class DerivedEnvelope:
             bad.append(("wind", f"must be a speed >= 0 m/s (got {self.wind!r})"))
         elif math.isfinite(self.eas) and self.eas > 0 and self.wind >= self.tas_low:
             # The slowest TAS: at the lowest point a headwind leaves the least ground speed.
-            low = self.altitude if self.low_altitude is None else self.low_altitude
             bad.append(
                 (
                     "wind",
                     f"{self.wind:g} m/s is not below the true airspeed {self.tas_low:.1f} m/s "
-                    f"({self.eas:g} m/s EAS at {low:.0f} m, the scenario's lowest point): the "
+                    f"({self.eas:g} m/s EAS at {self.lowest_altitude:.0f} m, the scenario's "
+                    "lowest point): the "
                     "aircraft cannot make way against it",
                 )
             )
@@ -389,7 +393,7 @@ class DerivedEnvelope:
             "cruise_eas": self.eas,
             "altitude_m": self.altitude,
             "tas": self.tas,
-            "low_altitude_m": self.altitude if self.low_altitude is None else self.low_altitude,
+            "low_altitude_m": self.lowest_altitude,
             "tas_low": self.tas_low,
             "bank_limit_deg": self.bank_deg,
             "climb_rate": num(self.climb_rate),

@@ -16,6 +16,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from gcs_planner import plan_json
+from gcs_planner.autopilot import effective
 from gcs_planner.core.bnb import flown_route
 from gcs_planner.errors import InputError
 from gcs_planner.geometry.dubins import cs_leg
@@ -490,3 +491,24 @@ def test_loiter_turns_leave_on_the_tangent_in_the_exported_files():
     doc = plan_document(m)
     items = [i for i in doc["mission"]["items"] if i.get("command") == 18]
     assert items and all(i["params"][1] == 1 for i in items)
+
+
+def test_px4_run_out_beyond_b_counts_the_design_wind_and_refuses_a_bad_one():
+    """The run-out is the settle distance at B's TAS plus the plan's design wind (a plan whose
+    envelope was derived for a wind); a design wind that is not a speed is refused, named."""
+    plan = make_plan()
+
+    def run_out(p: dict) -> float:
+        m = build_mission(p, firmware="px4")
+        frame = LocalFrame(m.origin)
+        k = m.seq_of(p["front"][0]["route"][-1])
+        b, beyond = (frame.to_local(it.x / 1e7, it.y / 1e7, it.z) for it in m.items[k : k + 2])
+        return math.hypot(beyond[0] - b[0], beyond[1] - b[1])
+
+    still = run_out(plan)
+    windy = run_out({**plan, "vehicle": {"envelope": {"design_wind": 10.0}}})
+    per_ms = effective("px4", {}).settle_distance(1.0)
+    assert windy - still == pytest.approx(10.0 * per_ms, abs=0.1)
+    for bad in ("ten", -1.0, float("nan")):
+        with pytest.raises(InputError, match="design_wind"):
+            build_mission({**plan, "vehicle": {"envelope": {"design_wind": bad}}}, firmware="px4")

@@ -434,6 +434,26 @@ def plan_cruise_airspeed(plan: dict, source: str = "") -> float:
     return speed
 
 
+def plan_design_wind(plan: dict, source: str = "") -> float:
+    """The design wind (m/s) the plan's envelope was derived for: ``vehicle.envelope.
+    design_wind``; 0 when the envelope was stated (no ``envelope``) or the file predates it."""
+    vehicle = plan.get("vehicle")
+    envelope = vehicle.get("envelope") if isinstance(vehicle, dict) else None
+    if not isinstance(envelope, dict) or "design_wind" not in envelope:
+        return 0.0
+    try:
+        wind = float(envelope["design_wind"])
+    except (TypeError, ValueError) as exc:
+        raise _bad(
+            "vehicle.envelope.design_wind must be a number", source, "design_wind"
+        ) from exc
+    if not math.isfinite(wind) or wind < 0:
+        raise _bad(
+            f"vehicle.envelope.design_wind must be >= 0 m/s, got {wind!r}", source, "design_wind"
+        )
+    return wind
+
+
 def _check_options(firmware: str, altitude_frame: str, at_end: str, cruise_speed: Any) -> float:
     if firmware not in FIRMWARES:
         raise _bad(f"unknown firmware {firmware!r} (one of {', '.join(FIRMWARES)})", "", "firmware")
@@ -628,7 +648,7 @@ def build_mission(
 
     beyond = _departure_beyond_b(params, legs[-1], radius, source)
     if beyond is None and firmware == "px4":
-        beyond = _px4_run_out_beyond_b(plan, legs[-1], radius, speed, org.alt)
+        beyond = _px4_run_out_beyond_b(plan, legs[-1], radius, speed, org.alt, source)
     if beyond is not None:
         # B overflown straight on too: an autopilot that switches to the end action early (PX4
         # turns into its loiter at its switch distance) would pass B outside its capture radius.
@@ -688,7 +708,7 @@ def _straight_on_beyond_b(last: FlownLeg, run_out: float) -> np.ndarray:
 
 
 def _px4_run_out_beyond_b(
-    plan: dict, last: FlownLeg, radius: float, eas: float, base_alt: float
+    plan: dict, last: FlownLeg, radius: float, eas: float, base_alt: float, source: str = ""
 ) -> np.ndarray | None:
     """Where a run-out beyond B ends for PX4 when the plan has none: PX4 switches to its next
     item npfg's switch distance early (Navigator::get_acceptance_radius), so with the end
@@ -702,11 +722,7 @@ def _px4_run_out_beyond_b(
     from gcs_planner.autopilot import effective
     from gcs_planner.vehicle import tas_from_eas
 
-    vehicle = plan.get("vehicle") if isinstance(plan.get("vehicle"), dict) else {}
-    envelope = vehicle.get("envelope") if isinstance(vehicle.get("envelope"), dict) else {}
-    wind = envelope.get("design_wind", 0.0)
-    wind = float(wind) if isinstance(wind, (int, float)) and math.isfinite(wind) else 0.0
-    ground_speed = tas_from_eas(eas, float(last.end[2]) + base_alt) + max(wind, 0.0)
+    ground_speed = tas_from_eas(eas, float(last.end[2]) + base_alt) + plan_design_wind(plan, source)
     return _straight_on_beyond_b(last, effective("px4", {}).settle_distance(ground_speed))
 
 
