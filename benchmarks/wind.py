@@ -4,7 +4,8 @@ a user would (``gcs-planner plan ... --json``), with the straight run-in and run
 landmark that the envelope derives (docs/model.md, "Straight at every landmark") and, for
 comparison, without them (``--approach 0 --departure 0``).
 
-Each row: the derived envelope (TAS at the highest point, R, climb/descent angles, runs), the
+Each row: the derived envelope (TAS at the highest point; R and the climb/descent angles at the
+lowest and the highest point, each leg flying within those of its own highest point; runs), the
 front's size and proof, and the chosen route (default rule: at least 0.99 likely to arrive, else
 the most reliable). Planning time is that of the whole process (numba's cache warm after the
 first row).
@@ -16,7 +17,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import re
 import subprocess
 import sys
 import time
@@ -44,6 +44,7 @@ class WindRow:
     radius: float
     climb: float
     descent: float
+    low: tuple[float, float, float]  # R, climb, descent at the lowest point
     runs: float  # derived run-in = run-out, m
     front: int
     proven: bool
@@ -74,21 +75,21 @@ def _plan(workbook: str, firmware: str, wind: float, extra: tuple[str, ...] = ()
     return json.loads(out.stdout)
 
 
-def _envelope(error: str, tas: float) -> dict:
-    """The derived envelope of an infeasible case, read off the planner's message (the TAS is
-    the autopilot's at the workbook's highest point, as in the case's other rows)."""
+def _envelope(workbook: str, firmware: str, wind: float) -> dict:
+    """The derived envelope of an infeasible case (no plan JSON to read it from), derived as the
+    command line derives it (``cli.vehicle_from.derive_envelope``)."""
+    from gcs_planner.cli import build_parser
+    from gcs_planner.cli.common import load_scenario_from_args
+    from gcs_planner.cli.vehicle_from import derive_envelope
 
-    def number(pattern: str) -> float:
-        m = re.search(pattern, error)
-        return float(m.group(1)) if m else float("nan")
-
-    return {
-        "tas": tas,
-        "turn_radius": number(r"turning radius ([\d.]+) m"),
-        "max_climb_angle": number(r"climb <= ([\d.]+) deg"),
-        "max_descent_angle": number(r"descent <= ([\d.]+) deg"),
-        "approach_m": number(r"run-in >= ([\d.]+) m"),
-    }
+    argv = ["plan", str(Path(DATA) / f"{workbook}.xlsx")]
+    for flag, value in zip(FLAGS, TABLE2[workbook]):
+        argv += [flag, value]
+    argv += ["--firmware", firmware, "--wind", f"{wind:g}"]
+    args = build_parser(argv).parse_args(argv)
+    scenario = derive_envelope(args, load_scenario_from_args(args), wind_text=args.wind)
+    assert scenario.envelope is not None
+    return scenario.envelope.to_dict()
 
 
 def _chosen(plan: dict) -> dict | None:
@@ -105,16 +106,14 @@ def run_wind(
     for workbook in ("dataset1", "dataset2"):
         for firmware in firmwares:
             for wind in winds:
-                plan_error = ""
                 t0 = time.perf_counter()
                 plan = _plan(workbook, firmware, wind)
                 seconds = time.perf_counter() - t0
                 if "infeasible" in plan:
                     print(f"{workbook} {firmware} {wind:g} m/s: {plan['infeasible']}")
-                    plan_error = plan["infeasible"]
                     plan = {"vehicle": {"envelope": None}, "front": [], "chosen": None,
                             "optimality": {"optimal": True}}  # fmt: skip
-                env = plan["vehicle"]["envelope"] or _envelope(plan_error, rows[-1].tas)
+                env = plan["vehicle"]["envelope"] or _envelope(workbook, firmware, wind)
                 chosen = _chosen(plan)
                 plain = None
                 if compare:
@@ -132,6 +131,11 @@ def run_wind(
                         radius=env["turn_radius"],
                         climb=env["max_climb_angle"],
                         descent=env["max_descent_angle"],
+                        low=(
+                            env["low_turn_radius"],
+                            env["low_max_climb_angle"],
+                            env["low_max_descent_angle"],
+                        ),
                         runs=env["approach_m"],
                         front=len(plan["front"]),
                         proven=bool(plan["optimality"]["optimal"]),
@@ -147,7 +151,8 @@ def run_wind(
 
 def wind_table(rows: list[WindRow]) -> str:
     header = [
-        "workbook", "autopilot", "wind", "TAS", "R", "climb / descent", "run-in = run-out",
+        "workbook", "autopilot", "wind", "TAS", "R: lowest – highest point",
+        "climb / descent: lowest – highest point", "run-in = run-out",
         "front", "proven", "chosen: length", "corrections", "P",
         "without the runs: length, corrections, P",
     ]  # fmt: skip
@@ -159,8 +164,8 @@ def wind_table(rows: list[WindRow]) -> str:
                 NAMES.get(r.firmware, r.firmware),
                 f"{r.wind:g} m/s",
                 f"{r.tas:.1f} m/s",
-                f"{r.radius:.0f} m",
-                f"{r.climb:.1f}° / {r.descent:.1f}°",
+                f"{r.low[0]:.0f} – {r.radius:.0f} m",
+                f"{r.low[1]:.1f}° / {r.low[2]:.1f}° – {r.climb:.1f}° / {r.descent:.1f}°",
                 f"{r.runs:.0f} m",
                 r.front if r.front else "none: infeasible",
                 "yes" if r.proven else "no",

@@ -257,7 +257,8 @@ class DerivedEnvelope:
     The aircraft holds ``eas`` (m/s EAS), banks at most ``bank_deg``, climbs at ``climb_rate``
     and sinks at ``sink_rate`` m/s (inf: unlimited) under ``autopilot``. Over the ground, in a
     wind of ``wind`` m/s from any direction, it can fly as fast as V + W with V the TAS at
-    ``altitude`` (the scenario's highest: the largest TAS, so conservative for every leg), so
+    ``altitude`` (the scenario's highest: the largest TAS; the parts named in ``per_leg`` each
+    leg takes at its own highest point instead, geometry.airplane.LegEnvelope), so
 
     * climb angle <= atan(climb_rate / (V + W)), descent likewise;
     * turning radius R = (V + W)^2 / (g tan(bank)) (the ground-track radius of a turn flown
@@ -286,6 +287,11 @@ class DerivedEnvelope:
     # The scenario's lowest altitude (m; None: ``altitude``), where the TAS is slowest: gusts
     # wander the track most, and a headwind leaves least ground speed, there.
     low_altitude: float | None = None
+    # The parts of the envelope each leg takes from the altitude of its own highest point
+    # ("turn_radius", "max_climb_angle", "max_descent_angle": those derived here, not stated
+    # directly); the figures above are the scenario's highest point's, the largest radius and
+    # the shallowest angles (geometry.airplane.LegEnvelope).
+    per_leg: tuple[str, ...] = ()
 
     @property
     def tas(self) -> float:
@@ -320,6 +326,13 @@ class DerivedEnvelope:
             return 0.0
         v = self.ground_speed_max
         return v * v / (G * math.tan(math.radians(self.bank_deg)))
+
+    def low_envelope(self) -> tuple[float, float, float]:
+        """(turning radius, climb angle, descent angle) at the scenario's lowest point: those
+        of its lowest legs when the envelope is derived per leg."""
+        v = self.tas_low + self.wind
+        radius = v * v / (G * math.tan(math.radians(self.bank_deg))) if self.bank_deg > 0 else 0
+        return radius, _angle(self.climb_rate, v), _angle(self.sink_rate, v)
 
     def refusals(self) -> list[tuple[str, str]]:
         """(field, why) for each input the envelope cannot be derived from; empty when sound."""
@@ -360,10 +373,16 @@ class DerivedEnvelope:
             )
         )
         src = ", ".join(f"{k} from {v}" for k, v in self.sources)
+        where = (
+            "the scenario's highest altitude; each leg flies within the figures of its own "
+            "highest point, these at the top"
+            if self.per_leg
+            else "the scenario's highest altitude: conservative for every leg"
+        )
         lines = [
             f"envelope derived for {self.autopilot or 'the aircraft'}: {self.eas:g} m/s EAS = "
-            f"{self.tas:.2f} m/s TAS at {self.altitude:.0f} m (ISA, the scenario's highest "
-            f"altitude: conservative for every leg); {wind}; ground speed <= {v:.2f} m/s",
+            f"{self.tas:.2f} m/s TAS at {self.altitude:.0f} m (ISA, {where}); {wind}; ground "
+            f"speed <= {v:.2f} m/s",
             (
                 f"  turning radius R = (TAS + W)^2 / (g tan {self.bank_deg:.4g} deg) = "
                 f"{self.turn_radius:.1f} m"
@@ -375,6 +394,18 @@ class DerivedEnvelope:
             + _rate_text(self.sink_rate)
             + f" / (TAS + W)) = {self.descent_angle:.2f} deg",
         ]
+        if self.per_leg:
+            low = self.low_envelope()
+            parts = {
+                "turn_radius": f"R {low[0]:.1f} m",
+                "max_climb_angle": f"climb {low[1]:.2f} deg",
+                "max_descent_angle": f"descent {low[2]:.2f} deg",
+            }
+            lines.append(
+                f"  per leg, from the TAS at its highest point: at the lowest point "
+                f"({self.lowest_altitude:.0f} m, TAS {self.tas_low:.2f} m/s) "
+                + ", ".join(parts[k] for k in self.per_leg)
+            )
         if self.approach > 0 or self.departure > 0:
             lines.append(
                 f"  straight at every landmark: run-in >= {self.approach:.0f} m, run-out "
@@ -401,6 +432,11 @@ class DerivedEnvelope:
             "design_wind": self.wind,
             "design_wind_from_deg": self.wind_from,
             "wind_rule": "any direction (conservative)",
+            "per_leg": list(self.per_leg),
+            # at the lowest point: the lowest legs' figures when they are derived per leg
+            "low_turn_radius": self.low_envelope()[0],
+            "low_max_climb_angle": self.low_envelope()[1],
+            "low_max_descent_angle": self.low_envelope()[2],
             "ground_speed_max": self.ground_speed_max,
             "turn_radius": self.turn_radius,
             "max_climb_angle": self.climb_angle,
@@ -408,8 +444,13 @@ class DerivedEnvelope:
             "approach_m": self.approach,
             "departure_m": self.departure,
             "runs_source": self.runs_source,
-            "derivation": "TAS from EAS through ISA at the scenario's highest altitude; "
-            "angle = atan(rate / (TAS + W)); R = (TAS + W)^2 / (g tan(bank))",
+            "derivation": (
+                "TAS from EAS through ISA at each leg's highest altitude (the figures here at "
+                "the scenario's highest); "
+                if self.per_leg
+                else "TAS from EAS through ISA at the scenario's highest altitude; "
+            )
+            + "angle = atan(rate / (TAS + W)); R = (TAS + W)^2 / (g tan(bank))",
             "sources": dict(self.sources),
         }
 

@@ -277,6 +277,12 @@ def derive_envelope(
             file=sys.stderr,
         )
         return scenario
+    env = replace(
+        env,
+        per_leg=tuple(
+            k for k in ("turn_radius", "max_climb_angle", "max_descent_angle") if k in changes
+        ),
+    )
     out = scenario.with_params(**changes)
     out = out.with_vehicle(
         cruise_airspeed=float(eas),

@@ -150,6 +150,11 @@ class Legs(NamedTuple):
     heading_a: np.ndarray  # (3,)
     run_in: float  # airplane legs: least tangent into a point, m (0: none)
     run_out: float  # airplane legs: straight on from a point before turning, m
+    # Airplane legs: the radius and the limits' tangents at each point's altitude; a leg takes
+    # the largest radius and the smallest tangents of its two ends (airplane.LegEnvelope).
+    radius_at: np.ndarray
+    tan_climb_at: np.ndarray
+    tan_descent_at: np.ndarray
 
 
 class Seeds(NamedTuple):

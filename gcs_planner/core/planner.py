@@ -185,6 +185,10 @@ def climb_warnings(scenario: Scenario, routes: Sequence[Route]) -> tuple[str, ..
             angle = stop.leg.path_angle if stop.leg else 0.0
             steep.append((abs(angle), k, prev.id, stop.id))
             limit = v.max_climb_angle if angle > 0 else v.max_descent_angle
+            if stop.leg is not None and stop.leg.angle_limit is not None:
+                # an airplane leg's own limit (its highest point's when the envelope is derived
+                # per leg)
+                limit = stop.leg.angle_limit
             if abs(angle) > limit + 1e-6:
                 what = "climbs" if angle > 0 else "descends"
                 over.append(f"route {k} leg {prev.id}->{stop.id} {what} at {abs(angle):.1f} deg")

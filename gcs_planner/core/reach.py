@@ -7,7 +7,6 @@ corrections, so only neighbours within that radius are arcs. The graph is stored
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -15,7 +14,6 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from gcs_planner.core.kernel_records import Graph
-from gcs_planner.geometry.airplane import lower_bounds as climb_bounds
 from gcs_planner.geometry.legs import AirplaneLegs, scenario_leg_model
 from gcs_planner.scenario.model import Kind, Scenario
 
@@ -169,7 +167,6 @@ def _bounded(graph: ReachGraph, xyz: np.ndarray, model: AirplaneLegs) -> ReachGr
     keep = np.empty(arcs, dtype=bool)
     counts = np.zeros(n, dtype=np.int64)  # arcs kept per point
     reach = np.minimum(graph.lim_v, graph.lim_h)
-    origin = np.zeros(3)
     first = 0
     while first < n:
         # the points whose arcs make up the next block of about _BLOCK_ARCS
@@ -178,7 +175,7 @@ def _bounded(graph: ReachGraph, xyz: np.ndarray, model: AirplaneLegs) -> ReachGr
         lo, hi = int(graph.indptr[first]), int(graph.indptr[last])
         src = np.repeat(np.arange(first, last), np.diff(graph.indptr[first : last + 1]))
         dst = graph.target[lo:hi]
-        bound[lo:hi] = model.lower_bounds(origin, xyz[dst] - xyz[src])
+        bound[lo:hi] = model.arc_bounds(xyz[src], xyz[dst])
         keep[lo:hi] = bound[lo:hi] <= reach[dst]
         counts[first:last] = np.bincount(src[keep[lo:hi]] - first, minlength=last - first)
         first = last
@@ -188,13 +185,8 @@ def _bounded(graph: ReachGraph, xyz: np.ndarray, model: AirplaneLegs) -> ReachGr
         indptr = np.zeros(n + 1, dtype=np.int64)
         np.cumsum(counts, out=indptr[1:])
         target, bound = graph.target[keep], bound[keep]
-    to_end = climb_bounds(
-        np.zeros(3),
-        xyz[graph.end][None, :] - xyz,
-        model.max_climb_angle,
-        model.max_descent_angle,
-        radius=math.inf,
-    )
+    # A bound of the rest of any route (a walk through other points), not of one leg.
+    to_end = model.walk_bounds(np.zeros(3), xyz[graph.end][None, :] - xyz)
     return ReachGraph(
         indptr,
         target,

@@ -23,6 +23,10 @@ class Leg:
     turn_angle: float = 0.0  # radians turned on the arc (helix turns not counted)
     helix_turns: int = 0  # whole turns flown to gain or lose height (airplane legs)
     path_angle: float = 0.0  # flight-path angle in degrees, positive climbing (steepest on CS)
+    # The limit the leg's path angle is held to (degrees; the climb limit when it climbs, the
+    # descent limit otherwise): an airplane leg's own (of its highest point when the envelope
+    # is derived per leg), None where the scenario's limits apply.
+    angle_limit: float | None = None
 
     @property
     def straight(self) -> float:

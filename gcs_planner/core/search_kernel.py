@@ -27,7 +27,11 @@ from gcs_planner.core.expand_kernel import expand, new_labels, relaxed_legs
 from gcs_planner.core.kernel_records import Graph, Legs, Nogoods, Pairs, Partial, Seeds, ToGo
 from gcs_planner.core.key_table_kernel import empty_table
 from gcs_planner.core.probability import PROB_EPS
-from gcs_planner.geometry.airplane_kernel import airplane_lengths, free_airplane_lengths
+from gcs_planner.geometry.airplane_kernel import (
+    airplane_lengths,
+    airplane_lengths_each,
+    free_airplane_lengths,
+)
 from gcs_planner.geometry.dubins_kernel import cs_lengths
 from gcs_planner.jit import inner, kernel
 
@@ -124,6 +128,20 @@ def _flown_legs(
         t = graph.target[lo + idx]
         ends[idx, 0], ends[idx, 1], ends[idx, 2] = xyz[t, 0], xyz[t, 1], xyz[t, 2]
     if legs.mode == LEGS_AIRPLANE:
+        if has_heading and legs.radius > 0.0:
+            # each leg on the radius and within the limits of its higher end
+            m = hi - lo
+            r = np.empty(m)
+            tc = np.empty(m)
+            td = np.empty(m)
+            for idx in range(m):
+                t = graph.target[lo + idx]
+                r[idx] = max(legs.radius_at[node], legs.radius_at[t])
+                tc[idx] = min(legs.tan_climb_at[node], legs.tan_climb_at[t])
+                td[idx] = min(legs.tan_descent_at[node], legs.tan_descent_at[t])
+            return airplane_lengths_each(
+                xyz[node], heading, ends, r, tc, td, legs.run_in, legs.run_out
+            )
         if has_heading:
             return airplane_lengths(
                 xyz[node], heading, ends, legs.radius, legs.tan_climb, legs.tan_descent,

@@ -36,10 +36,86 @@ from dataclasses import dataclass
 import numpy as np
 
 from gcs_planner.geometry.dubins import COINCIDENT_M, TWO_PI, _core
+from gcs_planner.vehicle import (
+    ISA_DENSITY_EXPONENT,
+    ISA_LAPSE_K_PER_M,
+    ISA_T0_K,
+    ISA_TROPOPAUSE_M,
+)
+from gcs_planner.vehicle import G as G_MSS
 
 # Rounding slack on "steep enough for a helix": a leg needing 1e-9 m more horizontal path than it
 # has is flown without one (the difference is far below anything an aircraft can fly).
 STEEP_SLACK_M = 1e-9
+
+
+@dataclass(frozen=True)
+class LegEnvelope:
+    """The envelope of each leg from the altitude of its highest point (docs/model.md, "Flight in
+    the real world"): the aircraft holds ``eas`` (equivalent airspeed), so its true airspeed and
+    with it the ground speed V + W it may turn and climb at grow with altitude (ISA); a leg is
+    flown within the limits at its highest point, the most demanding along it (its altitude
+    changes monotonically).
+
+    Only for legs that turn (R > 0): straight legs carry no heading, so the search takes them
+    from heading-free bounds that must equal them, and those know no altitude.
+
+    ``tan_bank`` 0 keeps ``radius`` for every leg (a radius stated, not derived); a rate of NaN
+    keeps the stated angle (``climb_deg``, ``descent_deg``). ``base_altitude`` is the altitude
+    (AMSL) of the scenario's z = 0; ``lowest`` its lowest z, where the limits are the most
+    permissive, which every heading-free lower bound uses (``bound_*``) so that the bounds stay
+    lower bounds whatever the altitudes of the legs they stand for."""
+
+    eas: float
+    wind: float
+    base_altitude: float
+    lowest: float
+    radius: float  # the stated radius, or the one at the highest point (displays, B's loiter)
+    climb_deg: float
+    descent_deg: float
+    tan_bank: float = 0.0
+    climb_rate: float = math.nan
+    sink_rate: float = math.nan
+
+    def at(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(radius, tan climb limit, tan descent limit) at each altitude ``z`` (scenario
+        metres): non-decreasing radius and non-increasing tangents as z grows."""
+        z = np.asarray(z, dtype=float)
+        h = np.minimum(z + self.base_altitude, ISA_TROPOPAUSE_M)
+        sigma = (1.0 - ISA_LAPSE_K_PER_M * h / ISA_T0_K) ** ISA_DENSITY_EXPONENT
+        v = self.eas / np.sqrt(sigma) + self.wind
+        if self.tan_bank > 0:
+            radius = v * v / (G_MSS * self.tan_bank)
+        else:
+            radius = np.full(z.shape, float(self.radius))
+        return radius, self._tan(self.climb_rate, self.climb_deg, v), self._tan(
+            self.sink_rate, self.descent_deg, v
+        )
+
+    @staticmethod
+    def _tan(rate: float, angle_deg: float, v: np.ndarray) -> np.ndarray:
+        if math.isnan(rate):
+            return np.full(v.shape, slope_tan(angle_deg))
+        if math.isinf(rate):
+            return np.full(v.shape, math.inf)
+        return rate / v
+
+    def of_legs(
+        self, z_start: float, z_ends: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(radius, tan climb, tan descent) of the legs from altitude ``z_start`` to each of
+        ``z_ends``: the limits at the higher end of each (the largest radius, the smallest
+        tangents; taken as the extreme of both ends so that the compiled search, which has them
+        per point, gets the same numbers)."""
+        r0, c0, d0 = self.at(np.array([z_start]))
+        r, c, d = self.at(z_ends)
+        return np.maximum(r, r0[0]), np.minimum(c, c0[0]), np.minimum(d, d0[0])
+
+    def bounds(self) -> tuple[float, float, float]:
+        """(radius, tan climb, tan descent) at the lowest altitude, loosened by a part in 1e9
+        against rounding: at least as permissive as any leg's."""
+        r, c, d = (float(x[0]) for x in self.at(np.array([self.lowest])))
+        return r * (1.0 - 1e-9), c * (1.0 + 1e-9), d * (1.0 + 1e-9)
 
 
 def slope_limit(climb_deg: float, descent_deg: float, dz: np.ndarray | float) -> np.ndarray:
@@ -61,16 +137,27 @@ def needed_horizontal(dz: np.ndarray, climb_deg: float, descent_deg: float) -> n
 
 
 def helix_turns(
-    horizontal: np.ndarray, need: np.ndarray, radius: float
+    horizontal: np.ndarray, need: np.ndarray, radius: float | np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
     """(k, feasible): whole helix turns so that horizontal + 2 pi R k >= need; with R = 0 a leg
-    that needs more horizontal path than it has is infeasible."""
+    that needs more horizontal path than it has is infeasible. ``radius`` one for all legs or
+    one per leg (a per-leg envelope; all > 0 then)."""
     horizontal = np.asarray(horizontal, dtype=float)
     short = need - horizontal > STEEP_SLACK_M
-    if radius <= 0.0:
+    if np.ndim(radius) == 0 and radius <= 0.0:
         return np.zeros(horizontal.shape, dtype=np.int64), ~short
     k = np.where(short, np.ceil((need - horizontal - STEEP_SLACK_M) / (TWO_PI * radius)), 0.0)
     return np.maximum(k, 0).astype(np.int64), np.ones(horizontal.shape, dtype=bool)
+
+
+def needed_horizontal_tan(
+    dz: np.ndarray, tan_climb: float | np.ndarray, tan_descent: float | np.ndarray
+) -> np.ndarray:
+    """``needed_horizontal`` from the tangents of the limits (inf: no limit), one for all legs
+    or one per leg: |dz| / tan(gamma), 0 where unlimited."""
+    dz = np.asarray(dz, dtype=float)
+    g = np.where(dz > 0, tan_climb, tan_descent)
+    return np.where(np.isinf(g), 0.0, np.abs(dz) / np.where(np.isinf(g), 1.0, g))
 
 
 def lower_bounds(
@@ -78,10 +165,19 @@ def lower_bounds(
 ) -> np.ndarray:
     """Heading-free lower bounds of the airplane legs from ``start`` to each row of ``ends``:
     max(chord, |dz| / sin gamma), or inf where R = 0 and the straight leg is too steep."""
+    return lower_bounds_tan(
+        start, ends, slope_tan(climb_deg), slope_tan(descent_deg), radius
+    )
+
+
+def lower_bounds_tan(
+    start: np.ndarray, ends: np.ndarray, tan_climb: float, tan_descent: float, radius: float
+) -> np.ndarray:
+    """``lower_bounds`` from the tangents of the limits (inf: no limit)."""
     w = np.asarray(ends, dtype=float) - np.asarray(start, dtype=float)
     h = np.hypot(w[:, 0], w[:, 1])
     dz = w[:, 2]
-    need = needed_horizontal(dz, climb_deg, descent_deg)
+    need = needed_horizontal_tan(dz, tan_climb, tan_descent)
     out = np.sqrt(np.maximum(h, need) ** 2 + dz * dz)
     if radius <= 0.0:
         out = np.where(need - h > STEEP_SLACK_M, math.inf, out)
@@ -172,17 +268,26 @@ def airplane_legs(
     descent_deg: float,
     run_in: float = 0.0,
     run_out: float = 0.0,
+    envelope: LegEnvelope | None = None,
 ) -> AirplaneLegs:
     """Airplane legs from ``start`` (horizontal ``heading``, None = free: straight legs) to each
     row of ``ends``, with a run-out of ``run_out`` and a tangent of at least ``run_in`` metres
-    (horizontal; both 0 with R = 0: straight legs carry no heading to run out on)."""
+    (horizontal; both 0 with R = 0: straight legs carry no heading to run out on).
+
+    With an ``envelope`` each leg turns on the radius and climbs within the limits of its own
+    highest point (``LegEnvelope.of_legs``; ``radius`` and the angles are then not used)."""
     start = np.asarray(start, dtype=float)
     ends = np.asarray(ends, dtype=float)
-    if radius <= 0:
+    if envelope is not None:
+        radius, tan_climb, tan_descent = envelope.of_legs(start[2], ends[:, 2])
+    else:
+        tan_climb, tan_descent = slope_tan(climb_deg), slope_tan(descent_deg)
+    straight = np.ndim(radius) == 0 and radius <= 0
+    if straight:
         run_in = run_out = 0.0
-    hz = _horizontal(start, heading if radius > 0 else None, ends, radius, run_in, run_out)
+    hz = _horizontal(start, None if straight else heading, ends, radius, run_in, run_out)
     dz = ends[:, 2] - start[2]
-    need = needed_horizontal(dz, climb_deg, descent_deg)
+    need = needed_horizontal_tan(dz, tan_climb, tan_descent)
     k, ok = helix_turns(hz.length, need, radius)
     ok &= hz.reachable
     flat = hz.length + TWO_PI * radius * k
@@ -402,14 +507,20 @@ def airplane_leg(
     descent_deg: float,
     run_in: float = 0.0,
     run_out: float = 0.0,
+    envelope: LegEnvelope | None = None,
 ) -> AirplaneLeg:
     """The airplane leg from ``start`` (horizontal ``heading``; None = free) to ``end``, with
-    its run-out and run-in (``airplane_legs``)."""
+    its run-out and run-in (``airplane_legs``); with an ``envelope``, on the radius and within
+    the limits of its own highest point (which it records)."""
     p = np.asarray(start, dtype=float).reshape(3)
     q = np.asarray(end, dtype=float).reshape(3)
     legs = airplane_legs(
-        p, heading, q[None, :], radius, climb_deg, descent_deg, run_in, run_out
+        p, heading, q[None, :], radius, climb_deg, descent_deg, run_in, run_out, envelope
     )
+    if envelope is not None:
+        r, c, d = (float(x[0]) for x in envelope.of_legs(p[2], q[2:3]))
+        radius = r
+        climb_deg, descent_deg = _degrees(c), _degrees(d)
     runs_out = heading is not None and radius > 0
     reachable = bool(np.isfinite(legs.length[0]))
     if heading is None or radius <= 0:
@@ -441,6 +552,10 @@ def airplane_leg(
         descent_limit_deg=descent_deg,
         run_out=float(run_out) if runs_out else 0.0,
     )
+
+
+def _degrees(tan: float) -> float:
+    return 90.0 if math.isinf(tan) else math.degrees(math.atan(tan))
 
 
 def _frozen(v: np.ndarray) -> np.ndarray:

@@ -39,6 +39,26 @@ def airplane_lengths(
     if radius <= 0.0:
         return free_airplane_lengths(start, ends, radius, tan_climb, tan_descent, 0.0)
     m = ends.shape[0]
+    return airplane_lengths_each(
+        start, heading, ends, np.full(m, radius), np.full(m, tan_climb),
+        np.full(m, tan_descent), run_in, run_out,
+    )  # fmt: skip
+
+
+@kernel
+def airplane_lengths_each(
+    start: np.ndarray,
+    heading: np.ndarray,
+    ends: np.ndarray,
+    radius: np.ndarray,
+    tan_climb: np.ndarray,
+    tan_descent: np.ndarray,
+    run_in: float,
+    run_out: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """``airplane_lengths`` with the radius and limits of each leg (a per-leg envelope,
+    ``airplane.LegEnvelope``; every radius > 0)."""
+    m = ends.shape[0]
     length = np.empty(m)
     head = np.empty((m, 3))
     norm = math.hypot(heading[0], heading[1])
@@ -49,18 +69,19 @@ def airplane_lengths(
     for i in range(m):
         wx = ends[i, 0] - sx
         wy = ends[i, 1] - sy
-        reachable, horizontal, hx, hy, hz = cs_core(ux, uy, 0.0, wx, wy, 0.0, radius)
+        r = radius[i]
+        reachable, horizontal, hx, hy, hz = cs_core(ux, uy, 0.0, wx, wy, 0.0, r)
         if reachable and run_in > 0.0:
             # the tangent's length as airplane.tangent_lengths computes it
             a = wx * ux + wy * uy
             b = abs(ux * wy - uy * wx)
-            reachable = math.sqrt(max(a * a + b * (b - 2.0 * radius), 0.0)) >= run_in
+            reachable = math.sqrt(max(a * a + b * (b - 2.0 * r), 0.0)) >= run_in
         if not reachable:
             length[i] = math.inf
             head[i, 0], head[i, 1], head[i, 2] = np.nan, np.nan, np.nan
             continue
         length[i] = _flown(
-            run_out + horizontal, ends[i, 2] - start[2], radius, tan_climb, tan_descent
+            run_out + horizontal, ends[i, 2] - start[2], r, tan_climb[i], tan_descent[i]
         )
         head[i, 0], head[i, 1], head[i, 2] = hx, hy, hz
     return length, head

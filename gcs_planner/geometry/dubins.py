@@ -106,14 +106,17 @@ class _Core:
     straight: np.ndarray
 
 
-def _core(start: np.ndarray, u: np.ndarray, ends: np.ndarray, radius: float) -> _Core:
+def _core(
+    start: np.ndarray, u: np.ndarray, ends: np.ndarray, radius: float | np.ndarray
+) -> _Core:
+    """The CS paths of radius ``radius`` (one for all targets, or one > 0 per target)."""
     w = ends - start
     wx, wy, wz = w[:, 0], w[:, 1], w[:, 2]
     ux, uy, uz = float(u[0]), float(u[1]), float(u[2])
     chord = np.sqrt(wx * wx + wy * wy + wz * wz)
     m = w.shape[0]
 
-    if radius == 0.0:
+    if np.ndim(radius) == 0 and radius == 0.0:
         apart = chord > COINCIDENT_M
         heading = np.where(apart[:, None], w / np.where(apart, chord, 1.0)[:, None], u[None, :])
         zeros = np.zeros(m)

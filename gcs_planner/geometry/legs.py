@@ -27,9 +27,11 @@ import numpy as np
 
 from gcs_planner.geometry.airplane import (
     AirplaneLeg,
+    LegEnvelope,
     airplane_leg,
     airplane_legs,
     lower_bounds,
+    lower_bounds_tan,
     slope_tan,
 )
 from gcs_planner.geometry.dubins import CSLeg, cs_leg, cs_lengths, straight_leg
@@ -47,6 +49,16 @@ class KernelLegs:
     tan_descent: float
     run_in: float = 0.0  # airplane: least tangent into a target (m, horizontal)
     run_out: float = 0.0  # airplane: straight on from a point before turning (m, horizontal)
+    envelope: LegEnvelope | None = None  # airplane: each leg's limits from its altitude
+
+    def at_points(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(radius, tan climb, tan descent) at each point's altitude ``z``: the envelope's, or
+        the model's one radius and limits everywhere."""
+        z = np.asarray(z, dtype=float)
+        if self.envelope is not None:
+            return tuple(np.ascontiguousarray(a, float) for a in self.envelope.at(z))
+        n = len(z)
+        return np.full(n, self.radius), np.full(n, self.tan_climb), np.full(n, self.tan_descent)
 
 
 class LegModel(Protocol):
@@ -155,6 +167,11 @@ class AirplaneLegs:
     run_in: float = 0.0
     run_out: float = 0.0
     name: str = "airplane"
+    # Each leg's radius and limits from the altitude of its highest point (the envelope derived
+    # from the autopilot's terms, docs/model.md "Flight in the real world"); None: ``radius``
+    # and the angles for every leg. With it, ``radius`` and the angles are those of the
+    # scenario's highest point (the largest radius, the shallowest angles).
+    envelope: LegEnvelope | None = None
 
     @property
     def carries_heading(self) -> bool:
@@ -170,40 +187,84 @@ class AirplaneLegs:
         # The pair relaxation (core/pair_bounds.py) bounds the heading cone and the turn of the
         # CS path from the point itself; a run-out moves the turn off the point, so with runs
         # the search goes without it (exact still, only less pruned).
-        return self.radius > 0 and self.run_in == 0.0 and self.run_out == 0.0
+        # It also takes one radius for every leg.
+        return (
+            self.radius > 0 and self.run_in == 0.0 and self.run_out == 0.0
+            and self.envelope is None
+        )  # fmt: skip
 
     def kernel_legs(self) -> KernelLegs | None:
         return KernelLegs(
             "airplane", float(self.radius), slope_tan(self.max_climb_angle),
             slope_tan(self.max_descent_angle), float(self.run_in), float(self.run_out),
+            self.envelope,
         )  # fmt: skip
 
     def lengths(self, start, heading, ends):
         legs = airplane_legs(
             start, heading, ends, self.radius, self.max_climb_angle, self.max_descent_angle,
-            self.run_in, self.run_out,
+            self.run_in, self.run_out, self.envelope,
         )  # fmt: skip
         return legs.length, (legs.heading if self.radius > 0 else None)
 
     def compiled_lengths(self, start, heading, ends):
         """``lengths`` from a given heading, compiled (``airplane_kernel``: within a few ulp of
         numpy's). Loads numba on the first call: for searches that fly many partial routes."""
-        from gcs_planner.geometry.airplane_kernel import airplane_lengths
+        from gcs_planner.geometry.airplane_kernel import airplane_lengths, airplane_lengths_each
 
+        if self.envelope is not None:
+            ends = np.ascontiguousarray(ends, dtype=float)
+            r, c, d = self.envelope.of_legs(float(start[2]), ends[:, 2])
+            return airplane_lengths_each(
+                np.asarray(start, dtype=float), np.asarray(heading, dtype=float), ends,
+                r, c, d, float(self.run_in), float(self.run_out),
+            )  # fmt: skip
         return airplane_lengths(
             start, heading, ends, self.radius, slope_tan(self.max_climb_angle),
             slope_tan(self.max_descent_angle), float(self.run_in), float(self.run_out),
         )  # fmt: skip
 
     def lower_bounds(self, start, ends):
+        if self.envelope is not None:
+            # each leg within the limits of its own highest point, as it is flown
+            r, c, d = self.envelope.of_legs(float(np.asarray(start)[2]), np.asarray(ends)[:, 2])
+            return self._bounds_tan(start, ends, c, d)
         return lower_bounds(
             start, ends, self.max_climb_angle, self.max_descent_angle, self.radius
         )
 
+    def arc_bounds(self, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
+        """``lower_bounds`` of the legs from each row of ``starts`` to the same row of
+        ``ends`` (the reach graph's arcs, a block at a time)."""
+        starts = np.asarray(starts, dtype=float)
+        ends = np.asarray(ends, dtype=float)
+        if self.envelope is not None:
+            r0, c0, d0 = self.envelope.at(starts[:, 2])
+            r1, c1, d1 = self.envelope.at(ends[:, 2])
+            c, d = np.minimum(c0, c1), np.minimum(d0, d1)
+        else:
+            c, d = slope_tan(self.max_climb_angle), slope_tan(self.max_descent_angle)
+        return self._bounds_tan(np.zeros(3), ends - starts, c, d)
+
+    def walk_bounds(self, start: np.ndarray, ends: np.ndarray) -> np.ndarray:
+        """A lower bound of every walk from ``start`` to each row of ``ends``, whatever points
+        it passes through: the straight leg within the most permissive limits any leg has (the
+        lowest point's, with a per-leg envelope), never inf. Sums of leg bounds along a walk
+        are at least this (it is subadditive), which direct bounds to B rely on."""
+        if self.envelope is not None:
+            _, c, d = self.envelope.bounds()
+        else:
+            c, d = slope_tan(self.max_climb_angle), slope_tan(self.max_descent_angle)
+        return lower_bounds_tan(start, ends, c, d, math.inf)
+
+    def _bounds_tan(self, start, ends, tan_climb, tan_descent) -> np.ndarray:
+        # (R only says whether a too-steep straight leg is ruled out: R = 0, no helix.)
+        return lower_bounds_tan(start, ends, tan_climb, tan_descent, self.radius)
+
     def leg(self, start, heading, end):
         return airplane_leg(
             start, heading, end, self.radius, self.max_climb_angle, self.max_descent_angle,
-            self.run_in, self.run_out,
+            self.run_in, self.run_out, self.envelope,
         )  # fmt: skip
 
     def relaxation(self) -> LegModel:
@@ -249,6 +310,7 @@ def leg_model_of(
     max_descent_angle: float = 90.0,
     approach: float = 0.0,
     departure: float = 0.0,
+    envelope: LegEnvelope | None = None,
 ) -> LegModel:
     """The leg model a scenario plans with. R = 0 is straight legs (airplane: within the climb
     limits, a too-steep leg infeasible); cs3d ignores the climb limits. ``approach`` and
@@ -264,18 +326,45 @@ def leg_model_of(
     if radius <= 0:
         approach = departure = 0.0
     return AirplaneLegs(
-        radius, max_climb_angle, max_descent_angle, float(approach), float(departure)
-    )
+        radius, max_climb_angle, max_descent_angle, float(approach), float(departure),
+        envelope=envelope if radius > 0 else None,
+    )  # fmt: skip
 
 
 def scenario_leg_model(scenario) -> LegModel:  # noqa: ANN001 - Scenario, no import cycle
-    """The leg model of ``scenario`` (its turning radius, leg model, climb limits and the
-    straight run-in and run-out at every landmark)."""
+    """The leg model of ``scenario`` (its turning radius, leg model, climb limits, the straight
+    run-in and run-out at every landmark, and with an envelope derived from the autopilot's
+    terms, each leg's limits from its own altitude)."""
     p = scenario.params
     return leg_model_of(
         p.turn_radius, scenario.leg_model, p.max_climb_angle, p.max_descent_angle,
-        p.approach, p.departure,
+        p.approach, p.departure, leg_envelope(scenario),
     )  # fmt: skip
+
+
+def leg_envelope(scenario) -> LegEnvelope | None:  # noqa: ANN001 - Scenario
+    """Each leg's envelope from the altitude of its highest point, for the parts of the
+    scenario's envelope derived from the autopilot's terms (``DerivedEnvelope.per_leg``): the
+    radius when derived from the bank, the angles when derived from the rates; a part stated
+    directly (``--turn-radius``, ``--max-climb-angle``, ...) stays one for every leg. None when
+    nothing is derived per leg (or the legs are straight)."""
+    env = getattr(scenario, "envelope", None)
+    p = scenario.params
+    if env is None or not env.per_leg or p.turn_radius <= 0 or scenario.leg_model != "airplane":
+        return None
+    base = scenario.origin.alt if scenario.origin else 0.0
+    return LegEnvelope(
+        eas=float(env.eas),
+        wind=float(env.wind),
+        base_altitude=float(base),
+        lowest=float(scenario.xyz[:, 2].min()),
+        radius=float(p.turn_radius),
+        climb_deg=float(p.max_climb_angle),
+        descent_deg=float(p.max_descent_angle),
+        tan_bank=math.tan(math.radians(env.bank_deg)) if "turn_radius" in env.per_leg else 0.0,
+        climb_rate=float(env.climb_rate) if "max_climb_angle" in env.per_leg else math.nan,
+        sink_rate=float(env.sink_rate) if "max_descent_angle" in env.per_leg else math.nan,
+    )
 
 
 def path_angle_deg(leg: FlownLeg) -> float:

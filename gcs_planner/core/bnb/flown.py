@@ -8,6 +8,7 @@ import sys
 import numpy as np
 
 from gcs_planner.core.route import Leg, Route, evaluate_route
+from gcs_planner.geometry.airplane import AirplaneLeg
 from gcs_planner.geometry.legs import FlownLeg, LegModel, path_angle_deg, scenario_leg_model
 from gcs_planner.geometry.trajectory import route_trajectory
 from gcs_planner.scenario.model import Scenario
@@ -66,10 +67,15 @@ def _compiled_flight(
 
 def flown_leg(leg: FlownLeg) -> Leg:
     """The route table's view of a flown leg."""
+    angle = path_angle_deg(leg)
+    limit = None
+    if isinstance(leg, AirplaneLeg):
+        limit = leg.climb_limit_deg if angle > 0 else leg.descent_limit_deg
     return Leg(
         leg.length,
         leg.arc_length,
         leg.arc_angle,
         int(getattr(leg, "helix_turns", 0)),
-        path_angle_deg(leg),
+        angle,
+        limit,
     )

@@ -411,6 +411,7 @@ def _compiled_search(
         np.zeros(3) if heading_a is None else np.asarray(heading_a, float),
         kernel.run_in,
         kernel.run_out,
+        *kernel.at_points(scenario.xyz[:, 2]),
     )
     seeded = Seeds(
         np.array([f.length for f in inc.found], float),
