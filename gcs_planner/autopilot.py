@@ -103,6 +103,9 @@ class Autopilot:
     envelope: Mapping[str, str]
     mission_climb: tuple[str, ...]  # climb then sink parameters a mission flies with
     mission_climb_bounds: tuple[str, ...] = ()  # PX4: the TECS maxima bounding them
+    # The path follower's tuning: the settle distance (run-in and run-out), how late a turn is
+    # entered and how much of a gust reaches the track are derived from it.
+    guidance: tuple[str, ...] = ()
 
     @property
     def defaults(self) -> dict[str, float]:
@@ -193,6 +196,7 @@ ARDUPLANE = Autopilot(
         "acceptance_radius": "WP_RADIUS",
     },
     mission_climb=("TECS_CLMB_MAX", "TECS_SINK_MAX"),
+    guidance=("NAVL1_PERIOD", "NAVL1_DAMPING"),
 )
 
 PX4 = Autopilot(
@@ -225,6 +229,7 @@ PX4 = Autopilot(
     },
     mission_climb=("FW_T_CLMB_R_SP", "FW_T_SINK_R_SP"),
     mission_climb_bounds=("FW_T_CLMB_MAX", "FW_T_SINK_MAX"),
+    guidance=("NPFG_PERIOD", "NPFG_DAMPING", "NPFG_SW_DST_MLT"),
 )
 
 AUTOPILOTS: dict[str, Autopilot] = {"ardupilot": ARDUPLANE, "px4": PX4}

@@ -50,6 +50,7 @@ hold more (two points of one kind in a row, helices) is checked leg by leg after
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -285,19 +286,27 @@ class DerivedReserve:
         }
 
 
-def late_entry(autopilot: str | None, turn_radius: float, ground_speed: float) -> tuple[float, str]:
+def late_entry(
+    autopilot: str | None,
+    turn_radius: float,
+    ground_speed: float,
+    values: Mapping[str, float] | None = None,
+) -> tuple[float, str]:
     """(d, its rule): how late ``autopilot`` enters a turn of ``turn_radius`` metres flown at
-    ``ground_speed`` m/s (see the module docstring); None: the larger of both autopilots'."""
+    ``ground_speed`` m/s (see the module docstring); None: the larger of both autopilots'.
+    ``values``: the vehicle's own parameters (``--vehicle-from``; its NAVL1_PERIOD and
+    NAVL1_DAMPING), else the shipped defaults."""
     # ArduPlane's L1 trails the arc; both autopilots' aircraft roll in over ROLL_RESPONSE_S,
     # which npfg's R/2 already holds (it turns within a few metres of the arc).
     from gcs_planner.autopilot import effective
 
-    l1 = effective("ardupilot", {}).settle_distance(ground_speed)
+    own = dict(values or {}) if autopilot == "ardupilot" else {}
+    l1 = effective("ardupilot", own).settle_distance(ground_speed)
     roll_in = ROLL_RESPONSE_S * ground_speed
     ardupilot = (
         l1 / 2.0 + roll_in,
-        f"ArduPlane's L1 = {l1:.0f} m, d = L1/2 + {ROLL_RESPONSE_S:g} s of roll-in x "
-        f"{ground_speed:.1f} m/s",
+        f"ArduPlane's L1 = {l1:.0f} m{_tuned('ardupilot', own)}, d = L1/2 + "
+        f"{ROLL_RESPONSE_S:g} s of roll-in x {ground_speed:.1f} m/s",
     )
     px4 = (turn_radius / 2.0, "PX4's npfg, d = R/2")
     if autopilot == "ardupilot":
@@ -336,19 +345,29 @@ def track_wander(
     return total + quad(power, edges[-1], math.inf, limit=200)[0]
 
 
-def gust_wander(autopilot: str | None, tas: float) -> tuple[float, str]:
-    """(the factor on (sigma / Vg)^2 / 2, its rule) for ``autopilot``'s shipped path follower
-    at ``tas`` (the fastest TAS: the gust's correlation time L / TAS is then shortest and the
-    loop passes most of it); None: the larger of both autopilots'."""
+def gust_wander(
+    autopilot: str | None, tas: float, values: Mapping[str, float] | None = None
+) -> tuple[float, str]:
+    """(the factor on (sigma / Vg)^2 / 2, its rule) for ``autopilot``'s path follower at
+    ``tas`` (the fastest TAS: the gust's correlation time L / TAS is then shortest and the
+    loop passes most of it); None: the larger of both autopilots'. ``values``: the vehicle's
+    own parameters (its NAVL1_PERIOD / NAVL1_DAMPING or NPFG_PERIOD / NPFG_DAMPING), else the
+    shipped defaults."""
     from gcs_planner.autopilot import effective
 
     tau = DRYDEN_SCALE_LENGTH_M / max(tas, 1.0)
-    ap = effective("ardupilot", {})
-    px = effective("px4", {})
+    ap = effective("ardupilot", dict(values or {}) if autopilot == "ardupilot" else {})
+    px = effective("px4", dict(values or {}) if autopilot == "px4" else {})
     assert ap.l1_period and ap.l1_damping and px.npfg_period and px.npfg_damping
     found = {
-        "ardupilot": (track_wander(ap.l1_period, ap.l1_damping, tau), "ArduPlane's L1"),
-        "px4": (track_wander(px.npfg_period, px.npfg_damping, tau), "PX4's npfg"),
+        "ardupilot": (
+            track_wander(ap.l1_period, ap.l1_damping, tau),
+            "ArduPlane's L1" + _tuned("ardupilot", values if autopilot == "ardupilot" else None),
+        ),
+        "px4": (
+            track_wander(px.npfg_period, px.npfg_damping, tau),
+            "PX4's npfg" + _tuned("px4", values if autopilot == "px4" else None),
+        ),
     }
     if autopilot in found:
         f, who = found[autopilot]
@@ -356,6 +375,16 @@ def gust_wander(autopilot: str | None, tas: float) -> tuple[float, str]:
         f, who = max(found.values())
     rule = f"{who} passes F = {f:.3f} of the gust's power at {tas:.1f} m/s TAS, x {GUST_MARGIN:g}"
     return GUST_MARGIN * f, rule
+
+
+def _tuned(firmware: str, values: Mapping[str, float] | None) -> str:
+    """" (the vehicle's NAVL1_PERIOD 20, ...)" for the guidance parameters ``values`` gives,
+    "" when it gives none (the shipped defaults)."""
+    from gcs_planner.autopilot import autopilot_for
+
+    given = [f"{k} {float(values[k]):g}" for k in autopilot_for(firmware).guidance
+             if values and k in values]  # fmt: skip
+    return f" (the vehicle's {', '.join(given)})" if given else ""
 
 
 def altitude_of(scenario: Scenario) -> Callable[[str], float]:

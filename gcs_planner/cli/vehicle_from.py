@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+from collections.abc import Mapping
 from dataclasses import replace
 
 from gcs_planner.autopilot import autopilot_for, effective
@@ -101,7 +102,7 @@ def apply_vehicle_from(args: argparse.Namespace) -> None:
             )
         ap = autopilot_for(firmware)
         names = [ap.envelope["cruise_airspeed"], ap.envelope["bank_limit"]]
-        names += [*ap.mission_climb, *ap.mission_climb_bounds]
+        names += [*ap.mission_climb, *ap.mission_climb_bounds, *ap.guidance]
         target = client._target()
         values = {
             name: read_parameter(
@@ -112,6 +113,12 @@ def apply_vehicle_from(args: argparse.Namespace) -> None:
     finally:
         client.link.close()
     eff = effective(firmware, values)
+    for name in ap.guidance:
+        spec = next(p for p in ap.params if p.name == name)
+        if not (math.isfinite(values[name]) and spec.low <= values[name] <= spec.high):
+            raise LinkError(
+                f"the vehicle's {name} {values[name]!r} lies outside {spec.low:g}..{spec.high:g}"
+            )
     overrides = {
         "cruise_airspeed": eff.cruise_airspeed,
         "max_bank_angle": eff.bank_limit,
@@ -131,7 +138,14 @@ def apply_vehicle_from(args: argparse.Namespace) -> None:
     if getattr(args, "firmware", None) is None:
         args.firmware = firmware
     args.vehicle_source = f"the {firmware} vehicle"
-    print(f"gcs-planner: from the {firmware} vehicle: {', '.join(used)}", file=sys.stderr)
+    # Its path follower's tuning: the runs and the reserve are derived from it, not from the
+    # shipped defaults, when the plan is for this autopilot.
+    args.vehicle_values = (firmware, {name: values[name] for name in ap.guidance})
+    tuning = ", ".join(f"{name} {values[name]:g}" for name in ap.guidance)
+    print(
+        f"gcs-planner: from the {firmware} vehicle: {', '.join(used)}; guidance {tuning}",
+        file=sys.stderr,
+    )
 
 
 def derive_envelope(
@@ -199,7 +213,9 @@ def derive_envelope(
         return scenario
     origin = getattr(args, "vehicle_source", None) or "flag"
     sources: list[tuple[str, str]] = []
-    shipped = effective(firmware, {}) if firmware is not None else None
+    tuned_for, tuning = getattr(args, "vehicle_values", None) or (None, {})
+    own = dict(tuning) if firmware is not None and firmware == tuned_for else {}
+    shipped = effective(firmware, own) if firmware is not None else None
 
     def pick(name: str, given: float | None, default: float | None) -> float | None:
         if given is not None:
@@ -297,11 +313,15 @@ def derive_envelope(
     gust = 0.0 if gust is None else float(gust)
     if not (math.isfinite(gust) and 0.0 <= gust <= 50.0):
         raise InputError(f"must be a speed in [0, 50] m/s (got {gust:g})", field=gust_field)
-    return with_derived_reserve(out, env, gust, env.autopilot or flown_by)
+    return with_derived_reserve(out, env, gust, env.autopilot or flown_by, own)
 
 
 def with_derived_reserve(
-    scenario: Scenario, env: DerivedEnvelope, gust: float, autopilot: str | None = None
+    scenario: Scenario,
+    env: DerivedEnvelope,
+    gust: float,
+    autopilot: str | None = None,
+    values: Mapping[str, float] | None = None,
 ) -> Scenario:
     """The scenario planning with the reserve derived from what it must cover (turn entry at
     the envelope's radius, the design ``gust`` over the longest stretch: flight_reserve.py),
@@ -318,8 +338,8 @@ def with_derived_reserve(
     limits = [getattr(p, k) for k in ("alpha1", "alpha2", "beta1", "beta2", "theta")]
     # The arcs are flown at the larger of the planned radius and the roll limit's at V + W.
     radius = max(p.turn_radius, env.turn_radius)
-    late, rule = late_entry(autopilot, radius, env.ground_speed_max)
-    wander, wander_rule = gust_wander(autopilot, env.tas) if gust > 0 else (0.0, "")
+    late, rule = late_entry(autopilot, radius, env.ground_speed_max, values)
+    wander, wander_rule = gust_wander(autopilot, env.tas, values) if gust > 0 else (0.0, "")
     basis = DerivedReserve(
         turn_radius=radius,
         late=late,
@@ -368,6 +388,9 @@ def _with_runs(
             else "speed, npfg's track error bound NPFG_PERIOD * NPFG_DAMPING * V"
         )
     )
+    values = shipped.values  # type: ignore[attr-defined]
+    names = autopilot_for(firmware).guidance[:2]
+    why += " (" + ", ".join(f"{n} {values[n]:g}" for n in names) + ")"
     return replace(env, approach=d, departure=d, runs_source=why)
 
 
