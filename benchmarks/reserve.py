@@ -53,7 +53,7 @@ class Measured:
     basis: str
 
 
-def planned(dataset: int, firmware: str, wind: float, gust: float):
+def planned(dataset: int, firmware: str, wind: float, gust: float, per_leg: bool = False):
     """The plan ``gcs-planner plan`` makes for this case (default choice and probability)."""
     from gcs_planner.cli.vehicle_from import derive_envelope
     from gcs_planner.core.planner import plan
@@ -65,7 +65,7 @@ def planned(dataset: int, firmware: str, wind: float, gust: float):
         {**TABLE2[dataset], "cruise_airspeed": terms["cruise_airspeed"],
          "max_bank_angle": terms["max_bank_angle"]},
     )  # fmt: skip
-    args = SimpleNamespace(firmware=firmware, **terms)
+    args = SimpleNamespace(firmware=firmware, per_leg_envelope=per_leg, **terms)
     scenario = derive_envelope(args, scenario, wind_text=f"{wind:g}", gust=gust)
     return plan(scenario, time_limit=None)
 
@@ -121,10 +121,12 @@ def flight(result, firmware: str, wind: float, gust: float, seed: int, from_deg=
     return report
 
 
-def measure(dataset: int, firmware: str, wind: float, gust: float, flights: int) -> Measured:
+def measure(
+    dataset: int, firmware: str, wind: float, gust: float, flights: int, per_leg: bool = False
+) -> Measured:
     from gcs_planner.plan_json import reserve_of
 
-    result = planned(dataset, firmware, wind, gust)
+    result = planned(dataset, firmware, wind, gust, per_leg)
     basis = result.scenario.reserve_basis
     assert basis is not None, "the reserve was not derived"
     overruns = [fly(result, firmware, wind, gust, seed) for seed in range(flights)]
@@ -139,6 +141,8 @@ def measure(dataset: int, firmware: str, wind: float, gust: float, flights: int)
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--flights", type=int, default=3, help="flights per case (wind directions)")
+    ap.add_argument("--per-leg-envelope", action="store_true",
+                    help="plan each leg on its own envelope (plan --per-leg-envelope)")  # fmt: skip
     args = ap.parse_args(argv)
     from gcs_planner.errors import InfeasibleError
 
@@ -150,7 +154,7 @@ def main(argv: list[str] | None = None) -> int:
             for wind in (0.0, 5.0, 10.0):
                 gust = GUST if wind > 0 else 0.0
                 try:
-                    m = measure(dataset, firmware, wind, gust, args.flights)
+                    m = measure(dataset, firmware, wind, gust, args.flights, args.per_leg_envelope)
                 except InfeasibleError:
                     print(f"| dataset {dataset} | {firmware} | {wind:g}, {gust:g} m/s | "
                           "no route | | | |")  # fmt: skip

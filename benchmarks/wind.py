@@ -4,8 +4,7 @@ a user would (``gcs-planner plan ... --json``), with the straight run-in and run
 landmark that the envelope derives (docs/model.md, "Straight at every landmark") and, for
 comparison, without them (``--approach 0 --departure 0``).
 
-Each row: the derived envelope (TAS at the highest point; R and the climb/descent angles at the
-lowest and the highest point, each leg flying within those of its own highest point; runs), the
+Each row: the derived envelope (TAS at the highest point, R, climb/descent angles, runs), the
 front's size and proof, and the chosen route (default rule: at least 0.99 likely to arrive, else
 the most reliable). Planning time is that of the whole process (numba's cache warm after the
 first row).
@@ -44,7 +43,9 @@ class WindRow:
     radius: float
     climb: float
     descent: float
-    low: tuple[float, float, float]  # R, climb, descent at the lowest point
+    # planned with --per-leg-envelope: (R at the lowest point, length, corrections, P), or
+    # (R, None, None, None) with no route
+    per_leg: tuple[float, float | None, int | None, float | None] | None
     runs: float  # derived run-in = run-out, m
     front: int
     proven: bool
@@ -122,6 +123,14 @@ def run_wind(
                     )
                     if other is not None:
                         plain = (other["length"], other["corrections"], other["probability"])
+                per_leg = None
+                if compare:
+                    leg_plan = _plan(workbook, firmware, wind, ("--per-leg-envelope",))
+                    each = _chosen(leg_plan)
+                    low_r = env["low_turn_radius"]
+                    per_leg = (low_r, None, None, None) if each is None else (
+                        low_r, each["length"], each["corrections"], each["probability"]
+                    )
                 rows.append(
                     WindRow(
                         workbook=workbook,
@@ -131,11 +140,7 @@ def run_wind(
                         radius=env["turn_radius"],
                         climb=env["max_climb_angle"],
                         descent=env["max_descent_angle"],
-                        low=(
-                            env["low_turn_radius"],
-                            env["low_max_climb_angle"],
-                            env["low_max_descent_angle"],
-                        ),
+                        per_leg=per_leg,
                         runs=env["approach_m"],
                         front=len(plan["front"]),
                         proven=bool(plan["optimality"]["optimal"]),
@@ -151,10 +156,10 @@ def run_wind(
 
 def wind_table(rows: list[WindRow]) -> str:
     header = [
-        "workbook", "autopilot", "wind", "TAS", "R: lowest – highest point",
-        "climb / descent: lowest – highest point", "run-in = run-out",
+        "workbook", "autopilot", "wind", "TAS", "R", "climb / descent", "run-in = run-out",
         "front", "proven", "chosen: length", "corrections", "P",
         "without the runs: length, corrections, P",
+        "--per-leg-envelope: R at the lowest point; length, corrections, P",
     ]  # fmt: skip
     body = []
     for r in rows:
@@ -164,8 +169,8 @@ def wind_table(rows: list[WindRow]) -> str:
                 NAMES.get(r.firmware, r.firmware),
                 f"{r.wind:g} m/s",
                 f"{r.tas:.1f} m/s",
-                f"{r.low[0]:.0f} – {r.radius:.0f} m",
-                f"{r.low[1]:.1f}° / {r.low[2]:.1f}° – {r.climb:.1f}° / {r.descent:.1f}°",
+                f"{r.radius:.0f} m",
+                f"{r.climb:.1f}° / {r.descent:.1f}°",
                 f"{r.runs:.0f} m",
                 r.front if r.front else "none: infeasible",
                 "yes" if r.proven else "no",
@@ -173,9 +178,19 @@ def wind_table(rows: list[WindRow]) -> str:
                 "–" if r.corrections is None else r.corrections,
                 "–" if r.probability is None else f"{r.probability:.3f}",
                 "–" if r.without_runs is None else "{:,.1f} m, {}, {:.3f}".format(*r.without_runs),
+                _per_leg_cell(r.per_leg),
             ]
         )
     return table(header, body)
+
+
+def _per_leg_cell(per_leg: tuple | None) -> str:
+    if per_leg is None:
+        return "–"
+    low, length, corrections, p = per_leg
+    if length is None:
+        return f"{low:.0f} m; no route"
+    return f"{low:.0f} m; {length:,.1f} m, {corrections}, {p:.3f}"
 
 
 def main(argv: list[str] | None = None) -> None:

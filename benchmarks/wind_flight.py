@@ -42,7 +42,9 @@ class FlightCell:
     seconds: float
 
 
-def fly(workbook: str, firmware: str, wind: float, runs: int, choice: str) -> FlightCell:
+def fly(
+    workbook: str, firmware: str, wind: float, runs: int, choice: str, extra: tuple[str, ...] = ()
+) -> FlightCell:
     args = [str(Path(DATA) / f"{workbook}.xlsx")]
     for flag, value in zip(FLAGS, TABLE2[workbook]):
         args += [flag, value]
@@ -56,6 +58,7 @@ def fly(workbook: str, firmware: str, wind: float, runs: int, choice: str) -> Fl
              "--quiet"]  # fmt: skip
     if choice != "default":
         args += ["--choose", choice]
+    args += list(extra)
     exe = Path(sys.executable).with_name("gcs-planner")
     t0 = time.perf_counter()
     out = subprocess.run(
@@ -104,7 +107,10 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--firmwares", default="ardupilot,px4")
     parser.add_argument("--most-reliable", action="store_true",
                         help="also fly the front's most reliable route")  # fmt: skip
+    parser.add_argument("--per-leg-envelope", action="store_true",
+                        help="plan each leg on its own envelope")  # fmt: skip
     a = parser.parse_args(argv)
+    extra = ("--per-leg-envelope",) if a.per_leg_envelope else ()
     winds = tuple(float(w) for w in a.winds.split(","))
     choices = ("default", "most-reliable") if a.most_reliable else ("default",)
     started = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
@@ -113,12 +119,13 @@ def main(argv: list[str] | None = None) -> None:
         for firmware in a.firmwares.split(","):
             for choice in choices:
                 for wind in winds:
-                    c = fly(workbook, firmware, wind, a.runs, choice)
+                    c = fly(workbook, firmware, wind, a.runs, choice, extra)
                     cells.append(c)
                     print(f"  {workbook} {firmware} {choice} {wind:g} m/s: {_cell(c)} "
                           f"in {c.seconds:.0f} s", flush=True)  # fmt: skip
     print(f"\nMeasured {started}, `python -m benchmarks.wind_flight --runs {a.runs}"
-          f"{' --most-reliable' if a.most_reliable else ''}`:\n")  # fmt: skip
+          f"{' --most-reliable' if a.most_reliable else ''}"
+          f"{' '.join(('', *extra))}`:\n")  # fmt: skip
     print(render(cells, winds))
 
 

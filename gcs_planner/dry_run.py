@@ -599,9 +599,15 @@ def plan_assumptions(plan: Plan, wind: WindSpec | None = None) -> tuple[str, ...
             "legs are not checked against the envelope in the wind flown; the flight judges"
         )
     if env is not None:
+        each = (
+            "; each leg at the TAS of its own highest point, down to "
+            f"{env.tas_low:.1f} m/s at {env.lowest_altitude:.0f} m"
+            if env.per_leg
+            else ""
+        )
         out.append(
             f"the plan took {env.eas:g} m/s EAS as {env.tas:.1f} m/s TAS at "
-            f"{env.altitude:.0f} m (ISA, the highest point)"
+            f"{env.altitude:.0f} m (ISA, the highest point){each}"
         )
     else:
         out.append(

@@ -52,9 +52,9 @@ OBJECTIVES = {"three": ("length", "corrections", "probability"),
 INFEASIBLE = {(2, "px4", 5.0), (2, "px4", 10.0)}
 
 
-def scenario_for(path, dataset: int, firmware: str, wind: str):
+def scenario_for(path, dataset: int, firmware: str, wind: str, per_leg: bool = False):
     argv = ["plan", str(path), *TABLE2[dataset], "--delta", "0.001", "--firmware", firmware,
-            "--wind", str(wind)]  # fmt: skip
+            "--wind", str(wind), *(["--per-leg-envelope"] if per_leg else [])]  # fmt: skip
     args = build_parser(argv).parse_args(argv)
     return derive_envelope(args, load_scenario_from_args(args), wind_text=args.wind)
 
@@ -153,14 +153,16 @@ def straight_metres(points: np.ndarray, from_end: bool) -> float:
     return float(flat.sum() if not turned.any() else flat[: int(np.argmax(turned))].sum())
 
 
+@pytest.mark.parametrize("per_leg", [False, True], ids=["one envelope", "per-leg envelope"])
 @pytest.mark.parametrize("objectives", list(OBJECTIVES))
 @pytest.mark.parametrize("firmware", ["ardupilot", "px4"])
 @pytest.mark.parametrize("dataset", [1, 2])
 def test_every_front_leg_flies_within_the_envelope_in_the_design_wind(
-    dataset_paths, dataset, firmware, objectives
+    dataset_paths, dataset, firmware, objectives, per_leg
 ):
     for wind in WINDS:
-        scenario = scenario_for(dataset_paths[dataset], dataset, firmware, wind)
+        scenario = scenario_for(dataset_paths[dataset], dataset, firmware, wind, per_leg)
+        assert bool(scenario.envelope.per_leg) == per_leg
         env = scenario.envelope
         speed, _, direction = wind.partition("@")
         assert env is not None and env.wind == float(speed) and env.autopilot == firmware

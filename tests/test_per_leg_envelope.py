@@ -211,13 +211,15 @@ def test_walk_bounds_stay_below_every_two_leg_walk() -> None:
 @pytest.mark.parametrize(("firmware", "varies"), [
     ("ardupilot", PER_LEG), ("px4", ("turn_radius",))])  # fmt: skip
 def test_what_varies_per_leg_under_each_autopilot(firmware, varies, dataset_paths) -> None:
-    """ArduPlane counts a helix's turns: its legs take all three figures from their own highest
-    point. PX4 leaves a helix on reaching the altitude, on its last turn's exit course: its
-    legs keep the highest point's climb and descent angles (the dry run of a plan at each leg's
-    own angles lost flights by a lap more), and take the radius per leg."""
+    """Only with --per-leg-envelope. ArduPlane counts a helix's turns: its legs take all three
+    figures from their own highest point. PX4 leaves a helix on reaching the altitude, on its
+    last turn's exit course: its legs keep the highest point's climb and descent angles (the
+    dry run of a plan at each leg's own angles lost flights by a lap more) and take the radius
+    per leg."""
     from test_envelope_in_wind import scenario_for
 
-    scenario = scenario_for(dataset_paths[1], 1, firmware, "5")
+    assert scenario_for(dataset_paths[1], 1, firmware, "5").envelope.per_leg == ()  # asked only
+    scenario = scenario_for(dataset_paths[1], 1, firmware, "5", per_leg=True)
     assert scenario.envelope.per_leg == varies
     env = leg_envelope(scenario)
     r, c, d = env.at(np.array([0.0, float(scenario.xyz[:, 2].max())]))

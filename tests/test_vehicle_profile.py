@@ -100,15 +100,25 @@ def test_text_output_says_how_each_figure_was_derived(line_csv, capsys):
     code = main(["plan", str(line_csv), *FLAGS, "--firmware", "px4", "--wind", "5@270"])
     out = capsys.readouterr().out
     assert code == 0
+    assert "ISA, the scenario's highest altitude: conservative for every leg" in out
+    assert "per leg" not in out
+    assert "from 270 deg (held from any direction: conservative)" in out
+    assert "R = (TAS + W)^2 / (g tan 50 deg)" in out
+    assert "max_climb_rate from px4's shipped default" in out
+
+
+def test_text_output_of_a_per_leg_envelope(line_csv, capsys):
+    code = main(["plan", str(line_csv), *FLAGS, "--firmware", "ardupilot", "--wind", "5",
+                 "--per-leg-envelope"])  # fmt: skip
+    out = capsys.readouterr().out
+    assert code == 0
     assert (
         "ISA, the scenario's highest altitude; each leg flies within the figures of its own "
         "highest point, these at the top" in out
     )
     # the line's points lie at 3 km and 3.4 km: the lowest legs' figures are printed too
     assert "per leg, from the TAS at its highest point: at the lowest point (3000 m" in out
-    assert "from 270 deg (held from any direction: conservative)" in out
-    assert "R = (TAS + W)^2 / (g tan 50 deg)" in out
-    assert "max_climb_rate from px4's shipped default" in out
+    assert "climb " in out.split("at the lowest point (3000 m")[1].splitlines()[0]
 
 
 def test_direct_statements_leave_the_front_unchanged(line_csv, capsys):
