@@ -50,3 +50,20 @@ def write_scenario_csv(scenario: Scenario, path: Path) -> Path:
         lines.append(f"{scenario.ids[i]},{x!r},{y!r},{z!r},{kind},{int(scenario.unreliable[i])}")
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
     return path
+
+
+def legs_modes(monkeypatch) -> list:  # noqa: ANN001 - pytest's monkeypatch
+    """The legs mode (search_kernel.LEGS_*, or None: the Python search) of every search the
+    branch and bound runs from now on, appended as they run: so a test can show the compiled
+    search really flew its legs."""
+    from gcs_planner.core.bnb import search as bnb_search
+
+    modes: list = []
+    legs_mode = bnb_search._legs_mode
+
+    def counted(ctx, critical):  # noqa: ANN001, ANN202
+        modes.append(legs_mode(ctx, critical))
+        return modes[-1]
+
+    monkeypatch.setattr(bnb_search, "_legs_mode", counted)
+    return modes

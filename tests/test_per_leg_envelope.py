@@ -16,6 +16,7 @@ import math
 
 import numpy as np
 import pytest
+from helpers import legs_modes
 from test_plan_exact import THREE, TWO, assert_same, enumerate_fronts, planned_front, tall_scenario
 from test_probes import assert_same_front, dfs_front, front_of, probed_scenario
 from test_search_kernel import _pair, _same
@@ -164,16 +165,7 @@ def test_the_front_with_a_per_leg_envelope_equals_enumeration() -> None:
 
 
 def test_the_compiled_search_flies_per_leg_envelopes_as_the_python_one(monkeypatch) -> None:
-    from gcs_planner.core.bnb import search as bnb_search
-
-    modes = []
-    legs_mode = bnb_search._legs_mode
-
-    def counted(ctx, critical):
-        modes.append(legs_mode(ctx, critical))
-        return modes[-1]
-
-    monkeypatch.setattr(bnb_search, "_legs_mode", counted)
+    modes = legs_modes(monkeypatch)
     for seed in range(6):
         base = probed_scenario(seed, "airplane, climb limits")
         scenario = enveloped(base, 40.0, 30.0, 6.0, 6.0, 3.0 * (seed % 2))

@@ -15,6 +15,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from helpers import legs_modes
 from test_plan_exact import (
     THREE,
     TWO,
@@ -132,16 +133,7 @@ def test_the_front_with_runs_equals_enumeration() -> None:
 def test_the_compiled_search_flies_runs_as_the_python_one(monkeypatch, legs: str) -> None:
     """The branch and bound's compiled search (search_kernel: the legs from airplane_kernel with
     the runs in its Legs record) against the Python one, both against depth-first enumeration."""
-    from gcs_planner.core.bnb import search as bnb_search
-
-    modes = []
-    legs_mode = bnb_search._legs_mode
-
-    def counted(ctx, critical):
-        modes.append(legs_mode(ctx, critical))
-        return modes[-1]
-
-    monkeypatch.setattr(bnb_search, "_legs_mode", counted)
+    modes = legs_modes(monkeypatch)
     for seed in range(6):
         base = probed_scenario(seed, legs)
         scenario = base.with_params(approach=400.0 + 100 * seed, departure=700.0 - 80 * seed)
