@@ -300,16 +300,13 @@ def derive_envelope(
             file=sys.stderr,
         )
         return scenario
-    # Each leg turns on the radius of its own highest point. Its climb and descent angles too,
-    # except under PX4 (or an autopilot not named): PX4 ends a helix's loiter (NAV_LOITER_TO_ALT)
-    # on the altitude, not on a count of turns, and leaves only on its last turn's exit course;
-    # a helix planned at the leg's own limit reaches the altitude on that last turn with nothing
-    # to spare, and a flight that comes to it a few seconds late circles once more (the dry run
-    # of dataset 1 in still air lost 30 of 200 flights so, a lap of 245 m on a 4.3 km helix).
-    # The highest point's angles leave it the margin it flew with before.
-    # Asked for only (--per-leg-envelope): at the legs' own limits the mock's flights overran
-    # what the derived reserve covers (tight turns low down entered late, more of them per
-    # stretch than the reserve's two; PX4 an extra lap on a helix in 10 m/s).
+    # Each leg on the envelope of its own highest point, asked for only (--per-leg-envelope): at
+    # the legs' own limits the mock's flights overran what the derived reserve covers (tight
+    # turns low down entered late, more per stretch than the reserve's two; PX4 an extra lap on
+    # a helix in 10 m/s). The radius always; the angles under ArduPlane only: PX4 ends a helix's
+    # NAV_LOITER_TO_ALT on the altitude, and only on its last turn's exit course, and a helix at
+    # the leg's own limit reaches it there with nothing to spare (the dry run of dataset 1 in
+    # still air lost 30 of 200 flights, each a lap of 245 m more).
     varies = []
     if getattr(args, "per_leg_envelope", False):
         varies = ["turn_radius"]
