@@ -419,6 +419,7 @@ class DerivedEnvelope:
         def num(x: float) -> float | None:
             return None if math.isinf(x) else float(x)
 
+        low_radius, low_climb, low_descent = self.low_envelope()
         return {
             "autopilot": self.autopilot,
             "cruise_eas": self.eas,
@@ -434,9 +435,9 @@ class DerivedEnvelope:
             "wind_rule": "any direction (conservative)",
             "per_leg": list(self.per_leg),
             # at the lowest point: the lowest legs' figures when they are derived per leg
-            "low_turn_radius": self.low_envelope()[0],
-            "low_max_climb_angle": self.low_envelope()[1],
-            "low_max_descent_angle": self.low_envelope()[2],
+            "low_turn_radius": low_radius,
+            "low_max_climb_angle": low_climb,
+            "low_max_descent_angle": low_descent,
             "ground_speed_max": self.ground_speed_max,
             "turn_radius": self.turn_radius,
             "max_climb_angle": self.climb_angle,

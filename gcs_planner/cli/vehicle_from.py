@@ -121,7 +121,8 @@ def apply_vehicle_from(args: argparse.Namespace) -> None:
         client.link.close()
     eff = effective(firmware, values)
     for name in ap.guidance:
-        spec = next(p for p in ap.params if p.name == name)
+        spec = ap.spec(name)
+        assert spec is not None  # every guidance parameter is in the autopilot's table
         if not (math.isfinite(values[name]) and spec.low <= values[name] <= spec.high):
             raise LinkError(
                 f"the vehicle's {name} {values[name]!r} lies outside {spec.low:g}..{spec.high:g}"

@@ -27,11 +27,7 @@ from gcs_planner.core.expand_kernel import expand, new_labels, relaxed_legs
 from gcs_planner.core.kernel_records import Graph, Legs, Nogoods, Pairs, Partial, Seeds, ToGo
 from gcs_planner.core.key_table_kernel import empty_table
 from gcs_planner.core.probability import PROB_EPS
-from gcs_planner.geometry.airplane_kernel import (
-    airplane_lengths,
-    airplane_lengths_each,
-    free_airplane_lengths,
-)
+from gcs_planner.geometry.airplane_kernel import airplane_lengths_each, free_airplane_lengths
 from gcs_planner.geometry.dubins_kernel import cs_lengths
 from gcs_planner.jit import inner, kernel
 
@@ -142,11 +138,7 @@ def _flown_legs(
             return airplane_lengths_each(
                 xyz[node], heading, ends, r, tc, td, legs.run_in, legs.run_out
             )
-        if has_heading:
-            return airplane_lengths(
-                xyz[node], heading, ends, legs.radius, legs.tan_climb, legs.tan_descent,
-                legs.run_in, legs.run_out,
-            )  # fmt: skip
+        # A free heading at A, or R = 0 (the chord whatever the heading; no runs then).
         return free_airplane_lengths(
             xyz[node], ends, legs.radius, legs.tan_climb, legs.tan_descent, legs.run_in
         )
