@@ -264,9 +264,13 @@ class DerivedEnvelope:
     * turning radius R = (V + W)^2 / (g tan(bank)) (the ground-track radius of a turn flown
       downwind at full bank).
 
-    ``wind_from`` (degrees, or None) is the design wind's direction; the any-direction bound is
-    used with it too (conservative: a per-leg rule needs the search's leg model). ``sources``
-    names where each input came from (flag, scenario file, vehicle, firmware default).
+    ``wind_from`` (degrees, or None) is the design wind's direction. With it and
+    ``along_track`` (both angles derived from the rates) each leg climbs and descends within
+    the limits of the fastest ground speed along its own track, atan(rate / Vg_max), and a
+    helix, which flies every heading, within those from any direction; the figures here stay
+    the any-direction ones, and the turning radius stays one from any direction (a turn's
+    headings depend on its radius; geometry.airplane.track_factor). ``sources`` names where
+    each input came from (flag, scenario file, vehicle, firmware default).
     """
 
     eas: float
@@ -292,6 +296,26 @@ class DerivedEnvelope:
     # directly); the figures above are the scenario's highest point's, the largest radius and
     # the shallowest angles (geometry.airplane.LegEnvelope).
     per_leg: tuple[str, ...] = ()
+    # Each leg's angles along its own track in the design wind's stated direction.
+    along_track: bool = False
+
+    @property
+    def wind_rule(self) -> str:
+        """How the design wind bounds the legs (the plan's words)."""
+        if self.wind == 0:
+            return "no design wind"
+        if self.along_track:
+            return (
+                f"from {self.wind_from:g} deg: each leg's climb and descent along its own track "
+                "(the fastest ground speed on it; a helix flies every heading, so from any "
+                "direction), the turning radius from any direction"
+            )
+        if self.wind_from is not None:
+            return (
+                f"from {self.wind_from:g} deg, held from any direction (conservative: the "
+                "angles are stated, not derived from the rates)"
+            )
+        return "from any direction"
 
     @property
     def tas(self) -> float:
@@ -363,15 +387,9 @@ class DerivedEnvelope:
         """Lines for the plan's output: each figure with how it was derived."""
         v = self.ground_speed_max
         wind = (
-            "no design wind"
-            if self.wind == 0
-            else f"design wind {self.wind:g} m/s"
-            + (
-                f" from {self.wind_from:g} deg (held from any direction: conservative)"
-                if self.wind_from is not None
-                else " from any direction"
-            )
-        )
+            "no design wind" if self.wind == 0
+            else f"design wind {self.wind:g} m/s {self.wind_rule}"
+        )  # fmt: skip
         src = ", ".join(f"{k} from {v}" for k, v in self.sources)
         where = (
             "the scenario's highest altitude; each leg flies within the figures of its own "
@@ -432,7 +450,8 @@ class DerivedEnvelope:
             "sink_rate": num(self.sink_rate),
             "design_wind": self.wind,
             "design_wind_from_deg": self.wind_from,
-            "wind_rule": "any direction (conservative)",
+            "wind_rule": self.wind_rule,
+            "along_track": self.along_track,
             "per_leg": list(self.per_leg),
             # at the lowest point: the lowest legs' figures when they are derived per leg
             "low_turn_radius": low_radius,

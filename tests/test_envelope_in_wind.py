@@ -3,8 +3,8 @@ when"): both workbooks, Table 2 limits, ArduPlane's and PX4's shipped defaults, 
 5 and 10 m/s from any direction and 10 m/s from 270 deg, 5 m/s from 45 deg; the fronts of three
 objectives and of two (length and corrections, `plan --objectives length,corrections`). The
 planner derives its envelope from the worst direction in closed form (vehicle.DerivedEnvelope:
-V + W over the ground, V the TAS at each leg's highest point; a design wind with a direction is
-held from any direction too); here
+V + W over the ground, V the TAS at each leg's highest point; with a direction, each leg
+without a helix within the fastest ground speed over its own track, airplane.track_factor); here
 each leg is sampled every metre where it turns (and every STRAIGHT_STEP_M on its straights,
 where the track, the slope and so every need are the same throughout) and flown through the
 wind triangle at the true airspeed of its own highest point (ISA): from 36 directions for a

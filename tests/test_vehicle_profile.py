@@ -102,7 +102,7 @@ def test_text_output_says_how_each_figure_was_derived(line_csv, capsys):
     assert code == 0
     assert "ISA, the scenario's highest altitude: conservative for every leg" in out
     assert "per leg" not in out
-    assert "from 270 deg (held from any direction: conservative)" in out
+    assert "from 270 deg: each leg's climb and descent along its own track" in out
     assert "R = (TAS + W)^2 / (g tan 50 deg)" in out
     assert "max_climb_rate from px4's shipped default" in out
 

@@ -61,7 +61,8 @@ def add_envelope_arguments(
             "--wind",
             metavar="SPEED[@FROM_DEG]",
             help="design wind, m/s: the envelope holds in a wind of this speed from any "
-            "direction (a direction given is held from any direction too: conservative)",
+            "direction; with @FROM_DEG and the angles from rates, each leg climbs and "
+            "descends within the limits of its own ground track",
         )
         g.add_argument(
             "--gust",
@@ -313,7 +314,12 @@ def derive_envelope(
         varies = ["turn_radius"]
         if (env.autopilot or flown_by) == "ardupilot":
             varies += ["max_climb_angle", "max_descent_angle"]
-    env = replace(env, per_leg=tuple(k for k in varies if k in changes))
+    # A stated direction: each leg's angles along its own track, where both come from the rates.
+    along = (
+        wind_from is not None and wind > 0
+        and "max_climb_angle" in changes and "max_descent_angle" in changes
+    )  # fmt: skip
+    env = replace(env, per_leg=tuple(k for k in varies if k in changes), along_track=along)
     out = scenario.with_params(**changes)
     out = out.with_vehicle(
         cruise_airspeed=float(eas),

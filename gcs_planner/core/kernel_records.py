@@ -155,6 +155,10 @@ class Legs(NamedTuple):
     radius_at: np.ndarray
     tan_climb_at: np.ndarray
     tan_descent_at: np.ndarray
+    # The TAS each point's limits are taken at, and the design wind's (east, north) m/s where
+    # each leg's angles follow its own track (zeros: from any direction; airplane_kernel).
+    airspeed_at: np.ndarray
+    wind: np.ndarray
 
 
 class Seeds(NamedTuple):

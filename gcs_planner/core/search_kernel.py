@@ -124,24 +124,24 @@ def _flown_legs(
         t = graph.target[lo + idx]
         ends[idx, 0], ends[idx, 1], ends[idx, 2] = xyz[t, 0], xyz[t, 1], xyz[t, 2]
     if legs.mode == LEGS_AIRPLANE:
+        # each leg on the radius and within the limits of its higher end
+        m = hi - lo
+        r = np.empty(m)
+        tc = np.empty(m)
+        td = np.empty(m)
+        v = np.empty(m)
+        for idx in range(m):
+            t = graph.target[lo + idx]
+            r[idx] = max(legs.radius_at[node], legs.radius_at[t])
+            tc[idx] = min(legs.tan_climb_at[node], legs.tan_climb_at[t])
+            td[idx] = min(legs.tan_descent_at[node], legs.tan_descent_at[t])
+            v[idx] = max(legs.airspeed_at[node], legs.airspeed_at[t])
         if has_heading and legs.radius > 0.0:
-            # each leg on the radius and within the limits of its higher end
-            m = hi - lo
-            r = np.empty(m)
-            tc = np.empty(m)
-            td = np.empty(m)
-            for idx in range(m):
-                t = graph.target[lo + idx]
-                r[idx] = max(legs.radius_at[node], legs.radius_at[t])
-                tc[idx] = min(legs.tan_climb_at[node], legs.tan_climb_at[t])
-                td[idx] = min(legs.tan_descent_at[node], legs.tan_descent_at[t])
             return airplane_lengths_each(
-                xyz[node], heading, ends, r, tc, td, legs.run_in, legs.run_out
+                xyz[node], heading, ends, r, tc, td, legs.run_in, legs.run_out, v, legs.wind
             )
         # A free heading at A, or R = 0 (the chord whatever the heading; no runs then).
-        return free_airplane_lengths(
-            xyz[node], ends, legs.radius, legs.tan_climb, legs.tan_descent, legs.run_in
-        )
+        return free_airplane_lengths(xyz[node], ends, r, tc, td, legs.run_in, v, legs.wind)
     if has_heading:
         return cs_lengths(xyz[node], heading, ends, legs.radius)
     # A free heading at A: the chord (``CS3DLegs.lengths``).

@@ -76,21 +76,84 @@ class LegEnvelope:
     tan_bank: float = 0.0
     climb_rate: float = math.nan
     sink_rate: float = math.nan
+    # The altitude (scenario metres) whose TAS the rates' angles are taken at for every leg
+    # (the scenario's highest point: angles not per leg); None: each leg's own.
+    angles_at: float | None = None
+    # The design wind's direction (degrees it blows from, clockwise from north); None: from
+    # any direction. With it, and both angles from rates, each leg climbs within the limit of
+    # the fastest ground speed along its own track (``track_factor``).
+    wind_from: float | None = None
+
+    @property
+    def directional(self) -> bool:
+        """Whether the legs' angles follow their tracks in a wind of a stated direction."""
+        return (
+            self.wind_from is not None and self.wind > 0
+            and not math.isnan(self.climb_rate) and not math.isnan(self.sink_rate)
+        )  # fmt: skip
+
+    @property
+    def wind_vector(self) -> np.ndarray:
+        """(east, north) m/s the design wind blows towards; zeros when the angles do not
+        follow the tracks (``directional``)."""
+        if not self.directional:
+            return np.zeros(2)
+        a = math.radians(float(self.wind_from))  # type: ignore[arg-type]
+        return np.array([-self.wind * math.sin(a), -self.wind * math.cos(a)])
+
+    def tas(self, z: np.ndarray) -> np.ndarray:
+        """True airspeed at each altitude ``z`` (scenario metres; ISA)."""
+        h = np.minimum(np.asarray(z, dtype=float) + self.base_altitude, ISA_TROPOPAUSE_M)
+        sigma = (1.0 - ISA_LAPSE_K_PER_M * h / ISA_T0_K) ** ISA_DENSITY_EXPONENT
+        return self.eas / np.sqrt(sigma)
+
+    def airspeed_at(self, z: np.ndarray) -> np.ndarray:
+        """The TAS the climb and descent limits at each altitude ``z`` are taken at."""
+        z = np.asarray(z, dtype=float)
+        if self.angles_at is not None:
+            return np.full(z.shape, float(self.tas(np.array([self.angles_at]))[0]))
+        return self.tas(z)
 
     def at(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(radius, tan climb limit, tan descent limit) at each altitude ``z`` (scenario
-        metres): non-decreasing radius and non-increasing tangents as z grows."""
+        metres), from any direction: non-decreasing radius and non-increasing tangents as z
+        grows."""
         z = np.asarray(z, dtype=float)
-        h = np.minimum(z + self.base_altitude, ISA_TROPOPAUSE_M)
-        sigma = (1.0 - ISA_LAPSE_K_PER_M * h / ISA_T0_K) ** ISA_DENSITY_EXPONENT
-        v = self.eas / np.sqrt(sigma) + self.wind
+        v = self.tas(z) + self.wind
         if self.tan_bank > 0:
             radius = v * v / (G_MSS * self.tan_bank)
         else:
             radius = np.full(z.shape, float(self.radius))
-        return radius, self._tan(self.climb_rate, self.climb_deg, v), self._tan(
-            self.sink_rate, self.descent_deg, v
+        va = self.airspeed_at(z) + self.wind
+        return radius, self._tan(self.climb_rate, self.climb_deg, va), self._tan(
+            self.sink_rate, self.descent_deg, va
         )
+
+    def airspeeds(self, z_start: float, z_ends: np.ndarray) -> np.ndarray:
+        """The TAS each leg's limits are taken at (``of_legs``: the higher end's)."""
+        return np.maximum(self.airspeed_at(np.asarray(z_ends, dtype=float)),
+                          float(self.airspeed_at(np.array([z_start]))[0]))  # fmt: skip
+
+    def bound_factor(self, w: np.ndarray, airspeed: np.ndarray) -> np.ndarray:
+        """How much steeper than from any direction any leg over the horizontal offsets ``w``
+        ((m, 2+)) may climb, whatever its track: (V + W) / min(Vg along the chord,
+        sqrt(V^2 - W^2)). A continuous track from a point to another turns through a range
+        of headings that holds the chord's or spans a half-turn, and a half-turn holds a
+        heading within 90 deg of downwind; where the points coincide, (V + W) / (V - W)."""
+        if not self.directional:
+            return np.ones(len(w))
+        w = np.asarray(w, dtype=float)
+        h = np.hypot(w[:, 0], w[:, 1])
+        apart = h > COINCIDENT_M
+        t = w[:, :2] / np.where(apart, h, 1.0)[:, None]
+        wv = self.wind_vector
+        along = t @ wv
+        cross = t[:, 0] * wv[1] - t[:, 1] * wv[0]
+        v = np.asarray(airspeed, dtype=float)
+        chord = along + np.sqrt(np.maximum(v * v - cross * cross, 0.0))
+        side = np.sqrt(np.maximum(v * v - self.wind * self.wind, 0.0))
+        slowest = np.where(apart, np.minimum(chord, side), v - self.wind)
+        return np.maximum((v + self.wind) / slowest, 1.0) * (1.0 + 1e-9)
 
     @staticmethod
     def _tan(rate: float, angle_deg: float, v: np.ndarray) -> np.ndarray:
@@ -113,8 +176,13 @@ class LegEnvelope:
 
     def bounds(self) -> tuple[float, float, float]:
         """(radius, tan climb, tan descent) at the lowest altitude, loosened by a part in 1e9
-        against rounding: at least as permissive as any leg's."""
+        against rounding: at least as permissive as any leg's. In a wind of a stated direction
+        the angles are those of flying straight into it (V - W: the slowest ground speed any
+        track has), so that they hold whatever the legs' tracks."""
         r, c, d = (float(x[0]) for x in self.at(np.array([self.lowest])))
+        if self.directional:
+            v = float(self.airspeed_at(np.array([self.lowest]))[0])
+            c, d = (x * (v + self.wind) / (v - self.wind) for x in (c, d))
         return r * (1.0 - 1e-9), c * (1.0 + 1e-9), d * (1.0 + 1e-9)
 
 
@@ -137,17 +205,58 @@ def needed_horizontal(dz: np.ndarray, climb_deg: float, descent_deg: float) -> n
 
 
 def helix_turns(
-    horizontal: np.ndarray, need: np.ndarray, radius: float | np.ndarray
+    horizontal: np.ndarray,
+    need: np.ndarray,
+    radius: float | np.ndarray,
+    steeper: np.ndarray | float = 1.0,
 ) -> tuple[np.ndarray, np.ndarray]:
     """(k, feasible): whole helix turns so that horizontal + 2 pi R k >= need; with R = 0 a leg
     that needs more horizontal path than it has is infeasible. ``radius`` one for all legs or
-    one per leg (a per-leg envelope; all > 0 then)."""
+    one per leg (a per-leg envelope; all > 0 then). A leg with no helix may be ``steeper``
+    times as steep as ``need`` says (its own track in a wind of a stated direction,
+    ``track_factor``); a helix flies every heading, so its turns are counted from ``need``."""
     horizontal = np.asarray(horizontal, dtype=float)
-    short = need - horizontal > STEEP_SLACK_M
+    short = need / steeper - horizontal > STEEP_SLACK_M
     if np.ndim(radius) == 0 and radius <= 0.0:
         return np.zeros(horizontal.shape, dtype=np.int64), ~short
     k = np.where(short, np.ceil((need - horizontal - STEEP_SLACK_M) / (TWO_PI * radius)), 0.0)
     return np.maximum(k, 0).astype(np.int64), np.ones(horizontal.shape, dtype=bool)
+
+
+def track_factor(
+    u: np.ndarray, normal: np.ndarray, phi: np.ndarray, airspeed: np.ndarray, wind: np.ndarray
+) -> np.ndarray:
+    """(V + W) / the fastest ground speed of each leg over its track's headings, from ``u``
+    turning towards ``normal`` through ``phi`` ((m, 2+) unit vectors, (m,) angles): how much
+    steeper than from any direction the leg may climb at the rates (docs/model.md, "Flight in
+    the real world"); 1 with no wind. ``wind`` is (east, north) m/s, where it blows towards.
+    A run-out flies u and the tangent the arc's last heading, so the arc's headings are all
+    the leg's; downwind within them gives V + W, else the faster of the two ends (the ground
+    speed falls with the angle off downwind). ``airplane_kernel.track_factor`` does the same
+    operations."""
+    m = len(phi)
+    w = math.hypot(float(wind[0]), float(wind[1]))
+    if w == 0.0:
+        return np.ones(m)
+    wx, wy = float(wind[0]), float(wind[1])
+    u = np.asarray(u, dtype=float)
+    n = np.asarray(normal, dtype=float)
+    phi = np.asarray(phi, dtype=float)
+    v = np.asarray(airspeed, dtype=float)
+    ux, uy, nx, ny = u[:, 0], u[:, 1], n[:, 0], n[:, 1]
+    fastest = _ground_speed(ux, uy, v, wx, wy)
+    c, s = np.cos(phi), np.sin(phi)
+    fastest = np.maximum(fastest, _ground_speed(c * ux + s * nx, c * uy + s * ny, v, wx, wy))
+    turned = np.arctan2((wx * nx + wy * ny) / w, (wx * ux + wy * uy) / w)
+    turned = np.where(turned < 0.0, turned + TWO_PI, turned)
+    fastest = np.where((phi > 0.0) & (turned <= phi), v + w, fastest)
+    return np.maximum((v + w) / fastest, 1.0)
+
+
+def _ground_speed(tx, ty, airspeed, wx: float, wy: float):  # noqa: ANN001, ANN202 - arrays
+    along = wx * tx + wy * ty
+    cross = wx * ty - wy * tx
+    return along + np.sqrt(np.maximum(airspeed * airspeed - cross * cross, 0.0))
 
 
 def needed_horizontal_tan(
@@ -257,6 +366,9 @@ class AirplaneLegs:
     arc_angle: np.ndarray  # phi
     normal: np.ndarray  # (m, 3) horizontal normal towards the turn (and the helix)
     straight: np.ndarray  # no arc
+    # how much steeper than its limits from any direction each leg may climb along its own
+    # track (a design wind of a stated direction; 1 without, and not used where a helix flies)
+    steeper: np.ndarray | None = None
 
 
 def airplane_legs(
@@ -288,12 +400,23 @@ def airplane_legs(
     hz = _horizontal(start, None if straight else heading, ends, radius, run_in, run_out)
     dz = ends[:, 2] - start[2]
     need = needed_horizontal_tan(dz, tan_climb, tan_descent)
-    k, ok = helix_turns(hz.length, need, radius)
+    steeper = np.ones(len(ends))
+    if envelope is not None and envelope.directional and not straight:
+        u = hz.heading if heading is None else np.broadcast_to(
+            np.asarray(heading, dtype=float)[:2] / math.hypot(heading[0], heading[1]),
+            (len(ends), 2),
+        )  # fmt: skip
+        with np.errstate(invalid="ignore"):
+            steeper = track_factor(
+                u, hz.normal, np.where(hz.reachable, hz.phi, 0.0),
+                envelope.airspeeds(start[2], ends[:, 2]), envelope.wind_vector,
+            )  # fmt: skip
+    k, ok = helix_turns(hz.length, need, radius, steeper)
     ok &= hz.reachable
     flat = hz.length + TWO_PI * radius * k
     length = np.where(ok, np.sqrt(flat * flat + dz * dz), math.inf)
     head = np.where(ok[:, None], hz.heading, np.nan)
-    return AirplaneLegs(length, head, flat, k, hz.phi, hz.normal, hz.straight)
+    return AirplaneLegs(length, head, flat, k, hz.phi, hz.normal, hz.straight, steeper)
 
 
 @dataclass(frozen=True, eq=False)
@@ -519,6 +642,9 @@ def airplane_leg(
     )
     if envelope is not None:
         r, c, d = (float(x[0]) for x in envelope.of_legs(p[2], q[2:3]))
+        if legs.helix_turns[0] == 0 and legs.steeper is not None:
+            # its own track's limits (a wind of a stated direction); a helix flies them all
+            c, d = c * float(legs.steeper[0]), d * float(legs.steeper[0])
         radius = r
         climb_deg, descent_deg = _degrees(c), _degrees(d)
     runs_out = heading is not None and radius > 0

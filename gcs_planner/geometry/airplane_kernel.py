@@ -16,7 +16,7 @@ import numpy as np
 
 from gcs_planner.geometry.airplane import STEEP_SLACK_M
 from gcs_planner.geometry.dubins import COINCIDENT_M, TWO_PI
-from gcs_planner.geometry.dubins_kernel import cs_core
+from gcs_planner.geometry.dubins_kernel import cs_arc
 from gcs_planner.jit import inner, kernel
 
 
@@ -36,13 +36,14 @@ def airplane_lengths(
     lies inside the turning circle or its tangent is shorter than ``run_in``; tangents inf for
     limits of 90 degrees. The leg first runs ``run_out`` metres straight on. ``radius`` 0 flies
     the chord whatever the heading, and a leg too steep for it is inf (no helix), as numpy's."""
-    if radius <= 0.0:
-        return free_airplane_lengths(start, ends, radius, tan_climb, tan_descent, 0.0)
     m = ends.shape[0]
-    return airplane_lengths_each(
-        start, heading, ends, np.full(m, radius), np.full(m, tan_climb),
-        np.full(m, tan_descent), run_in, run_out,
-    )  # fmt: skip
+    r = np.full(m, radius)
+    tc = np.full(m, tan_climb)
+    td = np.full(m, tan_descent)
+    no_wind = np.zeros(2)
+    if radius <= 0.0:
+        return free_airplane_lengths(start, ends, r, tc, td, 0.0, tc, no_wind)
+    return airplane_lengths_each(start, heading, ends, r, tc, td, run_in, run_out, tc, no_wind)
 
 
 @kernel
@@ -55,9 +56,14 @@ def airplane_lengths_each(
     tan_descent: np.ndarray,
     run_in: float,
     run_out: float,
+    airspeed: np.ndarray,
+    wind: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray]:
     """``airplane_lengths`` with the radius and limits of each leg (a per-leg envelope,
-    ``airplane.LegEnvelope``; every radius > 0)."""
+    ``airplane.LegEnvelope``; every radius > 0). With a design ``wind`` from a stated direction
+    ((east, north) m/s it blows towards; zeros: none) each leg may climb as steeply as the
+    fastest ground speed along its own track allows (``airplane.track_factor``; ``airspeed``
+    the TAS its limits were taken at); the limits given are those from any direction."""
     m = ends.shape[0]
     length = np.empty(m)
     head = np.empty((m, 3))
@@ -70,7 +76,7 @@ def airplane_lengths_each(
         wx = ends[i, 0] - sx
         wy = ends[i, 1] - sy
         r = radius[i]
-        reachable, horizontal, hx, hy, hz = cs_core(ux, uy, 0.0, wx, wy, 0.0, r)
+        reachable, horizontal, hx, hy, hz, phi, nx, ny, _ = cs_arc(ux, uy, 0.0, wx, wy, 0.0, r)
         if reachable and run_in > 0.0:
             # the tangent's length as airplane.tangent_lengths computes it
             a = wx * ux + wy * uy
@@ -80,8 +86,9 @@ def airplane_lengths_each(
             length[i] = math.inf
             head[i, 0], head[i, 1], head[i, 2] = np.nan, np.nan, np.nan
             continue
+        steeper = track_factor(ux, uy, nx, ny, phi, airspeed[i], wind[0], wind[1])
         length[i] = _flown(
-            run_out + horizontal, ends[i, 2] - start[2], r, tan_climb[i], tan_descent[i]
+            run_out + horizontal, ends[i, 2] - start[2], r, tan_climb[i], tan_descent[i], steeper
         )
         head[i, 0], head[i, 1], head[i, 2] = hx, hy, hz
     return length, head
@@ -91,14 +98,16 @@ def airplane_lengths_each(
 def free_airplane_lengths(
     start: np.ndarray,
     ends: np.ndarray,
-    radius: float,
-    tan_climb: float,
-    tan_descent: float,
-    run_in: float = 0.0,
+    radius: np.ndarray,
+    tan_climb: np.ndarray,
+    tan_descent: np.ndarray,
+    run_in: float,
+    airspeed: np.ndarray,
+    wind: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray]:
     """``airplane_legs`` with no heading (at A, when none is given): straight horizontal
     paths, helices where too steep, the heading out along the chord; inf where the chord is
-    shorter than ``run_in``."""
+    shorter than ``run_in``. Per leg as ``airplane_lengths_each``."""
     m = ends.shape[0]
     length = np.empty(m)
     head = np.empty((m, 3))
@@ -111,23 +120,66 @@ def free_airplane_lengths(
         else:
             head[i, 0], head[i, 1], head[i, 2] = 1.0, 0.0, 0.0
         if h >= run_in:
-            length[i] = _flown(h, ends[i, 2] - start[2], radius, tan_climb, tan_descent)
+            steeper = track_factor(
+                head[i, 0], head[i, 1], 0.0, 0.0, 0.0, airspeed[i], wind[0], wind[1]
+            )
+            length[i] = _flown(
+                h, ends[i, 2] - start[2], radius[i], tan_climb[i], tan_descent[i], steeper
+            )
         else:
             length[i] = math.inf
     return length, head
 
 
 @inner
+def track_factor(
+    ux: float, uy: float, nx: float, ny: float, phi: float, airspeed: float, wx: float, wy: float
+) -> float:
+    """(V + W) / the fastest ground speed over the headings from u turning towards n through
+    ``phi`` (``airplane.track_factor``, the same operations): how much steeper than from any
+    direction the leg may climb; 1 with no wind."""
+    w = math.hypot(wx, wy)
+    if w == 0.0:
+        return 1.0
+    fastest = _ground_speed(ux, uy, airspeed, wx, wy)
+    c = math.cos(phi)
+    s = math.sin(phi)
+    fastest = max(fastest, _ground_speed(c * ux + s * nx, c * uy + s * ny, airspeed, wx, wy))
+    # downwind within the arc: the angle from u to it, turning towards n, at most phi
+    turned = math.atan2((wx * nx + wy * ny) / w, (wx * ux + wy * uy) / w)
+    if turned < 0.0:
+        turned += TWO_PI
+    if phi > 0.0 and turned <= phi:
+        fastest = airspeed + w
+    return max((airspeed + w) / fastest, 1.0)
+
+
+@inner
+def _ground_speed(tx: float, ty: float, airspeed: float, wx: float, wy: float) -> float:
+    """Ground speed along the unit track (tx, ty) at ``airspeed`` in the wind (wx, wy)."""
+    along = wx * tx + wy * ty
+    cross = wx * ty - wy * tx
+    return along + math.sqrt(max(airspeed * airspeed - cross * cross, 0.0))
+
+
+@inner
 def _flown(
-    horizontal: float, dz: float, radius: float, tan_climb: float, tan_descent: float
+    horizontal: float,
+    dz: float,
+    radius: float,
+    tan_climb: float,
+    tan_descent: float,
+    steeper: float = 1.0,
 ) -> float:
     """The flown length of a leg of ``horizontal`` metres and climb ``dz``: with the whole
     helix turns it needs where too steep (``airplane.helix_turns``); inf where it is too steep
-    and ``radius`` is 0."""
+    and ``radius`` is 0. The leg flies without a helix where it is no steeper than the limit
+    times ``steeper`` (its track's own); a helix flies every heading, so its turns are counted
+    at the limit from any direction."""
     g = tan_climb if dz > 0 else tan_descent
     need = 0.0 if math.isinf(g) else abs(dz) / g
     k = 0.0
-    if need - horizontal > STEEP_SLACK_M:
+    if need / steeper - horizontal > STEEP_SLACK_M:
         if radius <= 0.0:
             return math.inf
         k = max(math.ceil((need - horizontal - STEEP_SLACK_M) / (TWO_PI * radius)), 0.0)

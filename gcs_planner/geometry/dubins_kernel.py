@@ -19,6 +19,16 @@ def cs_core(
 ) -> tuple[bool, float, float, float, float]:
     """One CS leg from the origin with unit heading u to the offset w, radius > 0, as
     ``dubins._core`` computes it: (reachable, length, heading at the target)."""
+    reachable, length, hx, hy, hz, _, _, _, _ = cs_arc(ux, uy, uz, wx, wy, wz, radius)
+    return reachable, length, hx, hy, hz
+
+
+@inner
+def cs_arc(
+    ux: float, uy: float, uz: float, wx: float, wy: float, wz: float, radius: float
+) -> tuple[bool, float, float, float, float, float, float, float, float]:
+    """``cs_core`` with the arc: (reachable, length, heading at the target, arc angle phi,
+    unit normal towards the turn); phi 0 on a straight leg, NaN where not reachable."""
     R = radius
     chord = math.sqrt(wx * wx + wy * wy + wz * wz)
     a = wx * ux + wy * uy + wz * uz
@@ -62,16 +72,16 @@ def cs_core(
         phi = phi + TWO_PI
     phi = phi + 0.0
     if not reachable:
-        return False, math.inf, np.nan, np.nan, np.nan
+        return False, math.inf, np.nan, np.nan, np.nan, np.nan, nx, ny, nz
     if straight:
-        return True, chord, ux, uy, uz
+        return True, chord, ux, uy, uz, 0.0, nx, ny, nz
     c = math.cos(phi)
     s = math.sin(phi)
     hx = c * ux + s * nx
     hy = c * uy + s * ny
     hz = c * uz + s * nz
     hn = math.sqrt(hx * hx + hy * hy + hz * hz)
-    return True, R * phi + t, hx / hn, hy / hn, hz / hn
+    return True, R * phi + t, hx / hn, hy / hn, hz / hn, phi, nx, ny, nz
 
 
 @kernel

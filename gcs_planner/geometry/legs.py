@@ -51,14 +51,24 @@ class KernelLegs:
     run_out: float = 0.0  # airplane: straight on from a point before turning (m, horizontal)
     envelope: LegEnvelope | None = None  # airplane: each leg's limits from its altitude
 
-    def at_points(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(radius, tan climb, tan descent) at each point's altitude ``z``: the envelope's, or
-        the model's one radius and limits everywhere."""
+    def at_points(
+        self, z: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(radius, tan climb, tan descent, the TAS the limits are taken at) at each point's
+        altitude ``z``, and the design wind's (east, north) m/s where the angles follow the
+        legs' tracks (zeros where not): the envelope's, or the model's one radius and limits
+        everywhere."""
         z = np.asarray(z, dtype=float)
         if self.envelope is not None:
-            return tuple(np.ascontiguousarray(a, float) for a in self.envelope.at(z))
+            env = self.envelope
+            r, c, d = (np.ascontiguousarray(a, float) for a in env.at(z))
+            v = np.ascontiguousarray(env.airspeed_at(z), float)
+            return r, c, d, v, np.ascontiguousarray(env.wind_vector, float)
         n = len(z)
-        return np.full(n, self.radius), np.full(n, self.tan_climb), np.full(n, self.tan_descent)
+        return (
+            np.full(n, self.radius), np.full(n, self.tan_climb), np.full(n, self.tan_descent),
+            np.zeros(n), np.zeros(2),
+        )  # fmt: skip
 
 
 class LegModel(Protocol):
@@ -213,11 +223,13 @@ class AirplaneLegs:
         from gcs_planner.geometry.airplane_kernel import airplane_lengths, airplane_lengths_each
 
         if self.envelope is not None:
+            env = self.envelope
             ends = np.ascontiguousarray(ends, dtype=float)
-            r, c, d = self.envelope.of_legs(float(start[2]), ends[:, 2])
+            r, c, d = env.of_legs(float(start[2]), ends[:, 2])
             return airplane_lengths_each(
                 np.asarray(start, dtype=float), np.asarray(heading, dtype=float), ends,
                 r, c, d, float(self.run_in), float(self.run_out),
+                env.airspeeds(float(start[2]), ends[:, 2]), env.wind_vector,
             )  # fmt: skip
         return airplane_lengths(
             start, heading, ends, self.radius, slope_tan(self.max_climb_angle),
@@ -226,9 +238,13 @@ class AirplaneLegs:
 
     def lower_bounds(self, start, ends):
         if self.envelope is not None:
-            # each leg within the limits of its own highest point, as it is flown
-            r, c, d = self.envelope.of_legs(float(np.asarray(start)[2]), np.asarray(ends)[:, 2])
-            return self._bounds_tan(start, ends, c, d)
+            # each leg within the limits of its own highest point, as it is flown (and in a
+            # wind of a stated direction as steep as any track between its ends may climb)
+            env = self.envelope
+            z0, z1 = float(np.asarray(start)[2]), np.asarray(ends, dtype=float)[:, 2]
+            r, c, d = env.of_legs(z0, z1)
+            f = env.bound_factor(np.asarray(ends) - np.asarray(start), env.airspeeds(z0, z1))
+            return self._bounds_tan(start, ends, c * f, d * f)
         return lower_bounds(
             start, ends, self.max_climb_angle, self.max_descent_angle, self.radius
         )
@@ -239,9 +255,12 @@ class AirplaneLegs:
         starts = np.asarray(starts, dtype=float)
         ends = np.asarray(ends, dtype=float)
         if self.envelope is not None:
-            r0, c0, d0 = self.envelope.at(starts[:, 2])
-            r1, c1, d1 = self.envelope.at(ends[:, 2])
-            c, d = np.minimum(c0, c1), np.minimum(d0, d1)
+            env = self.envelope
+            r0, c0, d0 = env.at(starts[:, 2])
+            r1, c1, d1 = env.at(ends[:, 2])
+            v = np.maximum(env.airspeed_at(starts[:, 2]), env.airspeed_at(ends[:, 2]))
+            f = env.bound_factor(ends - starts, v)
+            c, d = np.minimum(c0, c1) * f, np.minimum(d0, d1) * f
         else:
             c, d = slope_tan(self.max_climb_angle), slope_tan(self.max_descent_angle)
         return self._bounds_tan(np.zeros(3), ends - starts, c, d)
@@ -343,16 +362,22 @@ def scenario_leg_model(scenario) -> LegModel:  # noqa: ANN001 - Scenario, no imp
 
 
 def leg_envelope(scenario) -> LegEnvelope | None:  # noqa: ANN001 - Scenario
-    """Each leg's envelope from the altitude of its highest point, for the parts of the
-    scenario's envelope derived from the autopilot's terms (``DerivedEnvelope.per_leg``): the
-    radius when derived from the bank, the angles when derived from the rates; a part stated
-    directly (``--turn-radius``, ``--max-climb-angle``, ...) stays one for every leg. None when
-    nothing is derived per leg (or the legs are straight)."""
+    """Each leg's envelope: from the altitude of its highest point, for the parts of the
+    scenario's envelope derived from the autopilot's terms (``DerivedEnvelope.per_leg``: the
+    radius when derived from the bank, the angles when derived from the rates), and in a design
+    wind of a stated direction the angles along its own track (``DerivedEnvelope.along_track``).
+    A part stated directly (``--turn-radius``, ``--max-climb-angle``, ...) stays one for every
+    leg. None when nothing varies per leg (or the legs are straight)."""
     env = getattr(scenario, "envelope", None)
     p = scenario.params
-    if env is None or not env.per_leg or p.turn_radius <= 0 or scenario.leg_model != "airplane":
+    if env is None or p.turn_radius <= 0 or scenario.leg_model != "airplane":
+        return None
+    along = bool(getattr(env, "along_track", False))
+    if not env.per_leg and not along:
         return None
     base = scenario.origin.alt if scenario.origin else 0.0
+    # The angles from the rates: per leg, or along the track at the scenario's highest point.
+    rates = along or "max_climb_angle" in env.per_leg
     return LegEnvelope(
         eas=float(env.eas),
         wind=float(env.wind),
@@ -362,8 +387,10 @@ def leg_envelope(scenario) -> LegEnvelope | None:  # noqa: ANN001 - Scenario
         climb_deg=float(p.max_climb_angle),
         descent_deg=float(p.max_descent_angle),
         tan_bank=math.tan(math.radians(env.bank_deg)) if "turn_radius" in env.per_leg else 0.0,
-        climb_rate=float(env.climb_rate) if "max_climb_angle" in env.per_leg else math.nan,
-        sink_rate=float(env.sink_rate) if "max_descent_angle" in env.per_leg else math.nan,
+        climb_rate=float(env.climb_rate) if rates else math.nan,
+        sink_rate=float(env.sink_rate) if rates else math.nan,
+        angles_at=None if "max_climb_angle" in env.per_leg else float(scenario.xyz[:, 2].max()),
+        wind_from=env.wind_from if along else None,
     )
 
 
