@@ -190,6 +190,9 @@ class DryRunReport:
     # the autopilot's terms (no envelope to derive: the flight is the only judge).
     envelope_shortfalls: tuple[LegShortfall, ...] = ()
     envelope_wind: float | None = None
+    # the flown wind's direction (degrees it blows from): the climbs are checked along each
+    # leg's track; None: from any direction
+    envelope_wind_from: float | None = None
 
     @property
     def demonstration(self) -> bool:
@@ -417,7 +420,9 @@ def dry_run(
         # with the flown autopilot's settle distance as the vehicle holds its parameters.
         flown_wind = (wind or WindSpec()).speed
         settle = effective(flavour, vehicle.parameters).settle_distance
-        envelope_shortfalls = legs_outside_envelope(plan.scenario, route.points, flown_wind, settle)
+        envelope_shortfalls = legs_outside_envelope(
+            plan.scenario, route.points, flown_wind, settle, (wind or WindSpec()).from_deg
+        )
         replayed = replay_mod.replay(
             vehicle.mission,
             landmarks,
@@ -524,6 +529,7 @@ def dry_run(
         lost_runs=tuple(lost_runs),
         envelope_shortfalls=tuple(envelope_shortfalls),
         envelope_wind=flown_wind if plan.scenario.envelope is not None else None,
+        envelope_wind_from=(wind or WindSpec()).from_deg,
         **_airframe(replayed),
     )
 

@@ -16,8 +16,11 @@ always fits):
   >= the autopilot's settle distance at V + W.
 
 The wind is taken from any direction (V + W), as the planner does: a flight that arrives in
-the directions it drew has not flown the others. Gusts are not in the envelope (the design
-wind is steady); the flight reports what they do.
+the directions it drew has not flown the others. A flown wind of a stated direction checks each
+leg's climb and descent along its own track instead (the fastest ground speed over its
+headings, ``airplane.track_factor``; a helix flies every heading), as a plan for a design wind
+of a stated direction holds them; the radius and the runs stay checked at V + W. Gusts are not
+in the envelope (the design wind is steady); the flight reports what they do.
 """
 
 from __future__ import annotations
@@ -26,7 +29,9 @@ import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
-from gcs_planner.geometry.airplane import AirplaneLeg
+import numpy as np
+
+from gcs_planner.geometry.airplane import AirplaneLeg, track_factor
 from gcs_planner.geometry.legs import path_angle_deg
 from gcs_planner.geometry.trajectory import scenario_trajectory
 from gcs_planner.scenario.model import Kind, Scenario
@@ -60,6 +65,7 @@ def legs_outside_envelope(
     points: Sequence[int],
     wind: float,
     settle_distance: Callable[[float], float] | None = None,
+    wind_from: float | None = None,
 ) -> list[LegShortfall]:
     """Every (leg, limit) of the route through ``points`` (scenario indices, A..B) that does not
     fit the envelope of ``scenario.envelope``'s aircraft in a ``wind`` of that many m/s from any
@@ -68,7 +74,9 @@ def legs_outside_envelope(
 
     ``settle_distance(ground_speed)``: the flown autopilot's straight-line settle distance; the
     run-in and run-out are checked only when the plan derived them from the autopilot (a user
-    who states ``--approach``/``--departure`` has said what the aircraft needs)."""
+    who states ``--approach``/``--departure`` has said what the aircraft needs).
+    ``wind_from``: the flown wind's direction (degrees it blows from), None when the flight
+    draws one per run (then from any direction)."""
     env = scenario.envelope
     if env is None:
         return []
@@ -89,18 +97,23 @@ def legs_outside_envelope(
 
         speed = f"{tas:.2f} m/s TAS at {top:.0f} m + {wind:g} m/s wind"
         angle = path_angle_deg(leg)
+        vg_climb, over = vg, f"({speed})"
+        if wind_from is not None and wind > 0 and isinstance(leg, AirplaneLeg):
+            vg_climb = vg / _track_factor(leg, tas, wind, wind_from)
+            over = (f"{vg_climb:.2f} m/s, the fastest along its track "
+                    f"({speed} from {wind_from:g} deg)")
         for sign, limit, rate in ((1, "climb angle", env.climb_rate),
                                   (-1, "descent angle", env.sink_rate)):  # fmt: skip
             if math.isinf(rate) or sign * angle <= 0:
                 continue
-            can = math.degrees(math.atan2(rate, vg))
+            can = math.degrees(math.atan2(rate, vg_climb))
             if sign * angle > can * (1 + RELATIVE_SLACK):
-                needed_rate = vg * math.tan(math.radians(sign * angle))
+                needed_rate = vg_climb * math.tan(math.radians(sign * angle))
                 verb = "climbs" if sign > 0 else "descends"
                 short((limit, sign * angle, can, "deg",
-                      f"{verb} at {sign * angle:.3f} deg, {needed_rate:.2f} m/s at {vg:.2f} m/s "
-                      f"over the ground; the aircraft {verb} at {rate:g} m/s: "
-                      f"atan({rate:g} / ({speed})) = {can:.3f} deg"))  # fmt: skip
+                      f"{verb} at {sign * angle:.3f} deg, {needed_rate:.2f} m/s at "
+                      f"{vg_climb:.2f} m/s over the ground; the aircraft {verb} at {rate:g} m/s: "
+                      f"atan({rate:g} / {over}) = {can:.3f} deg"))  # fmt: skip
         if tan_bank > 0 and leg.radius > 0 and _turns(leg):
             need_r = vg * vg / (G * tan_bank)
             if leg.radius < need_r * (1 - RELATIVE_SLACK):
@@ -123,6 +136,19 @@ def legs_outside_envelope(
                            f"({speed})"))  # fmt: skip
         out += [LegShortfall(k, ids[k - 1], ids[k], *f[:4], vg, f[4]) for f in found]
     return out
+
+
+def _track_factor(leg: AirplaneLeg, tas: float, wind: float, wind_from: float) -> float:
+    """(V + W) / the fastest ground speed over the leg's headings (1 with a helix: it flies
+    them all)."""
+    if leg.helix_turns > 0:
+        return 1.0
+    a = math.radians(wind_from)
+    u = np.asarray(leg.heading_in, dtype=float)[None, :2]
+    n = np.zeros((1, 2)) if leg.normal is None else np.asarray(leg.normal, float)[None, :2]
+    phi = np.array([leg.arc_angle if leg.normal is not None else 0.0])
+    toward = np.array([-wind * math.sin(a), -wind * math.cos(a)])
+    return float(track_factor(u, n, phi, np.array([tas]), toward)[0])
 
 
 def _turns(leg: object) -> bool:

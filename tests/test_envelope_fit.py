@@ -95,10 +95,16 @@ def test_a_plan_fits_the_wind_it_was_made_for_and_a_weaker_one(dataset_paths, st
     five = legs_outside_envelope(scenario, result.route.points, 5.0, settle)
     ten = legs_outside_envelope(scenario, result.route.points, 10.0, settle)
     assert len(ten) > len(five) > 0
-    for design in ("5", "5@270"):  # a direction is held from any direction (conservative)
-        windy, windy_plan = planned(dataset_paths[2], design)
-        for flown in (0.0, 5.0):
-            assert legs_outside_envelope(windy, windy_plan.route.points, flown, settle) == []
+    windy, windy_plan = planned(dataset_paths[2], "5")
+    for flown in (0.0, 5.0):
+        assert legs_outside_envelope(windy, windy_plan.route.points, flown, settle) == []
+    # A stated direction: the climbs along each leg's own track, in that wind and no other.
+    windy, windy_plan = planned(dataset_paths[2], "10@0")
+    points = windy_plan.route.points
+    for flown, toward in ((0.0, None), (10.0, 0.0), (7.0, 0.0)):
+        assert legs_outside_envelope(windy, points, flown, settle, toward) == []
+    anywhere = legs_outside_envelope(windy, points, 10.0, settle)
+    assert anywhere and {s.limit for s in anywhere} <= {"climb angle", "descent angle"}
 
 
 def test_a_plan_with_no_aircraft_in_autopilot_terms_is_not_checked_and_says_so(

@@ -437,7 +437,11 @@ def _envelope_lines(r: DryRunReport) -> list[str]:
     flight): a summary per limit, then the shortfalls one by one."""
     if r.envelope_wind is None:
         return []
-    head = f"envelope in the wind flown ({r.envelope_wind:g} m/s from any direction, per leg at "
+    where = (
+        "from any direction" if r.envelope_wind_from is None
+        else f"from {r.envelope_wind_from:g} deg, climbs along each leg's track"
+    )  # fmt: skip
+    head = f"envelope in the wind flown ({r.envelope_wind:g} m/s {where}, per leg at "
     head += "the TAS of its highest point): "
     if not r.envelope_shortfalls:
         return [head + "every leg fits"]
