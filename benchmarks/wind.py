@@ -9,6 +9,9 @@ front's size and proof, and the chosen route (default rule: at least 0.99 likely
 the most reliable). Planning time is that of the whole process (numba's cache warm after the
 first row).
 
+A wind may carry the direction it blows from (``--winds 10,10@90``): the plan holds each leg's
+climb and descent along its own track in that wind (docs/model.md, "Flight in the real world").
+
     python -m benchmarks.wind [--winds 0,5,10] [--firmwares ardupilot,px4] [--no-runs-column]
 """
 
@@ -38,7 +41,7 @@ NAMES = {"ardupilot": "ArduPlane", "px4": "PX4"}
 class WindRow:
     workbook: str
     firmware: str
-    wind: float
+    wind: str  # SPEED[@FROM_DEG], as given to --wind
     tas: float
     radius: float
     climb: float
@@ -57,12 +60,18 @@ class WindRow:
     seconds: float
 
 
-def _plan(workbook: str, firmware: str, wind: float, extra: tuple[str, ...] = ()) -> dict:
+def wind_label(wind: str) -> str:
+    """``10@90`` as "10 m/s from 90°"; ``0`` as "0 m/s"."""
+    speed, _, towards = wind.partition("@")
+    return f"{float(speed):g} m/s" + (f" from {float(towards):g}°" if towards else "")
+
+
+def _plan(workbook: str, firmware: str, wind: str, extra: tuple[str, ...] = ()) -> dict:
     path = Path(DATA) / f"{workbook}.xlsx"
     args = [str(path)]
     for flag, value in zip(FLAGS, TABLE2[workbook]):
         args += [flag, value]
-    args += ["--firmware", firmware, "--wind", f"{wind:g}", "--json", "--quiet", *extra]
+    args += ["--firmware", firmware, "--wind", wind, "--json", "--quiet", *extra]
     exe = Path(sys.executable).with_name("gcs-planner")
     out = subprocess.run(
         [str(exe), "plan", *args], capture_output=True, text=True, check=False, timeout=900
@@ -76,7 +85,7 @@ def _plan(workbook: str, firmware: str, wind: float, extra: tuple[str, ...] = ()
     return json.loads(out.stdout)
 
 
-def _envelope(workbook: str, firmware: str, wind: float) -> dict:
+def _envelope(workbook: str, firmware: str, wind: str) -> dict:
     """The derived envelope of an infeasible case (no plan JSON to read it from), derived as the
     command line derives it (``cli.vehicle_from.derive_envelope``)."""
     from gcs_planner.cli import build_parser
@@ -86,7 +95,7 @@ def _envelope(workbook: str, firmware: str, wind: float) -> dict:
     argv = ["plan", str(Path(DATA) / f"{workbook}.xlsx")]
     for flag, value in zip(FLAGS, TABLE2[workbook]):
         argv += [flag, value]
-    argv += ["--firmware", firmware, "--wind", f"{wind:g}"]
+    argv += ["--firmware", firmware, "--wind", wind]
     args = build_parser(argv).parse_args(argv)
     scenario = derive_envelope(args, load_scenario_from_args(args), wind_text=args.wind)
     assert scenario.envelope is not None
@@ -101,7 +110,7 @@ def _chosen(plan: dict) -> dict | None:
 
 
 def run_wind(
-    winds: tuple[float, ...], firmwares: tuple[str, ...], compare: bool = True
+    winds: tuple[str, ...], firmwares: tuple[str, ...], compare: bool = True
 ) -> list[WindRow]:
     rows = []
     for workbook in ("dataset1", "dataset2"):
@@ -111,7 +120,7 @@ def run_wind(
                 plan = _plan(workbook, firmware, wind)
                 seconds = time.perf_counter() - t0
                 if "infeasible" in plan:
-                    print(f"{workbook} {firmware} {wind:g} m/s: {plan['infeasible']}")
+                    print(f"{workbook} {firmware} {wind_label(wind)}: {plan['infeasible']}")
                     plan = {"vehicle": {"envelope": None}, "front": [], "chosen": None,
                             "optimality": {"optimal": True}}  # fmt: skip
                 env = plan["vehicle"]["envelope"] or _envelope(workbook, firmware, wind)
@@ -167,7 +176,7 @@ def wind_table(rows: list[WindRow]) -> str:
             [
                 r.workbook.replace("dataset", "dataset "),
                 NAMES.get(r.firmware, r.firmware),
-                f"{r.wind:g} m/s",
+                wind_label(r.wind),
                 f"{r.tas:.1f} m/s",
                 f"{r.radius:.0f} m",
                 f"{r.climb:.1f}° / {r.descent:.1f}°",
@@ -200,7 +209,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--no-runs-column", action="store_true",
                         help="skip the comparison plans without the runs")  # fmt: skip
     args = parser.parse_args(argv)
-    winds = tuple(float(w) for w in args.winds.split(","))
+    winds = tuple(w.strip() for w in args.winds.split(","))
     firmwares = tuple(args.firmwares.split(","))
     rows = run_wind(winds, firmwares, compare=not args.no_runs_column)
     print(wind_table(rows))

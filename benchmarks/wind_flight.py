@@ -9,6 +9,9 @@ Each cell: planned length and probability, then the success rate with its 99 % W
 and the runs lost by the flight (a missed landmark, or lost where the plan flown with the same
 correction outcomes arrives) and by failed corrections.
 
+A wind with a direction (``--winds 10@90``) is the plan's design wind and the wind every run
+flies: the plan holds each leg along its own track in that wind only.
+
     python -m benchmarks.wind_flight [--runs 200] [--winds 0,5,10] [--most-reliable]
 """
 
@@ -23,7 +26,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from benchmarks.cases import DATA
-from benchmarks.wind import FLAGS, NAMES, TABLE2
+from benchmarks.wind import FLAGS, NAMES, TABLE2, wind_label
 from gcs_planner.autopilot import effective
 
 
@@ -31,7 +34,7 @@ from gcs_planner.autopilot import effective
 class FlightCell:
     workbook: str
     firmware: str
-    wind: float
+    wind: str  # SPEED[@FROM_DEG], as given to --wind
     choice: str
     planned_length: float | None  # None: no route (exit 3)
     planned_probability: float | None
@@ -43,7 +46,7 @@ class FlightCell:
 
 
 def fly(
-    workbook: str, firmware: str, wind: float, runs: int, choice: str, extra: tuple[str, ...] = ()
+    workbook: str, firmware: str, wind: str, runs: int, choice: str, extra: tuple[str, ...] = ()
 ) -> FlightCell:
     args = [str(Path(DATA) / f"{workbook}.xlsx")]
     for flag, value in zip(FLAGS, TABLE2[workbook]):
@@ -54,7 +57,7 @@ def fly(
     args += ["--firmware", firmware, "--cruise-airspeed", f"{shipped.cruise_airspeed:g}",
              "--max-bank-angle", f"{shipped.bank_limit:g}", "--max-climb-rate",
              f"{shipped.climb_rate:g}", "--max-sink-rate", f"{shipped.sink_rate:g}",
-             "--wind", f"{wind:g}", "--runs", str(runs), "--set-params", "--json",
+             "--wind", wind, "--runs", str(runs), "--set-params", "--json",
              "--quiet"]  # fmt: skip
     if choice != "default":
         args += ["--choose", choice]
@@ -88,8 +91,8 @@ def _cell(c: FlightCell) -> str:
     )
 
 
-def render(cells: list[FlightCell], winds: tuple[float, ...]) -> str:
-    head = "| case | " + " | ".join(f"wind {w:g} m/s" if w else "wind 0" for w in winds) + " |"
+def render(cells: list[FlightCell], winds: tuple[str, ...]) -> str:
+    head = "| case | " + " | ".join(f"wind {wind_label(w)}" for w in winds) + " |"
     lines = [head, "|---" * (len(winds) + 1) + "|"]
     keys = sorted({(c.workbook, c.firmware, c.choice) for c in cells},
                   key=lambda k: (k[0], k[1] != "ardupilot", k[2]))  # fmt: skip
@@ -111,7 +114,7 @@ def main(argv: list[str] | None = None) -> None:
                         help="plan each leg on its own envelope")  # fmt: skip
     a = parser.parse_args(argv)
     extra = ("--per-leg-envelope",) if a.per_leg_envelope else ()
-    winds = tuple(float(w) for w in a.winds.split(","))
+    winds = tuple(w.strip() for w in a.winds.split(","))
     choices = ("default", "most-reliable") if a.most_reliable else ("default",)
     started = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
     cells = []
@@ -121,9 +124,10 @@ def main(argv: list[str] | None = None) -> None:
                 for wind in winds:
                     c = fly(workbook, firmware, wind, a.runs, choice, extra)
                     cells.append(c)
-                    print(f"  {workbook} {firmware} {choice} {wind:g} m/s: {_cell(c)} "
+                    print(f"  {workbook} {firmware} {choice} {wind_label(wind)}: {_cell(c)} "
                           f"in {c.seconds:.0f} s", flush=True)  # fmt: skip
     print(f"\nMeasured {started}, `python -m benchmarks.wind_flight --runs {a.runs}"
+          f"{'' if a.winds == '0,5,10' else ' --winds ' + a.winds}"
           f"{' --most-reliable' if a.most_reliable else ''}"
           f"{' '.join(('', *extra))}`:\n")  # fmt: skip
     print(render(cells, winds))
