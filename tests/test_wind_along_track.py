@@ -127,6 +127,67 @@ def test_numpy_compiled_and_one_leg_agree_and_bounds_hold(seed: int) -> None:
     assert steeper > 0 and helices > 0
 
 
+def test_the_least_horizontal_path_is_the_v_shaped_tracks_minimum() -> None:
+    """``least_horizontal`` against brute force: a track flown at the two headings b either
+    side of downwind, whose chord is at a <= b off downwind, is h cos a / cos b long and may
+    climb as steeply as its faster heading allows (``track_factor`` of each heading, the leg
+    rule itself); the least over a fine grid of b of max(its length, need / factor) is what
+    the bound claims, and is never below it."""
+    rng = np.random.default_rng(11)
+    env = replace(_envelope(rng, per_leg=False), wind=9.0, wind_from=30.0)
+    m = 300
+    downwind = env.wind_vector / env.wind
+    off = rng.uniform(-math.pi, math.pi, m)
+    dw = math.atan2(downwind[1], downwind[0])
+    h = rng.uniform(500, 8000, m)
+    w = np.column_stack([h * np.cos(dw + off), h * np.sin(dw + off), np.zeros(m)])
+    v = rng.uniform(20, 35, m)
+    need = h * rng.uniform(0.5, 1.6, m)
+    got = env.least_horizontal(w, v, need)
+    bs = np.linspace(0.0, math.pi / 2, 20001)[:-1]
+    zero = np.zeros(len(bs))
+    for i in range(m):
+        a = abs(off[i])
+        grid = np.concatenate([[a], bs[bs > a]]) if a < math.pi / 2 else np.array([a])
+        tracks = np.column_stack([np.cos(dw + grid), np.sin(dw + grid)])
+        f = track_factor(tracks, tracks, zero[: len(grid)], np.full(len(grid), v[i]),
+                         env.wind_vector)  # fmt: skip
+        length = h[i] * math.cos(a) / np.cos(grid) if a < math.pi / 2 else np.array([h[i]])
+        brute = float(np.min(np.maximum(length, need[i] / f)))
+        assert got[i] <= brute * (1 + 1e-12), i
+        assert got[i] >= brute * (1 - 2e-3), (i, got[i], brute)
+    # the slowest ground speed any track between the points can have (the chord's, or the
+    # crosswind's where the chord is downwind of it) bounds every leg too, more loosely
+    ground = env.wind * np.cos(off) + np.sqrt(v * v - (env.wind * np.sin(off)) ** 2)
+    slowest = np.minimum(ground, np.sqrt(v * v - env.wind**2))
+    loose = np.maximum(h, need * slowest / (v + env.wind))
+    assert np.all(got >= loose * (1 - 1e-8))
+    assert np.mean(got > loose * (1 + 1e-3)) > 0.2
+
+
+def test_the_bound_stays_below_legs_from_every_heading() -> None:
+    """Steep legs with downwind chords, where the bound leaves the chord's own ground speed:
+    the bound is below the shortest leg over 180 headings, run-in and run-out included."""
+    rng = np.random.default_rng(3)
+    for seed in range(4):
+        env = replace(_envelope(rng, per_leg=bool(seed % 2)), wind=float(rng.uniform(6, 12)))
+        runs = (0.0, 0.0) if seed % 2 == 0 else (150.0, 120.0)
+        model = AirplaneLegs(300.0, 10.0, 10.0, *runs, envelope=env)
+        start = np.array([0.0, 0.0, rng.uniform(0, 3000)])
+        dw = math.atan2(*env.wind_vector[::-1])
+        off = dw + rng.uniform(-1.3, 1.3, 200)
+        h = rng.uniform(800, 5000, 200)
+        dz = h * rng.uniform(0.05, 0.35, 200) * rng.choice([-1.0, 1.0], 200)
+        ends = np.column_stack([h * np.cos(off), h * np.sin(off), np.maximum(start[2] + dz, 0)])
+        bound = model.lower_bounds(start, ends)
+        best = np.full(len(ends), np.inf)
+        for k in range(180):
+            a = 2 * math.pi * k / 180
+            lengths, _ = model.lengths(start, np.array([math.cos(a), math.sin(a), 0.0]), ends)
+            best = np.minimum(best, lengths)
+        assert np.all(bound <= best * (1 + 1e-12))
+
+
 def reflown_rate_excess(leg, env: LegEnvelope) -> float:
     """The most the leg, re-flown as a polyline of 2 m steps in the stated wind, asks of the
     climb or sink rate beyond what the aircraft has (m/s; <= 0 when it fits): on each step the

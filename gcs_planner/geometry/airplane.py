@@ -134,26 +134,68 @@ class LegEnvelope:
         return np.maximum(self.airspeed_at(np.asarray(z_ends, dtype=float)),
                           float(self.airspeed_at(np.array([z_start]))[0]))  # fmt: skip
 
-    def bound_factor(self, w: np.ndarray, airspeed: np.ndarray) -> np.ndarray:
-        """How much steeper than from any direction any leg over the horizontal offsets ``w``
-        ((m, 2+)) may climb, whatever its track: (V + W) / min(Vg along the chord,
-        sqrt(V^2 - W^2)). A continuous track from a point to another turns through a range
-        of headings that holds the chord's or spans a half-turn, and a half-turn holds a
-        heading within 90 deg of downwind; where the points coincide, (V + W) / (V - W)."""
+    def bound_factor(
+        self,
+        w: np.ndarray,
+        airspeed: np.ndarray,
+        tan_climb: np.ndarray | float,
+        tan_descent: np.ndarray | float,
+    ) -> np.ndarray:
+        """How much steeper than from any direction (tangents ``tan_climb``, ``tan_descent``)
+        a lower bound of any leg over the offsets ``w`` ((m, 3)) may take it, whatever its
+        track (docs/model.md, "Flight in the real world"): need / the least horizontal path
+        ``least_horizontal`` allows, need = |dz| / tan; 1 where the wind has no direction."""
         if not self.directional:
             return np.ones(len(w))
         w = np.asarray(w, dtype=float)
+        need = needed_horizontal_tan(w[:, 2], tan_climb, tan_descent)
+        least = self.least_horizontal(w, airspeed, need)
+        return np.where(need > 0.0, need / np.where(least > 0.0, least, 1.0), 1.0)
+
+    def least_horizontal(
+        self, w: np.ndarray, airspeed: np.ndarray, need: np.ndarray
+    ) -> np.ndarray:
+        """A lower bound of the horizontal path of any leg over the offsets ``w`` ((m, 2+),
+        chord length h at angle a off downwind) that needs ``need`` metres from any direction,
+        flown at the TAS ``airspeed``. Let b be the angle off downwind of the leg's heading
+        nearest to it: the leg may be steeper by f(b) = (V + W) / Vg(b) (``track_factor``), so
+        its path L >= need / f(b); every heading t has t.downwind <= cos b and the headings
+        sum to the chord, so L cos b >= h cos a. Where a >= 90 deg no track has b > a (its
+        headings, all within 180 - b < 90 deg of upwind, cannot sum to the chord), so
+        L >= max(h, need / f(a)); downwind, L >= min over b in [a, 90 deg) of
+        max(h cos a / cos b, need / f(b)), the first rising and the second falling in b: found
+        by bisection and taken at the bracket's safe ends. Where the points coincide, V - W."""
+        w = np.asarray(w, dtype=float)
+        need = np.asarray(need, dtype=float)
+        v = np.asarray(airspeed, dtype=float) * np.ones(len(w))
+        wind = self.wind
         h = np.hypot(w[:, 0], w[:, 1])
         apart = h > COINCIDENT_M
-        t = w[:, :2] / np.where(apart, h, 1.0)[:, None]
-        wv = self.wind_vector
-        along = t @ wv
-        cross = t[:, 0] * wv[1] - t[:, 1] * wv[0]
-        v = np.asarray(airspeed, dtype=float)
-        chord = along + np.sqrt(np.maximum(v * v - cross * cross, 0.0))
-        side = np.sqrt(np.maximum(v * v - self.wind * self.wind, 0.0))
-        slowest = np.where(apart, np.minimum(chord, side), v - self.wind)
-        return np.maximum((v + self.wind) / slowest, 1.0) * (1.0 + 1e-9)
+        downwind = self.wind_vector / wind
+        cos_a = np.where(apart, (w[:, 0] * downwind[0] + w[:, 1] * downwind[1])
+                         / np.where(apart, h, 1.0), 1.0)  # fmt: skip
+        cos_a = np.clip(cos_a, -1.0, 1.0)
+
+        def ground(cos_b: np.ndarray) -> np.ndarray:
+            return wind * cos_b + np.sqrt(np.maximum(v * v - wind * wind * (1.0 - cos_b**2), 0.0))
+
+        scale = need / (v + wind)
+        at_chord = np.maximum(h, scale * ground(cos_a))
+        # downwind chords whose bound the chord's own angle leaves above h: search b
+        lo = np.arccos(cos_a)
+        hi = np.full(len(w), math.pi / 2)
+        open_ = apart & (cos_a > 0.0) & (scale * ground(cos_a) > h)
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            rising = h * cos_a / np.maximum(np.cos(mid), 1e-300)
+            falling = scale * ground(np.cos(mid))
+            up = rising < falling
+            lo = np.where(up, mid, lo)
+            hi = np.where(up, hi, mid)
+        best = np.maximum(h * cos_a / np.maximum(np.cos(lo), 1e-300), scale * ground(np.cos(hi)))
+        least = np.where(open_, np.minimum(best, at_chord), at_chord)
+        least = np.where(apart, least, scale * (v - wind))
+        return least * (1.0 - 1e-9)
 
     @staticmethod
     def _tan(rate: float, angle_deg: float, v: np.ndarray) -> np.ndarray:

@@ -243,7 +243,7 @@ class AirplaneLegs:
             env = self.envelope
             z0, z1 = float(np.asarray(start)[2]), np.asarray(ends, dtype=float)[:, 2]
             r, c, d = env.of_legs(z0, z1)
-            f = env.bound_factor(np.asarray(ends) - np.asarray(start), env.airspeeds(z0, z1))
+            f = env.bound_factor(np.asarray(ends) - np.asarray(start), env.airspeeds(z0, z1), c, d)
             return self._bounds_tan(start, ends, c * f, d * f)
         return lower_bounds(
             start, ends, self.max_climb_angle, self.max_descent_angle, self.radius
@@ -259,8 +259,9 @@ class AirplaneLegs:
             r0, c0, d0 = env.at(starts[:, 2])
             r1, c1, d1 = env.at(ends[:, 2])
             v = np.maximum(env.airspeed_at(starts[:, 2]), env.airspeed_at(ends[:, 2]))
-            f = env.bound_factor(ends - starts, v)
-            c, d = np.minimum(c0, c1) * f, np.minimum(d0, d1) * f
+            c, d = np.minimum(c0, c1), np.minimum(d0, d1)
+            f = env.bound_factor(ends - starts, v, c, d)
+            c, d = c * f, d * f
         else:
             c, d = slope_tan(self.max_climb_angle), slope_tan(self.max_descent_angle)
         return self._bounds_tan(np.zeros(3), ends - starts, c, d)
