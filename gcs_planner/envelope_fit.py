@@ -31,7 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gcs_planner.geometry.airplane import AirplaneLeg, track_factor
+from gcs_planner.geometry.airplane import AirplaneLeg, track_factor, wind_towards
 from gcs_planner.geometry.legs import path_angle_deg
 from gcs_planner.geometry.trajectory import scenario_trajectory
 from gcs_planner.scenario.model import Kind, Scenario
@@ -143,11 +143,10 @@ def _track_factor(leg: AirplaneLeg, tas: float, wind: float, wind_from: float) -
     them all)."""
     if leg.helix_turns > 0:
         return 1.0
-    a = math.radians(wind_from)
     u = np.asarray(leg.heading_in, dtype=float)[None, :2]
     n = np.zeros((1, 2)) if leg.normal is None else np.asarray(leg.normal, float)[None, :2]
     phi = np.array([leg.arc_angle if leg.normal is not None else 0.0])
-    toward = np.array([-wind * math.sin(a), -wind * math.cos(a)])
+    toward = wind_towards(wind, wind_from)
     return float(track_factor(u, n, phi, np.array([tas]), toward)[0])
 
 

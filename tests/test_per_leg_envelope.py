@@ -17,7 +17,7 @@ import math
 import numpy as np
 import pytest
 from helpers import legs_modes
-from test_plan_exact import THREE, TWO, assert_same, enumerate_fronts, planned_front, tall_scenario
+from test_plan_exact import TWO, assert_plans_enumeration, enumerate_fronts, tall_scenario
 from test_probes import assert_same_front, dfs_front, front_of, probed_scenario
 from test_search_kernel import _pair, _same
 
@@ -153,10 +153,7 @@ def test_the_front_with_a_per_leg_envelope_equals_enumeration() -> None:
         base = tall_scenario(seed, "airplane", 400.0, True)
         scenario = enveloped(base, 25.0, 30.0, float(climb), float(sink), wind)
         assert scenario_leg_model(scenario).envelope is not None
-        want = enumerate_fronts(scenario)
-        for objectives in (TWO, THREE):
-            what = f"seed {seed}, {objectives}"
-            assert_same(planned_front(scenario, objectives), want[objectives], what)
+        want = assert_plans_enumeration(scenario, f"seed {seed}")
         nonempty += bool(want[TWO])
         one = enveloped(base, 25.0, 30.0, float(climb), float(sink), wind, per_leg=())
         bitten += want != enumerate_fronts(one)

@@ -109,6 +109,14 @@ def planned_front(scenario: Scenario, objectives: tuple[str, ...]) -> list[tuple
     return sorted(got, key=lambda t: (t[1], t[0], t[2]))
 
 
+def assert_plans_enumeration(scenario: Scenario, what: str) -> dict:
+    """The planner's fronts for two and three objectives equal enumeration's; those fronts."""
+    want = enumerate_fronts(scenario)
+    for objectives in (TWO, THREE):
+        assert_same(planned_front(scenario, objectives), want[objectives], f"{what}, {objectives}")
+    return want
+
+
 def assert_same(got: list[tuple], want: list[tuple], what: str) -> None:
     assert [g[1:] for g in got] == [w[1:] for w in want], (what, got, want)
     np.testing.assert_allclose(
@@ -123,10 +131,7 @@ def test_plan_equals_enumeration(leg_model: str, radius: float) -> None:
     for seed in seeds:
         for limited in (False, True):
             scenario = tall_scenario(seed, leg_model, radius, limited)
-            want = enumerated(seed, leg_model, radius, limited)
-            for objectives in (TWO, THREE):
-                what = f"seed {seed}, {limited=}, {objectives}"
-                assert_same(planned_front(scenario, objectives), want[objectives], what)
+            want = assert_plans_enumeration(scenario, f"seed {seed}, {limited=}")
             nonempty += bool(want[TWO])
         bitten += enumerated(seed, leg_model, radius, False) != want
     assert nonempty >= len(seeds) // 4

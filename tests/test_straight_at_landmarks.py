@@ -16,14 +16,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 from helpers import legs_modes
-from test_plan_exact import (
-    THREE,
-    TWO,
-    assert_same,
-    enumerate_fronts,
-    planned_front,
-    tall_scenario,
-)
+from test_plan_exact import TWO, assert_plans_enumeration, enumerate_fronts, tall_scenario
 from test_probes import assert_same_front, dfs_front, front_of, probed_scenario
 from test_search_kernel import _pair, _same
 
@@ -119,10 +112,7 @@ def test_the_front_with_runs_equals_enumeration() -> None:
         for limited in (False, True):
             base = tall_scenario(seed, "airplane", 400.0, limited)
             scenario = _with_runs(base, seed)
-            want = enumerate_fronts(scenario)
-            for objectives in (TWO, THREE):
-                what = f"seed {seed}, {limited=}, {objectives}"
-                assert_same(planned_front(scenario, objectives), want[objectives], what)
+            want = assert_plans_enumeration(scenario, f"seed {seed}, {limited=}")
             nonempty += bool(want[TWO])
             bitten += want != enumerate_fronts(base)
     assert nonempty >= 10

@@ -19,7 +19,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 from helpers import legs_modes
-from test_plan_exact import THREE, TWO, assert_same, enumerate_fronts, planned_front, tall_scenario
+from test_plan_exact import TWO, assert_plans_enumeration, enumerate_fronts, tall_scenario
 from test_probes import assert_same_front, dfs_front, front_of, probed_scenario
 from test_search_kernel import _pair, _same
 
@@ -243,9 +243,7 @@ def test_the_front_along_the_track_equals_enumeration() -> None:
         terms = (20.0, 30.0, float(climb), float(sink), wind, wind_from)
         scenario = along_track(base, *terms, per_leg=per_leg)
         assert leg_envelope(scenario).directional
-        want = enumerate_fronts(scenario)
-        for objectives in (TWO, THREE):
-            assert_same(planned_front(scenario, objectives), want[objectives], (seed, objectives))
+        want = assert_plans_enumeration(scenario, f"seed {seed}")
         nonempty += bool(want[TWO])
         anywhere = along_track(base, *terms, along=False, per_leg=per_leg)
         bitten += want != enumerate_fronts(anywhere)

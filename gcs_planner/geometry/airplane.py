@@ -98,8 +98,7 @@ class LegEnvelope:
         follow the tracks (``directional``)."""
         if not self.directional:
             return np.zeros(2)
-        a = math.radians(float(self.wind_from))  # type: ignore[arg-type]
-        return np.array([-self.wind * math.sin(a), -self.wind * math.cos(a)])
+        return wind_towards(self.wind, float(self.wind_from))  # type: ignore[arg-type]
 
     def tas(self, z: np.ndarray) -> np.ndarray:
         """True airspeed at each altitude ``z`` (scenario metres; ISA)."""
@@ -226,6 +225,13 @@ class LegEnvelope:
             v = float(self.airspeed_at(np.array([self.lowest]))[0])
             c, d = (x * (v + self.wind) / (v - self.wind) for x in (c, d))
         return r * (1.0 - 1e-9), c * (1.0 + 1e-9), d * (1.0 + 1e-9)
+
+
+def wind_towards(speed: float, from_deg: float) -> np.ndarray:
+    """(east, north) m/s of a wind of ``speed`` blowing from ``from_deg`` (clockwise from
+    north, as a wind is reported): the vector it blows towards."""
+    a = math.radians(from_deg)
+    return np.array([-speed * math.sin(a), -speed * math.cos(a)])
 
 
 def slope_limit(climb_deg: float, descent_deg: float, dz: np.ndarray | float) -> np.ndarray:

@@ -40,10 +40,14 @@ def airplane_lengths(
     r = np.full(m, radius)
     tc = np.full(m, tan_climb)
     td = np.full(m, tan_descent)
+    # still air: the legs' angles do not follow their tracks, so their airspeeds are not read
     no_wind = np.zeros(2)
+    airspeed = np.zeros(m)
     if radius <= 0.0:
-        return free_airplane_lengths(start, ends, r, tc, td, 0.0, tc, no_wind)
-    return airplane_lengths_each(start, heading, ends, r, tc, td, run_in, run_out, tc, no_wind)
+        return free_airplane_lengths(start, ends, r, tc, td, 0.0, airspeed, no_wind)
+    return airplane_lengths_each(
+        start, heading, ends, r, tc, td, run_in, run_out, airspeed, no_wind
+    )
 
 
 @kernel
