@@ -593,10 +593,12 @@ def plan_assumptions(plan: Plan, wind: WindSpec | None = None) -> tuple[str, ...
     flown = "" if wind is None or wind.still else f"; this flight: {wind.describe()}"
     env = plan.scenario.envelope
     if env is not None and env.wind > 0:
-        out.append(
-            f"the plan's envelope holds in a design wind of {env.wind:g} m/s from any "
-            f"direction{flown}"
+        where = (
+            f"from {env.wind_from:g} deg only (each leg along its own track)"
+            if env.along_track
+            else "from any direction"
         )
+        out.append(f"the plan's envelope holds in a design wind of {env.wind:g} m/s {where}{flown}")
     else:
         out.append(f"the plan assumed still air{flown}")
     if env is None and wind is not None and wind.speed > 0:

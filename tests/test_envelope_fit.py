@@ -17,7 +17,7 @@ from gcs_planner.autopilot import effective
 from gcs_planner.cli import build_parser, main
 from gcs_planner.cli.common import load_scenario_from_args, plan_from_args
 from gcs_planner.cli.vehicle_from import derive_envelope
-from gcs_planner.dry_run import EXIT_LOST
+from gcs_planner.dry_run import EXIT_LOST, plan_assumptions
 from gcs_planner.envelope_fit import legs_outside_envelope
 from gcs_planner.geometry.trajectory import scenario_trajectory
 from gcs_planner.vehicle import G, tas_from_eas
@@ -98,12 +98,15 @@ def test_a_plan_fits_the_wind_it_was_made_for_and_a_weaker_one(dataset_paths, st
     windy, windy_plan = planned(dataset_paths[2], "5")
     for flown in (0.0, 5.0):
         assert legs_outside_envelope(windy, windy_plan.route.points, flown, settle) == []
+    assert any("of 5 m/s from any direction" in a for a in plan_assumptions(windy_plan))
     # A stated direction: the climbs along each leg's own track, in that wind and no other.
     windy, windy_plan = planned(dataset_paths[2], "10@0")
     points = windy_plan.route.points
     for flown, toward in ((0.0, None), (10.0, 0.0), (7.0, 0.0)):
         assert legs_outside_envelope(windy, points, flown, settle, toward) == []
     anywhere = legs_outside_envelope(windy, points, 10.0, settle)
+    # and the dry run says which wind the plan holds in
+    assert any("of 10 m/s from 0 deg only" in a for a in plan_assumptions(windy_plan))
     assert anywhere and {s.limit for s in anywhere} <= {"climb angle", "descent angle"}
 
 
