@@ -181,6 +181,8 @@ def test_lost_replay_exits_non_zero_and_says_where(capsys, line_plan, line_csv):
     assert rc == EXIT_LOST
     assert "LOST" in out and "verified" in out
     assert "planned probability is 0.5120 < 1" in out
+    # the point mass says what it cannot tell of an airframe
+    assert "flight model: point mass" in out and "no engine power, ceiling" in out
     rc_json, out_json, _ = run_cli(
         capsys, str(line_csv), *LINE_FLAGS, "--seed", str(seed), "--json"
     )

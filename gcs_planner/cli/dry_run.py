@@ -358,6 +358,13 @@ def render(r: DryRunReport) -> str:
         out.append(f"  note: {note}")
     if r.flight_model != "point mass":
         out.append(f"flight model: {r.flight_model}")
+    else:
+        # What the point mass cannot tell (docs/jsbsim.md, the cross-check's disagreements).
+        out.append(
+            "flight model: point mass (rolls into its turns; climbs and sinks at the autopilot's "
+            "rates at once, at any altitude: no engine power, ceiling or speed-height coupling; "
+            "--flight-model jsbsim flies an airframe)"
+        )
     for limit in r.airframe_limits:
         out.append(f"  CANNOT FLY: {limit}")
     for shortfall in r.airframe_shortfalls:
