@@ -69,6 +69,19 @@ def test_airframe_holds_its_trim_and_rolls_into_a_turn_with_a_lag():
     assert abs(s.z - 700.0) < 10.0  # the turn costs a few metres at most
 
 
+def test_the_airframe_takes_up_a_climb_within_seconds_and_power_bounds_it_aloft():
+    """benchmarks.climb_response: the c172r takes up a climb asked from level within a few
+    seconds (what the point mass does at once), a few metres below an instant climb and
+    catching up; 2 km higher it cannot make 3 m/s at full throttle and falls far behind."""
+    from benchmarks.climb_response import step_response
+
+    _, _, _, _, settled, top, at5, at30 = step_response("c172r", 45.0, 650.0, 3.0)
+    assert 0.5 <= settled <= 6.0 and top >= 3.0
+    assert 0.5 < at5 < 6.0 and 0.0 <= at30 < at5
+    _, _, _, _, settled, top, at5, at30 = step_response("c172r", 45.0, 2000.0, 3.0)
+    assert settled == "–" and top < 2.7 and at30 > 15.0
+
+
 def test_airframe_that_cannot_be_trimmed_at_the_start_is_not_flown():
     frame = LocalFrame(DEFAULT_ORIGIN)
     profile = VehicleProfile(turn_radius=300.0, cruise_airspeed=28.0)
