@@ -60,8 +60,7 @@ def rows(envelopes: list[tuple[float, float, str]], levels: list[int]) -> list[l
         values = [evaluate(sc, Policy.from_route(sc, r)) for r in result.routes]
         best = max(values, key=lambda v: (v.probability, -v.length))
         envelope = f"{climb:g}°/{descent:g}°" + (
-            f", {firmware} (run-in {sc.params.approach:.0f} m, "
-            f"run-out {sc.params.departure:.0f} m)"
+            f", {firmware} (run-in {sc.params.approach:.0f} m, run-out {sc.params.departure:.0f} m)"
             if firmware
             else ""
         )

@@ -137,8 +137,10 @@ def run_wind(
                     leg_plan = _plan(workbook, firmware, wind, ("--per-leg-envelope",))
                     each = _chosen(leg_plan)
                     low_r = env["low_turn_radius"]
-                    per_leg = (low_r, None, None, None) if each is None else (
-                        low_r, each["length"], each["corrections"], each["probability"]
+                    per_leg = (
+                        (low_r, None, None, None)
+                        if each is None
+                        else (low_r, each["length"], each["corrections"], each["probability"])
                     )
                 rows.append(
                     WindRow(

@@ -100,8 +100,9 @@ def legs_outside_envelope(
         vg_climb, over = vg, f"({speed})"
         if wind_from is not None and wind > 0 and isinstance(leg, AirplaneLeg):
             vg_climb = vg / _track_factor(leg, tas, wind, wind_from)
-            over = (f"{vg_climb:.2f} m/s, the fastest along its track "
-                    f"({speed} from {wind_from:g} deg)")
+            over = (
+                f"{vg_climb:.2f} m/s, the fastest along its track ({speed} from {wind_from:g} deg)"
+            )
         for sign, limit, rate in ((1, "climb angle", env.climb_rate),
                                   (-1, "descent angle", env.sink_rate)):  # fmt: skip
             if math.isinf(rate) or sign * angle <= 0:

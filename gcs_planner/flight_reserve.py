@@ -378,7 +378,7 @@ def gust_wander(
 
 
 def _tuned(firmware: str, values: Mapping[str, float] | None) -> str:
-    """" (the vehicle's NAVL1_PERIOD 20, ...)" for the guidance parameters ``values`` gives,
+    """ " (the vehicle's NAVL1_PERIOD 20, ...)" for the guidance parameters ``values`` gives,
     "" when it gives none (the shipped defaults)."""
     from gcs_planner.autopilot import autopilot_for
 

@@ -209,9 +209,7 @@ def test_contest_three_objective_fronts_within_15_degrees_are_proven(dataset_pat
     scenario = load_scenario(dataset_paths[dataset], {**CONTEST[dataset], **limits})
     # No time limit: the proof must not hang on how busy the machine is (a compile of the
     # kernels under load once took the default minute).
-    result = plan(
-        scenario, objectives=("length", "corrections", "probability"), time_limit=None
-    )
+    result = plan(scenario, objectives=("length", "corrections", "probability"), time_limit=None)
     assert result.optimal and all(result.proven()), result.statement
     assert len(result.routes) >= 2
     for route in result.routes:

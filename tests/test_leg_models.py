@@ -143,9 +143,7 @@ def test_heading_carrying_models_depend_on_it(name: str, seed: int) -> None:
     assert np.any(np.abs(a[both] - b[both]) > 1.0), name
 
 
-@pytest.mark.parametrize(
-    "name", [n for n, m in MODELS.items() if hasattr(m, "compiled_lengths")]
-)
+@pytest.mark.parametrize("name", [n for n, m in MODELS.items() if hasattr(m, "compiled_lengths")])
 @pytest.mark.parametrize("seed", range(3))
 def test_compiled_lengths_equal_numpys(name: str, seed: int) -> None:
     model = MODELS[name]

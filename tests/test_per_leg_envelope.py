@@ -166,9 +166,7 @@ def test_the_compiled_search_flies_per_leg_envelopes_as_the_python_one(monkeypat
     for seed in range(6):
         base = probed_scenario(seed, "airplane, climb limits")
         scenario = enveloped(base, 40.0, 30.0, 6.0, 6.0, 3.0 * (seed % 2))
-        scenario = scenario.with_params(
-            approach=200.0 * (seed % 3), departure=150.0 * (seed % 3)
-        )
+        scenario = scenario.with_params(approach=200.0 * (seed % 3), departure=150.0 * (seed % 3))
         compiled, python = _pair(scenario, True)
         _same(compiled, python, seed)
         assert_same_front(front_of(compiled, True), dfs_front(scenario, True), seed)

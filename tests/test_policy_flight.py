@@ -96,8 +96,19 @@ def test_reports_are_read_robustly():
     assert parse_report(text) == parse_report(text.encode()) and parse_report(text).no_fix
     assert parse_report("H fix 13 MISSED by 12.3m").no_fix  # the replayed flight's words
     assert parse_report("V fix 7 made").took and not parse_report("V fix 7 LOST").no_fix
-    for other in ("PreArm: Bad GPS", "V fix", "V fix 12", "X fix 12 made", "V fix 12 MAYBE",
-                  "V fix 12 madeX", "V fix 1 2 made", b"V fix \xff made", None, 42, ""):
+    for other in (
+        "PreArm: Bad GPS",
+        "V fix",
+        "V fix 12",
+        "X fix 12 made",
+        "V fix 12 MAYBE",
+        "V fix 12 madeX",
+        "V fix 1 2 made",
+        b"V fix \xff made",
+        None,
+        42,
+        "",
+    ):
         assert parse_report(other) is None, other  # fmt: skip
     with pytest.raises(ValueError):
         format_report("V", "two words", "made")

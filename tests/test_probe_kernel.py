@@ -141,9 +141,7 @@ def test_compiled_dominance_between_distributions_answers_as_the_python_one() ->
         }
         shift = float(rng.choice([0.0, 0.5, 1.0]))
         want = dominance._stochastically_dominates(dominance._shifted(d1, shift), d2)
-        got = stochastically_dominates(
-            *_pool(d1), 0, len(d1), shift, *_pool(d2), 0, len(d2)
-        )
+        got = stochastically_dominates(*_pool(d1), 0, len(d1), shift, *_pool(d2), 0, len(d2))
         assert got == want, (d1, d2, shift)
         answers[want] += 1
     assert answers[True] >= 300 and answers[False] >= 300, answers

@@ -256,9 +256,7 @@ def test_the_compiled_search_flies_along_the_track_as_the_python_one(monkeypatch
     for seed in range(6):
         base = probed_scenario(seed, "airplane, climb limits")
         scenario = along_track(base, 40.0, 30.0, 6.0, 6.0, 8.0, 45.0 * seed)
-        scenario = scenario.with_params(
-            approach=200.0 * (seed % 3), departure=150.0 * (seed % 3)
-        )
+        scenario = scenario.with_params(approach=200.0 * (seed % 3), departure=150.0 * (seed % 3))
         compiled, python = _pair(scenario, True)
         _same(compiled, python, seed)
         assert_same_front(front_of(compiled, True), dfs_front(scenario, True), seed)

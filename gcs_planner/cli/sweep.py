@@ -95,9 +95,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-def scheduler_address(
-    given: str | None, scheduler_file: Path | None
-) -> tuple[str | None, str]:
+def scheduler_address(given: str | None, scheduler_file: Path | None) -> tuple[str | None, str]:
     """The scheduler to submit to and where it came from: ``--scheduler``, the address in
     ``--scheduler-file``, or Dask's own DASK_SCHEDULER_ADDRESS (which a cluster's job scripts
     export); None: a local cluster."""

@@ -401,13 +401,10 @@ def _with_runs(
         return env
     d = shipped.settle_distance(env.ground_speed_max)  # type: ignore[attr-defined]
     firmware = shipped.firmware  # type: ignore[attr-defined]
-    why = (
-        f"derived: {firmware}'s settle distance at {env.ground_speed_max:.1f} m/s ground "
-        + (
-            "speed, the L1 distance NAVL1_PERIOD * NAVL1_DAMPING * V / pi"
-            if firmware == "ardupilot"
-            else "speed, npfg's track error bound NPFG_PERIOD * NPFG_DAMPING * V"
-        )
+    why = f"derived: {firmware}'s settle distance at {env.ground_speed_max:.1f} m/s ground " + (
+        "speed, the L1 distance NAVL1_PERIOD * NAVL1_DAMPING * V / pi"
+        if firmware == "ardupilot"
+        else "speed, npfg's track error bound NPFG_PERIOD * NPFG_DAMPING * V"
     )
     values = shipped.values  # type: ignore[attr-defined]
     names = autopilot_for(firmware).guidance[:2]

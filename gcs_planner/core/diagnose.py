@@ -60,9 +60,7 @@ def why_infeasible(
     if kmax == 0:
         if inner == 0:
             return f"the scenario has no correction points, and {direct}"
-        return (
-            f"--max-corrections {max_corrections} forbids corrections, and {direct}"
-        )
+        return f"--max-corrections {max_corrections} forbids corrections, and {direct}"
     carried, fewest = _reach(graph, scenario.kind == Kind.V, kmax)
     if fewest < 0:
         if kmax < inner:
@@ -253,8 +251,14 @@ def _nothing_from_a(scenario: Scenario, model: LegModel) -> str:
         d = float(bound[j])
         tight = min(limits, key=lambda t: t[1])
         if not math.isfinite(d):
-            parts.append(_too_steep(f"every {name} point is too steep to reach: A->"
-                                    f"{scenario.ids[j]}", scenario, a, scenario.xyz[j]))
+            parts.append(
+                _too_steep(
+                    f"every {name} point is too steep to reach: A->{scenario.ids[j]}",
+                    scenario,
+                    a,
+                    scenario.xyz[j],
+                )
+            )
             continue
         parts.append(
             f"the nearest {name} point, {scenario.ids[j]}, is {d:,.0f} m away "
@@ -299,9 +303,7 @@ def _unreached_kind(
         if h > graph.lim_h[j]:
             over.append(f"h = {_units(scenario, h)} against {l2[0]}={l2[1]:g}")
         src = "A" if i == scenario.start else f"point {scenario.ids[i]}"
-        leg = (
-            f"{d:,.0f} m from {src}" if math.isfinite(d) else f"too steep to fly to from {src}"
-        )
+        leg = f"{d:,.0f} m from {src}" if math.isfinite(d) else f"too steep to fly to from {src}"
         return (
             f"no chain from A reaches a {name} point within {l1[0]}={l1[1]:g} and "
             f"{l2[0]}={l2[1]:g} ({p.limits_m(kind)[0]:,.0f} m and {p.limits_m(kind)[1]:,.0f} m "

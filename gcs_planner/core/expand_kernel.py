@@ -34,6 +34,7 @@ from gcs_planner.jit import inner
 
 KIND_V, KIND_H = 2, 3
 
+
 class Labels(NamedTuple):
     """The partial routes of one search or probe, a row each (lists, appended by ``keep``),
     the partial routes kept per key and the queue. The fields ``dominance_kernel`` reads are
@@ -165,7 +166,6 @@ def propagate(
                 new_m[count] = 0.0 + share
                 count += 1
     return count
-
 
 
 @inner

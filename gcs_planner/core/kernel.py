@@ -119,7 +119,6 @@ def _scan(xyz, reach_to, start, end, to_end, lo, side, dims, first, order, slot,
                 slot[i] += 1
 
 
-
 @njit(cache=True)
 def fewest_corrections(
     xyz: np.ndarray,
@@ -262,6 +261,7 @@ def fewest_corrections(
         lo_i, hi_i = new_lo, size
         k += 1
     return -1, np.inf, np.empty(0, np.int64)
+
 
 @njit(cache=True)
 def layered_search(

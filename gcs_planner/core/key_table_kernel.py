@@ -91,4 +91,3 @@ def with_room(table: KeyTable, keys: int) -> KeyTable:
         if table.entry[s] >= 0:
             put(out, table.node[s], table.mask[s], table.entry[s])
     return out
-

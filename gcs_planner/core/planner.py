@@ -297,9 +297,7 @@ def _branch_and_bound(
         searched = scenario.subset(inside)
         graph = build_reach_graph(searched)
         position = {int(p): i for i, p in enumerate(inside)}
-        seeds = tuple(
-            tuple(position[p] for p in s) for s in seeds if all(p in position for p in s)
-        )
+        seeds = tuple(tuple(position[p] for p in s) for s in seeds if all(p in position for p in s))
     elif graph is None:
         budget.setup("the reach graph")
         graph = build_reach_graph(scenario)
@@ -312,9 +310,7 @@ def _branch_and_bound(
         graph=graph,
     )
     if inside is not None:
-        res.front = [
-            replace(g, points=tuple(int(inside[i]) for i in g.points)) for g in res.front
-        ]
+        res.front = [replace(g, points=tuple(int(inside[i]) for i in g.points)) for g in res.front]
     if certain is not None:
         res.lower_bounds = [
             max(lb, certain.floor(g.corrections)) for g, lb in zip(res.front, res.lower_bounds)

@@ -124,8 +124,10 @@ class LegEnvelope:
         else:
             radius = np.full(z.shape, float(self.radius))
         va = self.airspeed_at(z) + self.wind
-        return radius, self._tan(self.climb_rate, self.climb_deg, va), self._tan(
-            self.sink_rate, self.descent_deg, va
+        return (
+            radius,
+            self._tan(self.climb_rate, self.climb_deg, va),
+            self._tan(self.sink_rate, self.descent_deg, va),
         )
 
     def airspeeds(self, z_start: float, z_ends: np.ndarray) -> np.ndarray:
@@ -151,9 +153,7 @@ class LegEnvelope:
         least = self.least_horizontal(w, airspeed, need)
         return np.where(need > 0.0, need / np.where(least > 0.0, least, 1.0), 1.0)
 
-    def least_horizontal(
-        self, w: np.ndarray, airspeed: np.ndarray, need: np.ndarray
-    ) -> np.ndarray:
+    def least_horizontal(self, w: np.ndarray, airspeed: np.ndarray, need: np.ndarray) -> np.ndarray:
         """A lower bound of the horizontal path of any leg over the offsets ``w`` ((m, 2+),
         chord length h at angle a off downwind) that needs ``need`` metres from any direction,
         flown at the TAS ``airspeed``. Let b be the angle off downwind of the leg's heading
@@ -322,9 +322,7 @@ def lower_bounds(
 ) -> np.ndarray:
     """Heading-free lower bounds of the airplane legs from ``start`` to each row of ``ends``:
     max(chord, |dz| / sin gamma), or inf where R = 0 and the straight leg is too steep."""
-    return lower_bounds_tan(
-        start, ends, slope_tan(climb_deg), slope_tan(descent_deg), radius
-    )
+    return lower_bounds_tan(start, ends, slope_tan(climb_deg), slope_tan(descent_deg), radius)
 
 
 def lower_bounds_tan(
@@ -531,9 +529,7 @@ class AirplaneLeg:
 
     @property
     def horizontal_length(self) -> float:
-        return (
-            self.run_out + self.helix_horizontal + self.arc_horizontal + self.straight_horizontal
-        )
+        return self.run_out + self.helix_horizontal + self.arc_horizontal + self.straight_horizontal
 
     @property
     def _scale(self) -> float:
@@ -575,9 +571,7 @@ class AirplaneLeg:
 
     @property
     def tangent_point(self) -> np.ndarray:
-        return self.point_at_horizontal(
-            self.run_out + self.helix_horizontal + self.arc_horizontal
-        )
+        return self.point_at_horizontal(self.run_out + self.helix_horizontal + self.arc_horizontal)
 
     @property
     def sense(self) -> int:

@@ -106,9 +106,7 @@ class _Core:
     straight: np.ndarray
 
 
-def _core(
-    start: np.ndarray, u: np.ndarray, ends: np.ndarray, radius: float | np.ndarray
-) -> _Core:
+def _core(start: np.ndarray, u: np.ndarray, ends: np.ndarray, radius: float | np.ndarray) -> _Core:
     """The CS paths of radius ``radius`` (one for all targets, or one > 0 per target)."""
     w = ends - start
     wx, wy, wz = w[:, 0], w[:, 1], w[:, 2]

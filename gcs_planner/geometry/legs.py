@@ -245,9 +245,7 @@ class AirplaneLegs:
             r, c, d = env.of_legs(z0, z1)
             f = env.bound_factor(np.asarray(ends) - np.asarray(start), env.airspeeds(z0, z1), c, d)
             return self._bounds_tan(start, ends, c * f, d * f)
-        return lower_bounds(
-            start, ends, self.max_climb_angle, self.max_descent_angle, self.radius
-        )
+        return lower_bounds(start, ends, self.max_climb_angle, self.max_descent_angle, self.radius)
 
     def arc_bounds(self, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
         """``lower_bounds`` of the legs from each row of ``starts`` to the same row of

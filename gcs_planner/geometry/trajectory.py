@@ -92,9 +92,7 @@ def scenario_trajectory(scenario, points: Sequence[int]) -> Trajectory:  # noqa:
     """The flown trajectory of a route of ``scenario`` under its own leg model."""
     heading = None if scenario.heading_at_a is None else np.asarray(scenario.heading_at_a, float)
     model = scenario_leg_model(scenario)
-    return route_trajectory(
-        scenario.xyz[list(points)], scenario.params.turn_radius, heading, model
-    )
+    return route_trajectory(scenario.xyz[list(points)], scenario.params.turn_radius, heading, model)
 
 
 def _first_direction(pts: np.ndarray) -> np.ndarray:

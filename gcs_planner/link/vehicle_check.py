@@ -125,7 +125,12 @@ def shortfalls(plan: dict, firmware: str, read: Callable[[str], float]) -> list[
 
 
 def vehicle_shortfalls(
-    link: Link, target: tuple[int, int], plan: dict, firmware: str, *, timeout: float,
+    link: Link,
+    target: tuple[int, int],
+    plan: dict,
+    firmware: str,
+    *,
+    timeout: float,
     retries: int,
 ) -> list[Shortfall]:
     """:func:`shortfalls` read over ``link`` from the vehicle at ``target`` (upload and the dry

@@ -444,9 +444,7 @@ def plan_design_wind(plan: dict, source: str = "") -> float:
     try:
         wind = float(envelope["design_wind"])
     except (TypeError, ValueError) as exc:
-        raise _bad(
-            "vehicle.envelope.design_wind must be a number", source, "design_wind"
-        ) from exc
+        raise _bad("vehicle.envelope.design_wind must be a number", source, "design_wind") from exc
     if not math.isfinite(wind) or wind < 0:
         raise _bad(
             f"vehicle.envelope.design_wind must be >= 0 m/s, got {wind!r}", source, "design_wind"
