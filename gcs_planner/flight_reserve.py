@@ -378,8 +378,8 @@ def gust_wander(
 
 
 def _tuned(firmware: str, values: Mapping[str, float] | None) -> str:
-    """ " (the vehicle's NAVL1_PERIOD 20, ...)" for the guidance parameters ``values`` gives,
-    "" when it gives none (the shipped defaults)."""
+    """The text ``" (the vehicle's NAVL1_PERIOD 20, ...)"`` for the guidance parameters
+    ``values`` gives, ``""`` when it gives none (the shipped defaults)."""
     from gcs_planner.autopilot import autopilot_for
 
     given = [f"{k} {float(values[k]):g}" for k in autopilot_for(firmware).guidance
