@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import collections
 
-from test_probes import assert_same_front, front_of, probed_front, probed_scenario
+from test_probes import assert_same_front, dfs_front, front_of, probed_front, probed_scenario
 
 from gcs_planner.core import bnb, search_kernel
 from gcs_planner.core.bnb import Options
@@ -42,6 +42,14 @@ def _same(a: bnb.BnbResult, b: bnb.BnbResult, case) -> None:
     assert (a.optimal, a.proven, a.exhausted) == (b.optimal, b.proven, b.exhausted), case
     for x, y in zip(a.lower_bounds, b.lower_bounds):
         assert abs(x - y) <= 1e-6, case
+
+
+def assert_compiled_flies_as_python(scenario, case) -> None:
+    """The compiled search equals the Python one (three objectives), label for label, and its
+    front equals depth-first enumeration's."""
+    compiled, python = _pair(scenario, True)
+    _same(compiled, python, case)
+    assert_same_front(front_of(compiled, True), dfs_front(scenario, True), case)
 
 
 def test_compiled_searches_equal_the_python_ones_and_enumeration(monkeypatch) -> None:
