@@ -2,8 +2,9 @@
 
 Each mission is planned once and dry-run (upload over loopback, read back, replay on the INS
 estimate) under both autopilots, in still air and in WIND, with the dry run's point mass
-(rolling into its turns), the point mass banking at once (its model before issue 31) and
-JSBSim's c172r (sim/jsbsim_airframe.py): flown length against the plan, largest 3D
+(rolling into its turns), the point mass banking at once (its model before issue 31), the
+point mass with its legs checked against the c172r's trims first (``dry-run --aircraft
+c172r``) and JSBSim's c172r (sim/jsbsim_airframe.py): flown length against the plan, largest 3D
 deviation from the planned path, the true miss distance at each landmark met, the verdict.
 The missions: the bundled missions/jsbsim (a light aircraft's mission) and the same lifted by
 2.6 km (above the c172r's ceiling at 45 m/s: JSBSim says it cannot be flown, the point mass
@@ -24,7 +25,7 @@ from gcs_planner.core.planner import plan
 from gcs_planner.dry_run import dry_run
 from gcs_planner.scenario.readers import load_scenario
 from sim.aircraft import InstantBankFlightModel
-from sim.jsbsim_airframe import DEFAULT_AIRCRAFT, FlightModel
+from sim.jsbsim_airframe import DEFAULT_AIRCRAFT, CheckedPointMass, FlightModel
 from sim.wind import WindSpec
 
 MISSION = Path(__file__).resolve().parents[1] / "missions" / "jsbsim" / "scenario.toml"
@@ -52,6 +53,8 @@ def _model_name(model: object, aircraft: str) -> str:
         return "point mass"  # the dry run's: rolls into its turns (sim/aircraft.py step)
     if isinstance(model, InstantBankFlightModel):
         return "point mass, instant bank"
+    if isinstance(model, CheckedPointMass):
+        return f"point mass, checked against {aircraft}"
     return f"JSBSim {aircraft}"
 
 
@@ -71,7 +74,8 @@ def rows(aircraft: str) -> list[tuple]:
             planned = plan(load_scenario(path))
             for flavour in ("ardupilot", "px4"):
                 for wind in (WindSpec(), WIND):
-                    for model in (None, InstantBankFlightModel(), FlightModel(aircraft)):
+                    checked = CheckedPointMass(FlightModel(aircraft))
+                    for model in (None, InstantBankFlightModel(), checked, FlightModel(aircraft)):
                         t0 = time.perf_counter()
                         r = dry_run(planned, load_scenario(path), flavour=flavour, wind=wind,
                                     flight_model=model)  # fmt: skip

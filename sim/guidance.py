@@ -28,7 +28,7 @@ from gcs_planner.scenario.georef import LocalFrame
 from gcs_planner.vehicle import G, VehicleProfile
 from sim import atmosphere, flight_kernel
 from sim.aircraft import AircraftState, InstantBankFlightModel
-from sim.jsbsim_airframe import AirframeLimit, FlightModel, LegNeed
+from sim.jsbsim_airframe import AirframeLimit, CheckedPointMass, FlightModel, LegNeed
 from sim.navigators import NAVIGATORS
 from sim.navigators.base import (
     COARSE_STEPS,
@@ -174,7 +174,7 @@ def fly(
     ins: object | None = None,
     compiled: bool = True,
     commands: Sequence[NavCommand] | None = None,
-    flight_model: FlightModel | InstantBankFlightModel | None = None,
+    flight_model: FlightModel | CheckedPointMass | InstantBankFlightModel | None = None,
 ) -> Flight:
     """Fly the stored ``items`` in mode AUTO from ``start`` (local frame) at ``profile``'s cruise
     airspeed (EAS) under ``flavour``'s navigator with the autopilot ``params`` (by default its
@@ -195,9 +195,11 @@ def fly(
     ``flight_model`` (sim/jsbsim_airframe.py ``FlightModel``) flies the navigator's demands in
     JSBSim instead of the point mass (sim/aircraft.py ``step``, rolling into its turns), all in
     Python; sim/aircraft.py ``InstantBankFlightModel`` flies the point mass banking at once (the
-    model before issue 31, for the cross-check), in Python too. The legs are checked against
-    the airframe first (``Flight.limits``), and an airframe that cannot be trimmed at the start
-    is not flown (``ended`` "cannot be flown").
+    model before issue 31, for the cross-check), in Python too; sim/jsbsim_airframe.py
+    ``CheckedPointMass`` checks the legs against a JSBSim aircraft and leaves the flight to the
+    point mass (compiled as without a model). The legs are checked against the airframe first
+    (``Flight.limits``), and an airframe that cannot be trimmed at the start is not flown
+    (``ended`` "cannot be flown").
     """
     ap = params or AutopilotParams(flavour=flavour, loiter_radius=profile.turn_radius)
     if commands is None:
@@ -214,10 +216,6 @@ def fly(
     airframe = None
     limits: list[str] = []
     if flight_model is not None:
-        compiled = False  # the numba kernel flies the point mass only
-        # A model that cannot cut a step at a waypoint's acceptance circle or finish line
-        # (JSBSim) is stepped finer: the switch comes at most one such step late.
-        dt = min(dt, getattr(flight_model, "outer_step", dt))
         alt = float(frame.origin.alt)
         limits = flight_model.limits(
             leg_needs(cmds, start, alt, profile, ap), profile.cruise_airspeed
@@ -229,6 +227,11 @@ def fly(
         except AirframeLimit as exc:
             limits.insert(0, str(exc))
             return _unflown(s0, profile, ap, wind, flight_model, limits)
+    if airframe is not None:  # None: the dry run's point mass flies (a model that only checks)
+        compiled = False  # the numba kernel flies the point mass only
+        # A model that cannot cut a step at a waypoint's acceptance circle or finish line
+        # (JSBSim) is stepped finer: the switch comes at most one such step late.
+        dt = min(dt, getattr(flight_model, "outer_step", dt))
     pilot = NAVIGATORS[ap.flavour](
         cmds,
         profile.cruise_airspeed,
@@ -296,7 +299,7 @@ def _unflown(
     profile: VehicleProfile,
     ap: AutopilotParams,
     wind: WindModel | None,
-    model: FlightModel | InstantBankFlightModel,
+    model: FlightModel | CheckedPointMass | InstantBankFlightModel,
     limits: list[str],
 ) -> Flight:
     """The flight of an airframe that could not start: one sample where it stands."""

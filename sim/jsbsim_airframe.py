@@ -455,6 +455,10 @@ class FlightModel:
             self._cache[key] = trim(self._fdm(), top, eas, gamma_deg=gamma, bank_deg=bank)
         return self._cache[key]
 
+    def trims_level(self, altitude: float, eas: float) -> bool:
+        """Whether the aircraft trims in level flight at ``eas`` at ``altitude`` (m AMSL)."""
+        return self._trims(altitude, eas, 0.0, 0.0) is not None
+
     def best_climb_deg(self, top: float, eas: float) -> float:
         """The steepest flight-path angle (degrees, 0.25 apart) trimmed at ``top``."""
         lo, hi = 0.0, 20.0
@@ -493,6 +497,45 @@ class FlightModel:
                     f"EAS there (no trim)"
                 )
         return out
+
+
+@dataclass
+class CheckedPointMass:
+    """The dry run's point mass (sim/aircraft.py ``step``, the numba kernel) with each leg checked
+    before the flight against a JSBSim aircraft's trims at its altitude, as ``FlightModel``
+    checks them (``dry-run --aircraft NAME`` without ``--flight-model jsbsim``): the engine's
+    power, speed range and ceiling judged at the speed of the point mass. ``airframe`` is None:
+    the flight is the point mass's."""
+
+    checker: FlightModel
+
+    name = "point mass"
+
+    def describe(self) -> str:
+        return (
+            f"point mass (rolls into its turns; climbs at the autopilot's rates at once), each "
+            f"leg checked before the flight against JSBSim {self.checker.aircraft}'s trims at "
+            "its altitude (engine power, speed range, ceiling)"
+        )
+
+    def limits(self, needs: Sequence[LegNeed], eas: float) -> list[str]:
+        return self.checker.limits(needs, eas)
+
+    def airframe(
+        self,
+        start: AircraftState,
+        airspeed: float,
+        alt_offset: float,
+        wind: tuple[float, float] = (0.0, 0.0),
+    ) -> None:
+        """None (the point mass flies), once the aircraft trims level where it starts."""
+        h = start.z + alt_offset
+        if not self.checker.trims_level(h, airspeed):
+            raise AirframeLimit(
+                f"the {self.checker.aircraft} cannot be trimmed level at {airspeed:g} m/s EAS "
+                f"at the start altitude {h:,.0f} m (JSBSim finds no trim)"
+            )
+        return None
 
 
 def _clip(u: float) -> float:

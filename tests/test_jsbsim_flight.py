@@ -103,8 +103,10 @@ def test_leg_limits_name_the_leg_and_the_airframe_s_best():
     assert f"at most {best:.1f} deg" in out[0]
 
 
-def test_mission_above_the_airframe_s_ceiling_exits_5_with_where_and_why(tmp_path, capsys):
-    """The bundled scenario lifted by 2.6 km: the c172r cannot hold 45 m/s there."""
+@pytest.mark.parametrize("model", [["--flight-model", "jsbsim"], ["--aircraft", "c172r"]])
+def test_mission_above_the_airframe_s_ceiling_exits_5_with_where_and_why(tmp_path, capsys, model):
+    """The bundled scenario lifted by 2.6 km: the c172r cannot hold 45 m/s there. JSBSim says
+    so, and so does the point mass checked against the c172r; the point mass alone flies it."""
     lines = (SCENARIO.parent / "points.csv").read_text().splitlines()
     lifted = [lines[0]]
     for line in lines[1:]:
@@ -113,18 +115,44 @@ def test_mission_above_the_airframe_s_ceiling_exits_5_with_where_and_why(tmp_pat
         lifted.append(",".join(f))
     (tmp_path / "points.csv").write_text("\n".join(lifted) + "\n")
     (tmp_path / "scenario.toml").write_text(SCENARIO.read_text())
-    rc = main(["dry-run", str(tmp_path / "scenario.toml"), "--flight-model", "jsbsim"])
+    rc = main(["dry-run", str(tmp_path / "scenario.toml"), *model])
     out, err = capsys.readouterr()
     assert rc == EXIT_LOST
     assert "cannot be trimmed level at 45 m/s EAS at the start altitude 3,200 m" in err
     assert "result: the mission cannot be flown" in out
+    assert "CANNOT FLY: leg to item 2 (up to 3,200 m): the c172r cannot fly level" in out
+    rc = main(["dry-run", str(tmp_path / "scenario.toml")])
+    out, _ = capsys.readouterr()
+    assert rc == 0 and "CANNOT FLY" not in out
+
+
+def test_the_checked_point_mass_flies_as_the_point_mass(capsys):
+    """--aircraft alone: the legs are checked against the c172r, and the flight is the point
+    mass's, compiled as without the check (the same track to the centimetre)."""
+    flights = []
+    for extra in ([], ["--aircraft", "c172r"]):
+        rc = main(["dry-run", str(SCENARIO), "--firmware", "ardupilot", "--wind", "5@270",
+                   "--set-params", "--json", *extra])  # fmt: skip
+        d = json.loads(capsys.readouterr().out)
+        assert rc == 0 and d["arrived"] and d["airframe_limits"] == []
+        flights.append(d)
+    plain, checked = flights
+    assert plain["flight_model"] == "point mass"
+    assert (
+        checked["flight_model"].startswith("point mass")
+        and "JSBSim c172r" in checked["flight_model"]
+    )
+    assert checked["flown_length"] == pytest.approx(plain["flown_length"], abs=0.01)
+    assert [r["miss"] for r in checked["rows"]] == pytest.approx(
+        [r["miss"] for r in plain["rows"]], abs=0.01
+    )
 
 
 @pytest.mark.parametrize(
     ("flags", "field"),
     [
         (["--flight-model", "jsbsim", "--aircraft", "nosuch"], "--aircraft"),
-        (["--aircraft", "c172r"], "--aircraft"),
+        (["--aircraft", "nosuch"], "--aircraft"),
     ],
 )
 def test_bad_flight_model_flags_are_one_line_and_exit_2(capsys, flags, field):

@@ -138,8 +138,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     g.add_argument(
         "--aircraft",
         metavar="NAME",
-        help="the JSBSim aircraft of --flight-model jsbsim, one shipped with the jsbsim package "
-        "(default c172r)",
+        help="a JSBSim aircraft, one shipped with the jsbsim package: what --flight-model jsbsim "
+        "flies (default c172r); without it, the point mass flies and each leg is first checked "
+        "against this aircraft's trims at its altitude (engine power, speed range, ceiling)",
     )
     g.add_argument("--json", action="store_true", help="print one JSON object, nothing else")
     add_policy_arguments(g)
@@ -182,19 +183,23 @@ def parse_params(pairs: list[str]) -> dict[str, float]:
 
 
 def flight_model_from_args(args: argparse.Namespace) -> object | None:
-    """The JSBSim flight model of --flight-model jsbsim (None: the point mass), checked here:
-    the extra installed, the aircraft one that jsbsim ships (one line, exit 2 when not)."""
-    if args.flight_model != "jsbsim":
-        if args.aircraft is not None:
-            raise InputError("only with --flight-model jsbsim", field="--aircraft")
+    """The flight model of the flags, checked here: JSBSim's with --flight-model jsbsim; the
+    point mass checked against a JSBSim aircraft with --aircraft alone; None (the point mass)
+    with neither. The extra installed, the aircraft one that jsbsim ships (one line, exit 2
+    when not)."""
+    if args.flight_model != "jsbsim" and args.aircraft is None:
         return None
+    flag = "--flight-model" if args.flight_model == "jsbsim" else "--aircraft"
     try:
         import jsbsim  # noqa: F401
     except ImportError:
-        raise InputError(
-            "needs the jsbsim package: pip install '.[jsbsim]'", field="--flight-model"
-        ) from None
-    from sim.jsbsim_airframe import DEFAULT_AIRCRAFT, FlightModel, available_aircraft
+        raise InputError("needs the jsbsim package: pip install '.[jsbsim]'", field=flag) from None
+    from sim.jsbsim_airframe import (
+        DEFAULT_AIRCRAFT,
+        CheckedPointMass,
+        FlightModel,
+        available_aircraft,
+    )
 
     name = args.aircraft or DEFAULT_AIRCRAFT
     shipped = available_aircraft()
@@ -204,6 +209,8 @@ def flight_model_from_args(args: argparse.Namespace) -> object | None:
             f"no JSBSim aircraft {name!r} (shipped: {len(shipped)}, e.g. {light})",
             field="--aircraft",
         )
+    if args.flight_model != "jsbsim":
+        return CheckedPointMass(FlightModel(name))
     return FlightModel(name)
 
 
