@@ -4,6 +4,7 @@ vehicle, read back, replay the stored mission, report; through the CLI and the l
 from __future__ import annotations
 
 import json
+import sys
 from pathlib import Path
 
 import pytest
@@ -367,3 +368,15 @@ def test_dataset2_arriving_draw_flies_the_plan(dataset_paths):
     assert report.length_within_tolerance
     d = report.to_dict()
     assert abs(report.flown_length - result.route.length) <= flight_tolerance(d)
+
+
+@pytest.mark.parametrize("flags", [["--flight-model", "jsbsim"], ["--aircraft", "c172r"]])
+def test_a_flight_model_without_the_jsbsim_extra_is_one_line_and_exit_2(
+    capsys, monkeypatch, line_csv, flags
+):
+    """JSBSim's flight or the point mass checked against a JSBSim aircraft, without the
+    package: the flag named, how to install it, nothing flown."""
+    monkeypatch.setitem(sys.modules, "jsbsim", None)  # not importable
+    rc, out, err = run_cli(capsys, str(line_csv), *LINE_FLAGS, *flags)
+    assert rc == 2 and out == ""
+    assert err.count("\n") == 1 and flags[0] in err and "pip install '.[jsbsim]'" in err
