@@ -174,25 +174,24 @@ class LegEnvelope:
         cos_a = np.where(apart, (w[:, 0] * downwind[0] + w[:, 1] * downwind[1])
                          / np.where(apart, h, 1.0), 1.0)  # fmt: skip
         cos_a = np.clip(cos_a, -1.0, 1.0)
-
-        def ground(cos_b: np.ndarray) -> np.ndarray:
-            return wind * cos_b + np.sqrt(np.maximum(v * v - wind * wind * (1.0 - cos_b**2), 0.0))
-
-        scale = need / (v + wind)
-        at_chord = np.maximum(h, scale * ground(cos_a))
-        # downwind chords whose bound the chord's own angle leaves above h: search b
-        lo = np.arccos(cos_a)
-        hi = np.full(len(w), math.pi / 2)
-        open_ = apart & (cos_a > 0.0) & (scale * ground(cos_a) > h)
-        for _ in range(60):
-            mid = 0.5 * (lo + hi)
-            rising = h * cos_a / np.maximum(np.cos(mid), 1e-300)
-            falling = scale * ground(np.cos(mid))
-            up = rising < falling
-            lo = np.where(up, mid, lo)
-            hi = np.where(up, hi, mid)
-        best = np.maximum(h * cos_a / np.maximum(np.cos(lo), 1e-300), scale * ground(np.cos(hi)))
-        least = np.where(open_, np.minimum(best, at_chord), at_chord)
+        scale = need / (v + wind)  # need / f(b) = scale * Vg(b)
+        steep = scale * _ground_speed_off_downwind(cos_a, v, wind)
+        least = np.maximum(h, steep)
+        # Only downwind chords whose own angle leaves the bound above h gain from a search
+        # of b (most pairs do not: the bisection runs on those alone).
+        i = np.flatnonzero(apart & (cos_a > 0.0) & (steep > h))
+        if len(i):
+            hi_, ca, vi, si = h[i], cos_a[i], v[i], scale[i]
+            lo = np.arccos(ca)
+            hi = np.full(len(i), math.pi / 2)
+            for _ in range(60):
+                mid = 0.5 * (lo + hi)
+                up = hi_ * ca / np.cos(mid) < si * _ground_speed_off_downwind(np.cos(mid), vi, wind)
+                lo = np.where(up, mid, lo)
+                hi = np.where(up, hi, mid)
+            rising = hi_ * ca / np.cos(lo)
+            best = np.maximum(rising, si * _ground_speed_off_downwind(np.cos(hi), vi, wind))
+            least[i] = np.minimum(best, least[i])
         least = np.where(apart, least, scale * (v - wind))
         return least * (1.0 - 1e-9)
 
@@ -299,6 +298,12 @@ def track_factor(
     turned = np.where(turned < 0.0, turned + TWO_PI, turned)
     fastest = np.where((phi > 0.0) & (turned <= phi), v + w, fastest)
     return np.maximum((v + w) / fastest, 1.0)
+
+
+def _ground_speed_off_downwind(cos_b: np.ndarray, airspeed: np.ndarray, wind: float) -> np.ndarray:
+    """The ground speed along a track at angle b off downwind (from its cosine), TAS
+    ``airspeed`` in a wind of ``wind`` m/s: W cos b + sqrt(V^2 - W^2 sin^2 b)."""
+    return wind * cos_b + np.sqrt(np.maximum(airspeed**2 - wind * wind * (1.0 - cos_b**2), 0.0))
 
 
 def _ground_speed(tx, ty, airspeed, wx: float, wy: float):  # noqa: ANN001, ANN202 - arrays
