@@ -25,7 +25,9 @@ cross-check and as the substep); sim/flight_kernel.py ``_step`` is the compiled 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Protocol
 
 from gcs_planner.vehicle import ROLL_RESPONSE_S, G
 
@@ -210,6 +212,31 @@ def step(
     return out
 
 
+class FlightModelFace(Protocol):
+    """What the dry run asks of a flight model other than its point mass (sim/guidance.py
+    ``fly``): ``InstantBankFlightModel`` here, sim/jsbsim_airframe.py ``FlightModel`` and
+    ``CheckedPointMass``."""
+
+    def describe(self) -> str:
+        """The model in the report's words."""
+        ...
+
+    def limits(self, needs: Sequence[object], eas: float) -> list[str]:
+        """Where and why the airframe cannot fly the legs (``guidance.leg_needs``) at ``eas``."""
+        ...
+
+    def airframe(
+        self,
+        start: AircraftState,
+        airspeed: float,
+        alt_offset: float,
+        wind: tuple[float, float] = (0.0, 0.0),
+    ) -> object | None:
+        """What flies the navigator's demands from ``start`` (None: the point mass, compiled);
+        raises sim/jsbsim_airframe.py ``AirframeLimit`` when it cannot start."""
+        ...
+
+
 class InstantBankPointMass:
     """The point mass banking at once to the bank asked (``arc_step``): the model before the roll
     lag, an airframe for sim/navigators/base.py kept for the cross-check."""
@@ -220,8 +247,6 @@ class InstantBankPointMass:
 
 class InstantBankFlightModel:
     """The instant-bank point mass as a dry run's flight model (no limits of its own)."""
-
-    name = "point mass, instant bank"
 
     def describe(self) -> str:
         return "point mass banking at once (no roll lag)"

@@ -27,8 +27,8 @@ from gcs_planner.mission.items import GLOBAL_AMSL_FRAMES, GLOBAL_RELATIVE_FRAMES
 from gcs_planner.scenario.georef import LocalFrame
 from gcs_planner.vehicle import G, VehicleProfile
 from sim import atmosphere, flight_kernel
-from sim.aircraft import AircraftState, InstantBankFlightModel
-from sim.jsbsim_airframe import AirframeLimit, CheckedPointMass, FlightModel, LegNeed
+from sim.aircraft import AircraftState, FlightModelFace
+from sim.jsbsim_airframe import AirframeLimit, LegNeed
 from sim.navigators import NAVIGATORS
 from sim.navigators.base import (
     COARSE_STEPS,
@@ -174,7 +174,7 @@ def fly(
     ins: object | None = None,
     compiled: bool = True,
     commands: Sequence[NavCommand] | None = None,
-    flight_model: FlightModel | CheckedPointMass | InstantBankFlightModel | None = None,
+    flight_model: FlightModelFace | None = None,
 ) -> Flight:
     """Fly the stored ``items`` in mode AUTO from ``start`` (local frame) at ``profile``'s cruise
     airspeed (EAS) under ``flavour``'s navigator with the autopilot ``params`` (by default its
@@ -299,7 +299,7 @@ def _unflown(
     profile: VehicleProfile,
     ap: AutopilotParams,
     wind: WindModel | None,
-    model: FlightModel | CheckedPointMass | InstantBankFlightModel,
+    model: FlightModelFace,
     limits: list[str],
 ) -> Flight:
     """The flight of an airframe that could not start: one sample where it stands."""

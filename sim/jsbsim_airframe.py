@@ -428,8 +428,6 @@ class FlightModel:
     outer_step: float = OUTER_STEP_S
     _cache: dict = field(default_factory=dict, repr=False)
 
-    name = "jsbsim"
-
     def describe(self) -> str:
         return f"JSBSim {self.aircraft} (inner loops at {self.rate_hz:g} Hz)"
 
@@ -508,8 +506,6 @@ class CheckedPointMass:
     the flight is the point mass's."""
 
     checker: FlightModel
-
-    name = "point mass"
 
     def describe(self) -> str:
         return (
