@@ -34,6 +34,7 @@ def step_response(aircraft: str, eas: float, altitude: float, asked: float) -> t
     env = Envelope(eas, 30.0, asked + 2.0, 4.0)  # the rate asked within the autopilot's
     e2t = atmosphere.eas2tas(altitude)
     s = start
+    z0 = altitude  # where the climb starts: the altitude at the end of the level flight
     t = 0.0
     settled = None
     top = 0.0
