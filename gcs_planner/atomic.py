@@ -180,12 +180,20 @@ def _existing_ancestor(path: Path) -> Path:
 
 
 def check_output_file(path: str | os.PathLike[str], flag: str = "--out") -> Path:
-    """``path`` as a file to be written later: not a folder, and in a folder we can write in
-    (or can create). Raises :class:`InputError` otherwise."""
+    """``path`` as a file to be written later: not a folder, and in an existing folder we can
+    write in (a file name is not asked to create folders: a mistyped folder would otherwise
+    appear silently). Raises :class:`InputError` otherwise."""
     path = Path(path)
     if path.is_dir():
         raise InputError("is a folder, expected a file name", file=str(path), field=flag)
-    _probe_folder(_existing_ancestor(path.parent), flag, path)
+    folder = path.parent
+    _probe_folder(_existing_ancestor(folder), flag, path)
+    if not folder.is_dir():
+        raise InputError(
+            f"folder {folder} does not exist (create it first; a file name creates no folders)",
+            file=str(path),
+            field=flag,
+        )
     return path
 
 

@@ -20,7 +20,7 @@ from hypothesis import strategies as st
 from gcs_planner.errors import InputError
 from gcs_planner.scenario.generate import DATASET1
 from gcs_planner.scenario.model import PARAMETER_NAMES, Kind, Origin, Parameters, Scenario
-from gcs_planner.scenario.readers import MAX_COORDINATE, load_scenario
+from gcs_planner.scenario.readers import MAX_COORDINATE, SAME_POINT_M, load_scenario
 from gcs_planner.vehicle import DEFAULT_RESERVE_M, DEFAULT_RESERVE_MAX_SHARE
 
 REQUIRED = {k: getattr(DATASET1, k) for k in PARAMETER_NAMES}
@@ -142,6 +142,9 @@ def expected_points(records: list[dict[str, str]]) -> list[tuple] | None:
         out.append((point_id, xyz, kind, flag))
     if not out or [p[2] for p in out].count(Kind.A) != 1 or [p[2] for p in out].count(Kind.B) != 1:
         return None
+    a, b = (next(p[1] for p in out if p[2] == end) for end in (Kind.A, Kind.B))
+    if math.dist(a, b) < SAME_POINT_M:
+        return None  # A and B in one place: a 0 m mission
     return out
 
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 from gcs_planner.core.budget import DEFAULT_TIME_LIMIT
@@ -20,6 +21,8 @@ if TYPE_CHECKING:
 
 # The route choices (gcs_planner.core.choose.CHOICES, not imported: it pulls numpy in).
 CHOICES = ("compromise", "shortest", "fewest", "most-reliable")
+# The objectives (gcs_planner.core.planner.OBJECTIVES, not imported for the same reason).
+OBJECTIVES = ("length", "corrections", "probability")
 
 # flag -> Parameters field
 PARAMETER_FLAGS = {
@@ -104,7 +107,8 @@ def add_plan_arguments(parser: argparse.ArgumentParser) -> None:
     """The flags that say what to plan and which route to choose (plan, dry-run)."""
     parser.add_argument(
         "--objectives",
-        help="comma-separated subset of length,corrections,probability (default: "
+        help="comma-separated subset of length,corrections,probability, each at most once: the "
+        "front is reported over these alone (one objective: its one optimal route; default: "
         "length,corrections, plus probability when the scenario has unreliable points)",
     )
     parser.add_argument(
@@ -168,6 +172,17 @@ def add_quiet_argument(parser: argparse.ArgumentParser | argparse._ArgumentGroup
     )
 
 
+def check_link_flags(args: argparse.Namespace) -> None:
+    """The link's waits (upload, download, fly: ``add_link_arguments``): --timeout and --wait
+    finite seconds > 0, --retries a whole number >= 0; InputError naming the flag otherwise.
+    (A wait of -1 s or NaN would otherwise fail as a link error, after the link is opened.)"""
+    for flag, value in (("--timeout", args.timeout), ("--wait", args.wait)):
+        if not (math.isfinite(value) and value > 0):
+            raise InputError(f"must be a finite number of seconds > 0, got {value:g}", field=flag)
+    if args.retries < 0:
+        raise InputError(f"must be a whole number >= 0, got {args.retries}", field="--retries")
+
+
 def _seconds(text: str) -> float | None:
     if text.strip().lower() in ("none", "inf"):
         return None  # no time limit
@@ -206,20 +221,37 @@ def _suggest_compiling(quiet: bool) -> None:
         )
 
 
-def plan_from_args(args: argparse.Namespace, scenario: Scenario) -> Plan:
-    """Plan ``scenario`` with the flags of :func:`add_plan_arguments`; bad flags are InputError."""
-    from gcs_planner.core.planner import OBJECTIVES, plan
+def parse_objectives(text: str, known: Sequence[str]) -> tuple[str, ...]:
+    """``--objectives`` as names: each of ``known``, at most once, at least one."""
+    names = [o.strip() for o in text.split(",") if o.strip()]
+    choose = f"give a comma-separated subset of {','.join(known)}"
+    if not names:
+        raise InputError(f"no objective given ({text!r}); {choose}", field="--objectives")
+    unknown = [o for o in names if o not in known]
+    if unknown:
+        raise InputError(
+            f"unknown objective(s) {', '.join(map(repr, unknown))}; {choose}", field="--objectives"
+        )
+    twice = sorted({o for o in names if names.count(o) > 1})
+    if twice:
+        raise InputError(
+            f"{', '.join(twice)} given more than once in {text!r}; {choose}", field="--objectives"
+        )
+    return tuple(names)
 
+
+def check_plan_flags(
+    args: argparse.Namespace,
+) -> tuple[tuple[str, ...] | None, list[float] | None]:
+    """(objectives, weights) of the flags of :func:`add_plan_arguments`, checked: InputError
+    naming the flag otherwise. Cheap, so a command calls it before it reads the scenario."""
     objectives = None
-    if args.objectives:
-        objectives = tuple(o.strip() for o in args.objectives.split(",") if o.strip())
-        unknown = [o for o in objectives if o not in OBJECTIVES]
-        if unknown or not objectives:
-            raise InputError(
-                f"unknown objective(s) {', '.join(unknown) or '(none)'}; "
-                f"choose from {', '.join(OBJECTIVES)}",
-                field="--objectives",
-            )
+    if args.objectives is not None:  # '' is a mistake, not the default
+        objectives = parse_objectives(args.objectives, OBJECTIVES)
+    if args.max_corrections is not None and args.max_corrections < 0:
+        raise InputError(
+            f"must be a whole number >= 0, got {args.max_corrections}", field="--max-corrections"
+        )
     weights = None
     if args.weights:
         try:
@@ -230,6 +262,14 @@ def plan_from_args(args: argparse.Namespace, scenario: Scenario) -> Plan:
         raise InputError(
             f"{args.min_probability:g} is not a probability (0 to 1)", field="--min-probability"
         )
+    return objectives, weights
+
+
+def plan_from_args(args: argparse.Namespace, scenario: Scenario) -> Plan:
+    """Plan ``scenario`` with the flags of :func:`add_plan_arguments`; bad flags are InputError."""
+    from gcs_planner.core.planner import plan
+
+    objectives, weights = check_plan_flags(args)
     from gcs_planner.progress import SearchProgress
 
     # The CLI's 0 is "no limit", as unset is (the library's max_labels=0 allows no label).

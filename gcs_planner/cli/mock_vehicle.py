@@ -37,13 +37,19 @@ def _rate(text: str) -> float:
     return value
 
 
-def _speedup(text: str) -> float:
+def _speedup(text: str | float) -> float:
+    """--speedup, checked in ``run`` (not by argparse, whose refusal prints the whole usage):
+    InputError naming the flag, one line and exit 2."""
     try:
         value = float(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}") from None
+        raise InputError(f"not a number: {text!r}", field="--speedup") from None
     if not (value >= 0 and value < float("inf")):
-        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}")
+        raise InputError(
+            f"must be a finite number >= 0 (1: real time; 0: as fast as the link takes it), "
+            f"got {text!r}",
+            field="--speedup",
+        )
     return value
 
 
@@ -88,6 +94,7 @@ def _burst(text: str) -> float:
 
 def run(args: argparse.Namespace) -> int:
     check_connection(args.connect)  # a typo is named before the scenario is read
+    args.speedup = _speedup(args.speedup)
     radio: SikRadio | None = None
     vehicle_connect = args.connect
     if args.radio is not None:
@@ -202,7 +209,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument(
         "--speedup",
-        type=_speedup,
         default=100.0,
         metavar="N",
         help="a flight started by MISSION_START plays N times faster than real time "

@@ -136,6 +136,10 @@ def plan(
     for o in objectives:
         if o not in OBJECTIVES:
             raise ValueError(f"unknown objective {o!r}")
+    if not objectives or len(set(objectives)) != len(objectives):
+        raise ValueError(f"objectives must be distinct names, at least one (got {objectives})")
+    if max_corrections is not None and max_corrections < 0:
+        raise ValueError(f"max_corrections must be >= 0, not {max_corrections}")
     use_probability = "probability" in objectives
     # The layered straight search starts from rest; a state mid-flight (errors at A, see
     # core/from_state.py) is planned by the branch and bound, whose first label carries them.
@@ -148,7 +152,19 @@ def plan(
         raise InfeasibleError(f"{scenario.name}: {result.statement}")
     found = result.routes
     settled = result.settled or [True] * len(found)
-    order = sorted(range(len(found)), key=lambda i: (found[i].corrections, found[i].length))
+    # The engines search length and corrections (and probability): over fewer objectives the
+    # routes another one matches or beats in all of them are not on that front.
+    kept = _front_over(found, objectives)
+    statement = result.statement
+    if len(kept) < len(found):
+        dropped = len(found) - len(kept)
+        statement += (
+            f"; reported over {', '.join(objectives)} only: {dropped} route"
+            f"{'' if dropped == 1 else 's'} of the front over "
+            f"{', '.join(_SEARCHED[use_probability])} matched or beaten in "
+            f"{'it' if len(objectives) == 1 else 'them'} left out"
+        )
+    order = sorted(kept, key=lambda i: (found[i].corrections, found[i].length))
     routes = [found[i] for i in order]
     # Every route's probability is exact (re-evaluated), whichever objectives were searched.
     chosen, threshold_met = choose_index(
@@ -165,7 +181,7 @@ def plan(
         choice=choice,
         objectives=objectives,
         optimal=result.optimal,
-        statement=result.statement,
+        statement=statement,
         lower_bounds=tuple(result.lower_bounds[i] for i in order),
         stats=result.stats,
         min_probability=min_probability,
@@ -173,6 +189,46 @@ def plan(
         warnings=climb_warnings(scenario, routes),
         settled=tuple(bool(settled[i]) for i in order),
     )
+
+
+# The objectives each engine's front is over, without and with the probability objective.
+_SEARCHED = {False: ("length", "corrections"), True: OBJECTIVES}
+# Lengths within this many metres are the same length (the legs are flown in floating point).
+_LENGTH_TIE_M = 1e-6
+
+
+def _front_over(routes: Sequence[Route], objectives: Sequence[str]) -> list[int]:
+    """Indices of the routes no other route beats in ``objectives`` (at least as good in each
+    of them and better in one); of routes tied in all of them, the one best in length, then
+    corrections, then probability. On the engines' front over more objectives this is the front
+    over these: every value the smaller front reaches is reached there. Over all the searched
+    objectives the front is returned as it is."""
+    wanted = set(objectives)
+    if wanted >= {"length", "corrections"}:
+        return list(range(len(routes)))
+
+    def covers(a: Route, b: Route) -> bool:  # a is at least as good as b in every objective
+        return (
+            ("length" not in wanted or a.length <= b.length + _LENGTH_TIE_M)
+            and ("corrections" not in wanted or a.corrections <= b.corrections)
+            and ("probability" not in wanted or a.probability >= b.probability - PROB_EPS)
+        )
+
+    def beats(a: Route, b: Route) -> bool:
+        return covers(a, b) and not covers(b, a)
+
+    best_first = sorted(
+        range(len(routes)),
+        key=lambda i: (routes[i].length, routes[i].corrections, -routes[i].probability),
+    )
+    kept: list[int] = []
+    for i in best_first:
+        if any(beats(r, routes[i]) for r in routes):
+            continue
+        if any(covers(routes[j], routes[i]) for j in kept):
+            continue  # tied in every objective with a route kept: the better one stays
+        kept.append(i)
+    return sorted(kept)
 
 
 def climb_warnings(scenario: Scenario, routes: Sequence[Route]) -> tuple[str, ...]:

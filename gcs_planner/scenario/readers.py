@@ -384,7 +384,35 @@ def _points(
                 f"{', '.join(map(str, ends[end]))}); exactly one is allowed",
                 file=file, row=ends[end][1], field=labels["kind"],
             )  # fmt: skip
+    _check_ends_apart(file, rows, xyz, kind, labels)
     return Points(tuple(ids), xyz, kind, unreliable)
+
+
+# A and B closer than this (3D, metres) are one place: a mission of no length, nothing to plan.
+SAME_POINT_M = 1e-6
+
+
+def _check_ends_apart(
+    file: str,
+    rows: list[tuple[int, dict[str, object]]],
+    xyz: np.ndarray,
+    kind: np.ndarray,
+    labels: dict[str, str],
+) -> None:
+    """Refuse a scenario whose A and B are the same point (a 0 m mission, usually B's row
+    copied from A's): the planner would "plan" it and write a mission that goes nowhere."""
+    a = int(np.flatnonzero(kind == Kind.A)[0])
+    b = int(np.flatnonzero(kind == Kind.B)[0])
+    if float(np.linalg.norm(xyz[b] - xyz[a])) >= SAME_POINT_M:
+        return
+    x, y, z = (f"{float(c):g}" for c in xyz[a])
+    raise InputError(
+        f"A and B are the same point: rows {rows[a][0]} and {rows[b][0]} are both at local "
+        f"x={x} m, y={y} m, z={z} m (a 0 m mission); B must be where the mission ends",
+        file=file,
+        row=rows[b][0],
+        field=labels["kind"],
+    )
 
 
 def _show(value: object) -> str:

@@ -325,6 +325,9 @@ def _objectives(value: object, where: _Where, table: str, key: str, index=None) 
             key,
             index,
         )
+    twice = [o for o in OBJECTIVES if value.count(o) > 1]
+    if twice:
+        raise where.error(f"objective {twice[0]!r} given more than once", table, key, index)
     return tuple(value)
 
 
