@@ -5,14 +5,30 @@
   marked and labelled with the mission switched to.
 * ``policy_front_png``: F3 (probability of arriving) against F1 (longest length) for each route
   of the front and for the policy replanned from it, an arrow from each route to its policy.
+
+Labels are placed as in mission/pictures.py (``LabelPlacer``): none overprints another. The
+``*_figure`` functions return the drawn figure, for tests to measure.
 """
 
 from __future__ import annotations
 
 import numpy as np
+from matplotlib.figure import Figure
 
 from gcs_planner.mission.geo_exports import trajectory_local
-from gcs_planner.mission.pictures import COLOURS, KM, UNRELIABLE, _png, _points, plt
+from gcs_planner.mission.pictures import (
+    COLOURS,
+    DPI,
+    KM,
+    UNRELIABLE,
+    Label,
+    LabelPlacer,
+    MapView,
+    _marker_radius,
+    _png,
+    _points,
+    plt,
+)
 from gcs_planner.mission.policy_build import MissionPath, PathSwitch
 
 BRANCH_COLOURS = ("#9467bd", "#17becf", "#e377c2", "#8c564b", "#bcbd22", "#7f7f7f", "#ff7f0e")
@@ -28,20 +44,33 @@ def _leave_index(track: np.ndarray, parent: np.ndarray) -> int:
     return k
 
 
-def tree_png(
+def tree_figure(
     plan: dict,
     missions: list[tuple[MissionPath, dict]],
     switches: list[PathSwitch],
     title: str,
-) -> bytes:
+) -> Figure:
     """The policy's missions on the map. ``plan``: the scenario's plan dict (its points);
-    ``missions``: each mission's path and one-route plan, primary first."""
+    ``missions``: each mission's path and one-route plan, primary first. The map is cropped to
+    the points and tracks; labels are placed so that none overprints another (A and B first,
+    then the failed fixes and the missions they switch to, then the missions' points)."""
     xyz, kind, unreliable = _points(plan)
     xyz = xyz / KM
     ids = [str(p.get("id")) for p in plan.get("points") or []]
     tracks = {p.name: trajectory_local(d, 0) / KM for p, d in missions}
+    every = np.vstack([xyz[:, :2], *(t[:, :2] for t in tracks.values())])
+    view = MapView.of(every[:, 0], every[:, 1])
 
-    fig, ax = plt.subplots(figsize=(11, 8.5), layout="constrained")
+    # A square-ish map with the legend on its right, a flat one with the legend below.
+    beside = view.aspect >= 0.6
+    if beside:
+        map_h = 6.6
+        map_w = float(np.clip(map_h / view.aspect, 3.5, 8.0)) + 1.0
+        figsize = (map_w + 5.5, map_h + 1.0)
+    else:
+        map_h = float(np.clip(11.0 * view.aspect, 1.8, 6.0)) + 0.8
+        figsize = (12.0, map_h + 0.9 + 0.2 * (len(missions) + 4))
+    fig, ax = plt.subplots(figsize=figsize, layout="constrained", dpi=DPI)
     for letter, marker in (("V", "o"), ("H", "^")):
         sel = kind == letter
         if sel.any():
@@ -77,7 +106,7 @@ def tree_png(
                 zorder=3,
             )
             on = list(path.points)  # the plan's points are in scenario index order
-            ax.scatter(xyz[on, 0], xyz[on, 1], s=40, c="k", zorder=4)
+            ax.scatter(xyz[on, 0], xyz[on, 1], s=POINT_SIZE, c="k", zorder=4)
             continue
         colour = BRANCH_COLOURS[(n - 1) % len(BRANCH_COLOURS)]
         k = _leave_index(track, tracks[path.parent])
@@ -89,78 +118,96 @@ def tree_png(
         parent = next(p.points for p, _ in missions if p.name == path.parent)
         on = [j for j in path.points if j not in parent]
         if on:
-            ax.scatter(xyz[on, 0], xyz[on, 1], s=40, c=colour, ec="k", zorder=4)
-    labelled = sorted({j for p, _ in missions for j in p.points[1:-1]})
-    for j in labelled:
-        ax.annotate(
-            ids[j],
-            (xyz[j, 0], xyz[j, 1]),
-            xytext=(-4, 7),
-            textcoords="offset points",
-            fontsize=8.5,
-            color="0.2",
-            ha="right",
-        )
+            ax.scatter(xyz[on, 0], xyz[on, 1], s=POINT_SIZE, c=colour, ec="k", zorder=4)
     by_point: dict[int, list[str]] = {}
     for s in switches:  # one label per point, a line per context it fails in
         by_point.setdefault(s.failed, []).append(f"{s.mission} \u2192 {s.to}")
-    for j, lines in by_point.items():
-        x, y = xyz[j, 0], xyz[j, 1]
-        ax.scatter([x], [y], s=220, marker="X", c=UNRELIABLE, ec="k", zorder=5)
-        ax.annotate(
-            f"{ids[j]} fails: " + "\n".join(lines),
-            (x, y),
-            xytext=(8, -14),
-            textcoords="offset points",
-            fontsize=9,
-            color=UNRELIABLE,
-            va="top",
+    for j in by_point:
+        ax.scatter(
+            [xyz[j, 0]], [xyz[j, 1]], s=FAIL_SIZE, marker="X", c=UNRELIABLE, ec="k", zorder=5
         )
     start = missions[0][0].points
-    for j, marker, colour, size in (
-        (start[0], "*", COLOURS["A"], 300),
-        (start[-1], "s", COLOURS["B"], 150),
-    ):
+    ends = (
+        (start[0], "*", COLOURS["A"], END_SIZES[0]),
+        (start[-1], "s", COLOURS["B"], END_SIZES[1]),
+    )
+    for j, marker, colour, size in ends:
         ax.scatter([xyz[j, 0]], [xyz[j, 1]], s=size, marker=marker, c=colour, ec="k", zorder=6)
-        ax.annotate(
-            ids[j],
-            (xyz[j, 0], xyz[j, 1]),
-            xytext=(6, 6),
-            textcoords="offset points",
-            fontsize=12,
-            fontweight="bold",
-        )
     ax.scatter([], [], s=120, marker="X", c=UNRELIABLE, ec="k", label="failed fix: switch mission")
-    ax.set_xlabel("x east (km)")
-    ax.set_ylabel("y north (km)")
-    ax.set_aspect("equal", adjustable="datalim")
-    ax.grid(True, alpha=0.3)
-    fig.legend(loc="outside lower center", ncol=1, fontsize=9, frameon=False)
-    ax.set_title(title, fontsize=12)
-    return _png(fig)
+    view.apply(ax, title)
+    ax.title.set_fontsize(12)
+    if beside:
+        fig.legend(loc="outside right upper", ncol=1, fontsize=9, frameon=False)
+    else:
+        fig.legend(loc="outside lower center", ncol=1, fontsize=9, frameon=False)
+
+    # Labels: A and B, the failed fixes with the switches they make, the missions' points.
+    labels = [
+        Label(ids[j], tuple(xyz[j, :2]), 0, 12, "bold", "black", _marker_radius(size))
+        for j, _, _, size in ends
+    ]
+    fail_r = _marker_radius(FAIL_SIZE)
+    labels += [
+        Label(
+            f"{ids[j]} fails: " + "\n".join(lines),
+            tuple(xyz[j, :2]),
+            1,
+            9,
+            colour=UNRELIABLE,
+            clearance=fail_r,
+            gaps=FAR_GAPS,
+        )
+        for j, lines in by_point.items()
+    ]
+    named = {start[0], start[-1], *by_point}
+    points = sorted({j for p, _ in missions for j in p.points[1:-1]} - named)
+    labels += [
+        Label(ids[j], tuple(xyz[j, :2]), 2 + n % 2, clearance=_marker_radius(POINT_SIZE))
+        for n, j in enumerate(points)
+    ]
+    marked = sorted({j for p, _ in missions for j in p.points})
+    markers = [(xyz[marked, :2], _marker_radius(POINT_SIZE))]
+    markers += [(xyz[list(by_point), :2], fail_r)] if by_point else []
+    markers += [(xyz[[j], :2], _marker_radius(size)) for j, _, _, size in ends]
+    placer = LabelPlacer(fig)
+    dropped = placer.place(ax, labels, markers, [t[:, :2] for t in tracks.values()])
+    if dropped:
+        plural = "" if dropped == 1 else "s"
+        ax.set_title(f"{ax.get_title()}\n({dropped} label{plural} left out: no room)", fontsize=12)
+    return fig
 
 
-def policy_front_png(
-    rows: list[tuple[int, float, float, float, float]], chosen: int, title: str
+def tree_png(
+    plan: dict,
+    missions: list[tuple[MissionPath, dict]],
+    switches: list[PathSwitch],
+    title: str,
 ) -> bytes:
-    """``rows``: (front index, route F1 m, route F3, policy F1 m, policy F3) per front route."""
-    fig, ax = plt.subplots(figsize=(9, 6.5), layout="constrained")
+    """``tree_figure`` as PNG bytes."""
+    return _png(tree_figure(plan, missions, switches, title))
+
+
+# Marker areas (points²): the missions' points, the failed fixes, A and B.
+POINT_SIZE, FAIL_SIZE, END_SIZES = 40.0, 220.0, (300.0, 150.0)
+# The failed fixes' labels may go further out, tied to their point by a leader line.
+FAR_GAPS = (3.0, 10.0, 20.0, 34.0, 52.0, 75.0, 100.0)
+
+
+def policy_front_figure(
+    rows: list[tuple[int, float, float, float, float]], chosen: int, title: str
+) -> Figure:
+    """``rows``: (front index, route F1 m, route F3, policy F1 m, policy F3) per front route;
+    each route named beside its point, no name over another."""
+    fig, ax = plt.subplots(figsize=(9, 6.5), layout="constrained", dpi=DPI)
     r = np.array([[L, p, PL, pp] for _, L, p, PL, pp in rows], dtype=float).reshape(-1, 4)
     r[:, [0, 2]] /= KM
-    for (k, *_), (L, p, PL, pp) in zip(rows, r, strict=True):
+    arrows = []
+    for L, p, PL, pp in r:
         if abs(PL - L) > 1e-9 or abs(pp - p) > 1e-12:
             ax.annotate(
                 "", (PL, pp), (L, p), arrowprops={"arrowstyle": "->", "color": "0.5", "lw": 1}
             )
-        ax.annotate(
-            f"route {k}",
-            (L, p),
-            xytext=(-12, 8),
-            textcoords="offset points",
-            fontsize=8,
-            color="0.3",
-            ha="right",
-        )
+            arrows.append(np.array([[L, p], [PL, pp]]))
     ax.scatter(
         r[:, 0],
         r[:, 1],
@@ -201,4 +248,23 @@ def policy_front_png(
     ax.grid(True, alpha=0.3)
     fig.legend(loc="outside lower center", ncol=1, fontsize=10, frameon=False)
     ax.set_title(title, fontsize=12)
-    return _png(fig)
+    placer = LabelPlacer(fig)
+    labels = [
+        Label(f"route {k}", (L, p), size=8, colour="0.3", clearance=_marker_radius(60))
+        for (k, *_), (L, p, _, _) in zip(rows, r, strict=True)
+    ]
+    markers = [(r[:, :2], _marker_radius(60)), (r[:, 2:], _marker_radius(80))]
+    if c:
+        markers.append((np.vstack([r[c[0], :2], r[c[0], 2:]]), _marker_radius(320)))
+    dropped = placer.place(ax, labels, markers, arrows)
+    if dropped:
+        plural = "" if dropped == 1 else "s"
+        ax.set_title(f"{title} ({dropped} name{plural} left out: no room)", fontsize=12)
+    return fig
+
+
+def policy_front_png(
+    rows: list[tuple[int, float, float, float, float]], chosen: int, title: str
+) -> bytes:
+    """``policy_front_figure`` as PNG bytes."""
+    return _png(policy_front_figure(rows, chosen, title))
