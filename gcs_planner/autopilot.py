@@ -106,6 +106,22 @@ class Autopilot:
     # The path follower's tuning: the settle distance (run-in and run-out), how late a turn is
     # entered and how much of a gust reaches the track are derived from it.
     guidance: tuple[str, ...] = ()
+    # The airspeed range a commanded speed (DO_CHANGE_SPEED) must lie in, and what the autopilot
+    # does with one outside it: ArduPlane ignores it, PX4 constrains it (see the params above).
+    airspeed_range: tuple[str, str] = ("", "")
+    speed_outside_range: str = "clamped"
+
+    def commanded_airspeed(self, speed: float, values: Mapping[str, float]) -> float | None:
+        """The airspeed the aircraft flies after a mission's DO_CHANGE_SPEED to ``speed`` (m/s)
+        with the parameter table ``values`` (missing names: shipped defaults); None when the
+        autopilot ignores the command (the previous airspeed stays)."""
+        table = {**self.defaults, **values}
+        low, high = (float(table[name]) for name in self.airspeed_range)
+        if low <= speed <= high:
+            return speed
+        if self.speed_outside_range == "ignored":
+            return None
+        return min(max(speed, low), high)
 
     @property
     def defaults(self) -> dict[str, float]:
@@ -171,6 +187,10 @@ ARDUPLANE = Autopilot(
     params=(
         # AIRSPEED_CRUISE has no @Range; AIRSPEED_MIN / AIRSPEED_MAX are 5..100 m/s.
         ParamSpec("AIRSPEED_CRUISE", 12.0, low=5.0, high=100.0, unit="m/s"),
+        # A mission's DO_CHANGE_SPEED outside AIRSPEED_MIN..AIRSPEED_MAX is ignored
+        # (ArduPlane/commands_logic.cpp, Plane::do_change_speed): the aircraft stays at cruise.
+        ParamSpec("AIRSPEED_MIN", 9.0, low=5.0, high=100.0, unit="m/s"),
+        ParamSpec("AIRSPEED_MAX", 22.0, low=5.0, high=100.0, unit="m/s"),
         ParamSpec("ROLL_LIMIT_DEG", 45.0, low=0.0, high=90.0, low_open=True, unit="deg"),
         ParamSpec("TECS_CLMB_MAX", 5.0, low=0.1, high=20.0, unit="m/s"),
         ParamSpec("TECS_SINK_MAX", 5.0, low=0.0, high=20.0, low_open=True, unit="m/s"),
@@ -197,6 +217,8 @@ ARDUPLANE = Autopilot(
     },
     mission_climb=("TECS_CLMB_MAX", "TECS_SINK_MAX"),
     guidance=("NAVL1_PERIOD", "NAVL1_DAMPING"),
+    airspeed_range=("AIRSPEED_MIN", "AIRSPEED_MAX"),
+    speed_outside_range="ignored",
 )
 
 PX4 = Autopilot(
@@ -208,12 +230,21 @@ PX4 = Autopilot(
     helix_command=MAV_CMD_NAV_LOITER_TO_ALT,
     auto_custom_mode=PX4_MODE_AUTO_MISSION,
     params=(
-        ParamSpec("FW_AIRSPD_TRIM", 15.0, low=0.5, high=40.0, unit="m/s"),
+        # PX4's metadata shows the airspeeds as 0.5..40 m/s but PX4 does not enforce metadata
+        # ranges on PARAM_SET: a faster airframe (the JSBSim c172r at 45 m/s) sets them higher,
+        # so the flight's range is ArduPlane's 5..100 m/s.
+        ParamSpec("FW_AIRSPD_TRIM", 15.0, low=0.5, high=100.0, unit="m/s"),
+        # Every airspeed setpoint is constrained to FW_AIRSPD_MIN..FW_AIRSPD_MAX
+        # (FixedwingPositionControl::adapt_airspeed_setpoint, the performance model's bounds).
+        ParamSpec("FW_AIRSPD_MIN", 10.0, low=0.5, high=100.0, unit="m/s"),
+        ParamSpec("FW_AIRSPD_MAX", 20.0, low=0.5, high=100.0, unit="m/s"),
         ParamSpec("FW_R_LIM", 50.0, low=35.0, high=65.0, unit="deg"),
-        ParamSpec("FW_T_CLMB_MAX", 5.0, low=1.0, high=15.0, unit="m/s"),
-        ParamSpec("FW_T_SINK_MAX", 5.0, low=1.0, high=15.0, unit="m/s"),
-        ParamSpec("FW_T_CLMB_R_SP", 3.0, low=0.5, high=15.0, unit="m/s"),
-        ParamSpec("FW_T_SINK_R_SP", 2.0, low=0.5, high=15.0, unit="m/s"),
+        # Metadata shows the rates up to 15 m/s; PX4 takes more (metadata is not enforced) and
+        # the flight uses up to ArduPlane's TECS range, 20 m/s.
+        ParamSpec("FW_T_CLMB_MAX", 5.0, low=1.0, high=20.0, unit="m/s"),
+        ParamSpec("FW_T_SINK_MAX", 5.0, low=1.0, high=20.0, unit="m/s"),
+        ParamSpec("FW_T_CLMB_R_SP", 3.0, low=0.5, high=20.0, unit="m/s"),
+        ParamSpec("FW_T_SINK_R_SP", 2.0, low=0.5, high=20.0, unit="m/s"),
         ParamSpec("NAV_LOITER_RAD", 80.0, low=1.0, high=_RADIUS_MAX, unit="m"),
         ParamSpec("NAV_ACC_RAD", 10.0, low=0.05, high=200.0, unit="m"),
         ParamSpec("NPFG_PERIOD", 10.0, low=1.0, high=100.0, unit="s"),
@@ -230,6 +261,8 @@ PX4 = Autopilot(
     mission_climb=("FW_T_CLMB_R_SP", "FW_T_SINK_R_SP"),
     mission_climb_bounds=("FW_T_CLMB_MAX", "FW_T_SINK_MAX"),
     guidance=("NPFG_PERIOD", "NPFG_DAMPING", "NPFG_SW_DST_MLT"),
+    airspeed_range=("FW_AIRSPD_MIN", "FW_AIRSPD_MAX"),
+    speed_outside_range="clamped",
 )
 
 AUTOPILOTS: dict[str, Autopilot] = {"ardupilot": ARDUPLANE, "px4": PX4}

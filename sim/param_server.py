@@ -53,6 +53,11 @@ def parameter_table(
 
     if profile is not None:
         put(ap.envelope["cruise_airspeed"], profile.cruise_airspeed)
+        # An airframe set up to cruise at its airspeed holds it within its airspeed range
+        # (both autopilots bound the cruise by it: see gcs_planner.autopilot).
+        low_name, high_name = ap.airspeed_range
+        put(low_name, min(table[low_name][0], profile.cruise_airspeed))
+        put(high_name, max(table[high_name][0], profile.cruise_airspeed))
         if profile.turn_radius > 0:
             put(ap.loiter_radius_param, profile.turn_radius)
         if profile.radius_source != "turn_radius" and profile.turn_radius > 0:

@@ -174,7 +174,12 @@ def test_do_change_speed_changes_the_airspeed_and_widens_the_turns():
     items = mission((16, (0, 0, 1000), {"param2": 1}), (178, None, {"param2": 35.0}),
                     (16, (3000, 0, 1000), {"param2": 1}),
                     (16, (3000, 3000, 1000), {"param2": 1}))  # fmt: skip
-    f = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour="ardupilot")
+    # ArduPlane takes a speed within AIRSPEED_MIN..AIRSPEED_MAX only (shipped 9..22 m/s)
+    shipped = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour="ardupilot")
+    assert shipped.airspeed.max() == pytest.approx(PROFILE.cruise_airspeed)
+    assert any("DO_CHANGE_SPEED 35 m/s lies outside" in note for note in shipped.notes)
+    params = AutopilotParams("ardupilot", airspeed_max=40.0)
+    f = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour="ardupilot", params=params)
     assert f.airspeed.max() == pytest.approx(35.0)
     # Same roll limit (45 deg), faster: the tightest turn V^2 / (g tan 45) grows by (35/25)^2.
     fast = f.airspeed > 30.0

@@ -302,7 +302,17 @@ class Navigator:
                 break
             why = self.skips(c)
             if c.command == DO_CHANGE_SPEED and c.params[1] > 0:
-                self.env = self._envelope(c.params[1])
+                speed = self.ap.commanded_airspeed(c.params[1])
+                if speed is None:
+                    why = (
+                        f"DO_CHANGE_SPEED {c.params[1]:g} m/s lies outside AIRSPEED_MIN.."
+                        f"AIRSPEED_MAX {self.ap.airspeed_min:g}..{self.ap.airspeed_max:g}: "
+                        f"ignored, the aircraft stays at {self.env.airspeed:g} m/s"
+                    )
+                    self.notes.append(f"item {c.seq}: {why}")
+                    self.event(c.seq, "skipped", why)
+                else:
+                    self.env = self._envelope(speed)
             elif why:
                 self.notes.append(f"item {c.seq}: {why}; skipped")
                 self.event(c.seq, "skipped", why)

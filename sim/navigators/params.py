@@ -26,6 +26,8 @@ SHIPPED: dict[str, dict[str, float]] = {
         "TECS_SINK_MAX": 5.0,
         "WP_RADIUS": 90.0,
         "NAVL1_LIM_BANK": 0.0,
+        "AIRSPEED_MIN": 9.0,
+        "AIRSPEED_MAX": 22.0,
     },
     "px4": {
         "FW_R_LIM": 50.0,
@@ -37,6 +39,8 @@ SHIPPED: dict[str, dict[str, float]] = {
         "NPFG_PERIOD": 10.0,
         "NPFG_DAMPING": 0.7,
         "NPFG_SW_DST_MLT": 0.32,
+        "FW_AIRSPD_MIN": 10.0,
+        "FW_AIRSPD_MAX": 20.0,
     },
 }
 
@@ -57,6 +61,8 @@ class AutopilotParams:
     npfg_period: float = 10.0  # PX4 NPFG_PERIOD
     npfg_damping: float = 0.7  # PX4 NPFG_DAMPING
     npfg_switch_multiplier: float = 0.32  # PX4 NPFG_SW_DST_MLT
+    airspeed_min: float | None = None  # m/s: AIRSPEED_MIN / FW_AIRSPD_MIN
+    airspeed_max: float | None = None  # m/s: AIRSPEED_MAX / FW_AIRSPD_MAX
 
     def __post_init__(self) -> None:
         shipped = _limits(self.flavour, SHIPPED[self.flavour])
@@ -90,6 +96,18 @@ class AutopilotParams:
             npfg_switch_multiplier=merged["NPFG_SW_DST_MLT"],
             **limits,
         )
+
+    def commanded_airspeed(self, speed: float) -> float | None:
+        """The airspeed flown after DO_CHANGE_SPEED to ``speed`` m/s; None when the autopilot
+        ignores it (ArduPlane, outside AIRSPEED_MIN..AIRSPEED_MAX: ``Plane::do_change_speed``
+        in ArduPlane/commands_logic.cpp); PX4 constrains it to FW_AIRSPD_MIN..FW_AIRSPD_MAX
+        (``FixedwingPositionControl::adapt_airspeed_setpoint``)."""
+        low, high = float(self.airspeed_min or 0.0), float(self.airspeed_max or math.inf)
+        if low <= speed <= high:
+            return speed
+        if self.flavour == "ardupilot":
+            return None
+        return min(max(speed, low), high)
 
     def with_rates(self, climb: float, sink: float) -> AutopilotParams:
         """The same autopilot set to climb and sink at these rates (m/s)."""
@@ -125,9 +143,13 @@ def _limits(flavour: str, p: dict[str, float]) -> dict[str, float]:
             "bank_limit": p["ROLL_LIMIT_DEG"],
             "climb_rate": p["TECS_CLMB_MAX"],
             "sink_rate": p["TECS_SINK_MAX"],
+            "airspeed_min": p["AIRSPEED_MIN"],
+            "airspeed_max": p["AIRSPEED_MAX"],
         }
     return {
         "bank_limit": p["FW_R_LIM"],
         "climb_rate": min(p["FW_T_CLMB_R_SP"], p["FW_T_CLMB_MAX"]),
         "sink_rate": min(p["FW_T_SINK_R_SP"], p["FW_T_SINK_MAX"]),
+        "airspeed_min": p["FW_AIRSPD_MIN"],
+        "airspeed_max": p["FW_AIRSPD_MAX"],
     }
