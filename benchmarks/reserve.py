@@ -55,7 +55,7 @@ class Measured:
 
 def planned(dataset: int, firmware: str, wind: float, gust: float, per_leg: bool = False):
     """The plan ``gcs-planner plan`` makes for this case (default choice and probability)."""
-    from gcs_planner.cli.vehicle_from import derive_envelope
+    from gcs_planner.aircraft.derive import derive_envelope
     from gcs_planner.core.planner import plan
     from gcs_planner.scenario.readers import load_scenario
 

@@ -88,9 +88,9 @@ def _plan(workbook: str, firmware: str, wind: str, extra: tuple[str, ...] = ()) 
 def _envelope(workbook: str, firmware: str, wind: str) -> dict:
     """The derived envelope of an infeasible case (no plan JSON to read it from), derived as the
     command line derives it (``cli.vehicle_from.derive_envelope``)."""
+    from gcs_planner.aircraft.derive import derive_envelope
     from gcs_planner.cli import build_parser
     from gcs_planner.cli.common import load_scenario_from_args
-    from gcs_planner.cli.vehicle_from import derive_envelope
 
     argv = ["plan", str(Path(DATA) / f"{workbook}.xlsx")]
     for flag, value in zip(FLAGS, TABLE2[workbook]):

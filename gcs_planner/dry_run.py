@@ -50,10 +50,11 @@ from gcs_planner.link.connection import mavlink, open_link
 from gcs_planner.link.mission_client import MissionClient
 from gcs_planner.link.params import set_parameter
 from gcs_planner.link.protocol import DEFAULT_RETRIES, DEFAULT_TIMEOUT_S
-from gcs_planner.link.vehicle_check import refusal, vehicle_shortfalls
+from gcs_planner.link.vehicle_check import Shortfall, refusal, shortfalls
 from gcs_planner.mission.builder import build_mission
 from gcs_planner.mission.geo_exports import trajectory_local
 from gcs_planner.mission.items import HELIX_COMMANDS
+from gcs_planner.mission.vehicle_setup import needs as setup_needs
 from gcs_planner.plan_json import plan_to_dict
 from gcs_planner.scenario.model import Parameters, Scenario
 from sim import replay as replay_mod
@@ -66,6 +67,9 @@ from sim.wind import WindSpec
 # Exit code of a dry run whose mission verified but whose replay did not arrive. Not an error
 # class: the report is still printed in full, the code only tells a script the verdict.
 EXIT_LOST = 5
+# Exit code of a dry run that flew well but whose route arrives with a probability below the
+# planner's threshold (--min-probability), unless --allow-risky: plan's own for such a route.
+EXIT_RISKY = 3
 # ArduPilot's wait before it asks again for a mission item it has not received.
 VEHICLE_REQUEST_TIMEOUT_S = 1.0
 # The waypoint acceptance radius the dry run exports with (see module docstring).
@@ -193,6 +197,12 @@ class DryRunReport:
     # the flown wind's direction (degrees it blows from): the climbs are checked along each
     # leg's track; None: from any direction
     envelope_wind_from: float | None = None
+    # The plan's vehicle setup (``mission.vehicle_setup``) as set on the vehicle ("NAME=VALUE";
+    # empty when the vehicle flew as it is), and what the vehicle's parameters fell short of
+    # it when it flew (the first cause of a loss when the vehicle was not set up).
+    setup: tuple[str, ...] = ()
+    vehicle_as_is: bool = False
+    setup_shortfalls: tuple[str, ...] = ()
 
     @property
     def demonstration(self) -> bool:
@@ -248,6 +258,14 @@ class DryRunReport:
 
     def to_dict(self) -> dict:
         out = asdict(self)
+        if not self.verified:
+            # Nothing flew: no flight, no rate, no losses to speak of.
+            out = {k: out[k] for k in _UPLOAD_KEYS}
+            out["route"] = list(self.route)
+            out["ok"] = False
+            out["flown"] = False
+            return out
+        out["flown"] = True
         out["route"] = list(self.route)
         out["length_difference"] = self.length_difference
         out["length_within_tolerance"] = self.length_within_tolerance
@@ -266,6 +284,14 @@ class DryRunReport:
             for key in ("success_rate", "success_ci", "confidence"):
                 del out[key]
         return out
+
+
+# What a report of a mission that never verified (and so never flew) says.
+_UPLOAD_KEYS = (
+    "scenario", "flavour", "route", "verified", "link_error", "upload_attempts",
+    "upload_errors", "items", "upload_seconds", "resends", "messages_dropped", "loss", "seed",
+    "planned_length", "planned_probability", "setup", "vehicle_as_is",
+)  # fmt: skip
 
 
 def length_tolerance(arc_length: float, waypoints: int) -> float:
@@ -295,7 +321,7 @@ def dry_run(
     navigate_on_estimate: bool = True,
     error_unit: float = DEFAULT_ERROR_UNIT_M,
     set_params: dict[str, float] | None = None,
-    set_plan_params: bool = False,
+    vehicle_as_is: bool = False,
     flight_model: object | None = None,
 ) -> DryRunReport:
     """Fly ``plan``'s chosen route on a mock vehicle whose landmark database is ``landmarks``.
@@ -327,11 +353,13 @@ def dry_run(
     directions, outcomes) unless nothing in the flight is drawn. ``set_params``: autopilot
     parameters (the vehicle's own names, e.g. TECS_CLMB_MAX, NAVL1_LIM_BANK, FW_T_CLMB_R_SP)
     the ground station sets over the link after the upload, as a user configures the aircraft;
-    a parameter the vehicle does not confirm is an upload error. As ``upload`` does, the vehicle's
-    parameters are first checked against what the plan's derived envelope needs (climb and sink
-    rates, roll limit, ArduPlane's NAVL1_LIM_BANK: ``link.vehicle_check``): with
-    ``set_plan_params`` they are set (``set_params`` wins where both name one), otherwise the
-    upload is refused and the report says which and why.
+    a parameter the vehicle does not confirm is an upload error. The operator's workflow is
+    flown: the plan's vehicle setup (``mission.vehicle_setup``: airspeed, climb and sink rates,
+    roll limit, ArduPlane's NAVL1_LIM_BANK, loiter radius) is set with the mission, as
+    ``upload --params`` sets the setup file (``set_params`` wins where both name one). A setup
+    no autopilot value can meet refuses the upload, naming it. ``vehicle_as_is``: nothing of the
+    setup is set, the vehicle flies at its own parameters, and the report names what falls
+    short of the setup (``setup_shortfalls``), the first cause of a loss.
 
     ``flight_model`` (sim/jsbsim_airframe.py ``FlightModel``; default the point mass) flies the
     replay in JSBSim: what the airframe cannot fly (``airframe_limits``) fails the verdict.
@@ -364,6 +392,7 @@ def dry_run(
         request_timeout=request_timeout,
     )
     verified, errors = False, []
+    setup: list = []
     start = time.perf_counter()
     with vehicle:
         link = open_link(f"udpout:127.0.0.1:{port}")
@@ -372,17 +401,17 @@ def dry_run(
         client = MissionClient(link, timeout=timeout, retries=retries, transfer="mission")
         try:
             client.connect(timeout=connect_timeout)
-            # What the plan's envelope needs of the vehicle, as ``upload`` checks it: set with
-            # ``set_plan_params`` (the user's own --param values win), else refused.
-            needed = vehicle_shortfalls(
-                link, client._target(), plan_dict, flavour, timeout=timeout, retries=retries
-            )
-            if needed and not set_plan_params:
-                raise LinkError(refusal(needed, "set them with --set-params"))
+            # The plan's vehicle setup, as the operator loads it with the mission (upload
+            # --params): every parameter of it, the user's own --param values winning; as it
+            # is, the vehicle's own values, and what falls short of the setup is reported.
+            setup = [] if vehicle_as_is else setup_needs(plan_dict, flavour)
+            impossible = [Shortfall(n, math.nan) for n in setup if n.impossible]
+            if impossible:
+                raise LinkError(refusal(impossible, "plan for an aircraft this autopilot flies"))
             for _ in range(attempts):
                 try:
                     client.upload_verified(mission.items, loiter_radius=loiter)
-                    settings = {s.need.name: s.need.set_to for s in needed}
+                    settings = {n.name: n.set_to for n in setup}
                     settings.update(set_params or {})
                     if flavour == "px4":
                         settings = {PX4_ACCEPTANCE_PARAM: float(acceptance_radius), **settings}
@@ -415,7 +444,9 @@ def dry_run(
         upload_seconds = time.perf_counter() - start
         # The vehicle's stored mission and parameters, flown with the world's options (the mock
         # vehicle's own replay() knows no wind nor INS navigation yet).
-        autopilot = AutopilotParams.from_parameters(flavour, vehicle.parameters)
+        held = vehicle.parameters
+        autopilot = AutopilotParams.from_parameters(flavour, held)
+        short = shortfalls(plan_dict, flavour, lambda name: held.get(name, math.nan))
         # Before the flight: the plan's legs against its aircraft's envelope in the wind flown,
         # with the flown autopilot's settle distance as the vehicle holds its parameters.
         flown_wind = (wind or WindSpec()).speed
@@ -530,6 +561,9 @@ def dry_run(
         envelope_shortfalls=tuple(envelope_shortfalls),
         envelope_wind=flown_wind if plan.scenario.envelope is not None else None,
         envelope_wind_from=(wind or WindSpec()).from_deg,
+        setup=tuple(f"{n.name}={n.set_to:g}" for n in setup),
+        vehicle_as_is=vehicle_as_is,
+        setup_shortfalls=tuple(sh.describe() for sh in short),
         **_airframe(replayed),
     )
 

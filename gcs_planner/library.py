@@ -37,9 +37,16 @@ SUFFIX_FORMATS = {
 }
 
 
-def load_scenario(path: str | os.PathLike[str], **overrides: Any) -> Scenario:
+def load_scenario(
+    path: str | os.PathLike[str], *, autopilot: str | None = None, **overrides: Any
+) -> Scenario:
     """Read a scenario: a scenario TOML, a points CSV (local metres), a geographic CSV
-    (``id,lat,lon,alt,kind,unreliable``), GeoJSON points, or a contest workbook (.xlsx).
+    (``id,lat,lon,alt,kind,unreliable``), GeoJSON points, or a contest workbook (.xlsx), as the
+    planning problem ``gcs-planner plan`` builds from it: a TOML's ``[vehicle]`` autopilot
+    terms and ``[environment]`` derive the envelope and the reserve, and an aircraft with climb
+    limits and turns keeps straight at every landmark for as long as ``autopilot``'s path
+    follower needs (``--firmware``; ArduPilot when None). ``autopilot`` given also fills what
+    the scenario leaves unstated with that autopilot's shipped defaults, as ``--firmware``.
 
     Keyword overrides win over the file, as flags do on the command line: the model's parameters
     (``alpha1`` ... ``delta``, ``turn_radius``, ``p_success``, ``fail_residual``), the aircraft
@@ -65,7 +72,19 @@ def load_scenario(path: str | os.PathLike[str], **overrides: Any) -> Scenario:
             raise InputError(
                 f"must be an Origin or (lat, lon[, alt]), got {origin!r}", field="origin"
             ) from None
-    return read(path, overrides)
+    scenario = read(path, overrides)
+    from gcs_planner.aircraft.derive import AircraftTerms, derive_envelope
+
+    stated = {k: overrides[k] for k in _AIRCRAFT_OVERRIDES if overrides.get(k) is not None}
+    terms = AircraftTerms(firmware=autopilot, **stated)
+    return derive_envelope(terms, scenario, flown_by=autopilot or "ardupilot")
+
+
+# The overrides that state the aircraft (the flags of the same names on the command line).
+_AIRCRAFT_OVERRIDES = (
+    "cruise_airspeed", "max_bank_angle", "turn_radius", "max_climb_angle", "max_descent_angle",
+    "approach", "departure",
+)  # fmt: skip
 
 
 def choose(

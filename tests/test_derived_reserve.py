@@ -98,7 +98,7 @@ def test_the_derived_reserve_keeps_the_default_cap() -> None:
     constant default is."""
     from types import SimpleNamespace
 
-    from gcs_planner.cli.vehicle_from import derive_envelope
+    from gcs_planner.aircraft.derive import derive_envelope
     from gcs_planner.scenario.readers import load_scenario
 
     tight = {k: v / 4 for k, v in TABLE2[1].items() if k != "delta"}

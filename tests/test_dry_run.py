@@ -31,7 +31,10 @@ LINE = [
 ]
 LINE_P = 0.8**3
 PARAMS = {"alpha1": 25, "alpha2": 15, "beta1": 20, "beta2": 25, "theta": 30, "delta": 0.001}
-LINE_FLAGS = [f for k, v in PARAMS.items() for f in (f"--{k}", str(v))] + ["--turn-radius", "0"]
+# The line's route arrives with LINE_P < 0.99 on purpose: its dry runs accept the risk.
+LINE_FLAGS = [f for k, v in PARAMS.items() for f in (f"--{k}", str(v))] + [
+    "--turn-radius", "0", "--allow-risky",
+]  # fmt: skip
 
 DS1 = ["--alpha1", "25", "--alpha2", "15", "--beta1", "20", "--beta2", "25", "--theta", "30",
        "--delta", "0.001"]  # fmt: skip
@@ -257,7 +260,10 @@ def test_refused_upload_is_never_reported_as_a_success(capsys, line_csv, monkeyp
     d = json.loads(out)
     assert rc == LinkError.exit_code
     assert d["verified"] is False and "NO_SPACE" in d["link_error"] and "NO_SPACE" in err
-    assert d["arrived"] is False and d["ok"] is False  # it stored nothing, so flew nothing
+    # it stored nothing, so flew nothing: no flight, rate or losses are reported
+    assert d["flown"] is False and d["ok"] is False
+    assert "arrived" not in d and "success_rate" not in d and "lost_runs" not in d
+    assert d["verdict"].startswith("VERDICT: NOT VERIFIED")
 
 
 @pytest.mark.parametrize(
@@ -287,13 +293,14 @@ def test_missing_scenario_file_is_exit_2(capsys, tmp_path):
 def test_contest_workbook_planned_for_unlimited_climb_is_lost_by_the_flight(
     capsys, dataset_paths, dataset, flags, firmware
 ):
-    """The workbooks planned with the contest's unlimited climb: the mission verifies, but the
-    aircraft climbs at its autopilot's TECS rate, so it misses the points the plan climbs to;
-    the verdict blames the flight, not chance, and says what the plan assumed. (Until issue 26
-    the mock climbed at whatever the plan asked and these verified and arrived.)"""
+    """The workbooks planned with the contest's unlimited climb, flown by a vehicle left at its
+    autopilot's shipped parameters (--vehicle-as-is): the mission verifies, but the aircraft
+    climbs at its TECS rate, so it misses the points the plan climbs to; the verdict blames the
+    flight, not chance, and says what the plan assumed. (Until issue 26 the mock climbed at
+    whatever the plan asked and these verified and arrived.)"""
     rc, out, err = run_cli(
         capsys, str(dataset_paths[dataset]), *flags, *FAST, "--firmware", firmware,
-        "--runs", "20", "--json",
+        "--runs", "20", "--json", "--vehicle-as-is", "--allow-risky",
     )  # fmt: skip
     d = json.loads(out)
     assert d["verified"] is True and d["arc_length"] > 0
@@ -316,11 +323,11 @@ def test_contest_workbook_certain_route_for_unlimited_climb_is_lost_by_the_fligh
     capsys, dataset_paths, dataset, flags
 ):
     """The most reliable routes arrive even if every unreliable correction fails (planned
-    probability 1): a loss can only be the flight's, and the flight at the autopilot's climb
-    rate is lost."""
+    probability 1): a loss can only be the flight's, and the flight at the autopilot's shipped
+    climb rate (a vehicle not set up for the plan) is lost."""
     rc, out, _ = run_cli(
         capsys, str(dataset_paths[dataset]), *flags, "--turn-radius", "200",
-        "--choose", "most-reliable", "--json",
+        "--choose", "most-reliable", "--json", "--vehicle-as-is",
     )  # fmt: skip
     d = json.loads(out)
     assert d["planned_probability"] == 1.0 and d["verified"] is True
@@ -334,14 +341,15 @@ def _flags_to_overrides(flags: list[str]) -> dict[str, float]:
 
 def test_dataset1_no_draw_of_the_unlimited_climb_plan_arrives(dataset_paths):
     """Before issue 26 an arriving draw of dataset 1's shortest route was searched for and
-    found; its legs climb steeper than ArduPlane's 5 m/s, so now no flight arrives and the
-    losses are the flight's."""
+    found; its legs climb steeper than ArduPlane's shipped 5 m/s, so a vehicle left as it is
+    never arrives and the losses are the flight's (its setup names the climb rate)."""
     overrides = {**_flags_to_overrides(DS1), "turn_radius": 200.0}
     path = dataset_paths[1]
     result = plan(load_scenario(path, overrides), objectives=("length", "corrections"))
     assert 0 < result.route.probability < 1
-    report = dry_run(result, load_scenario(path, overrides), runs=20)
+    report = dry_run(result, load_scenario(path, overrides), runs=20, vehicle_as_is=True)
     assert report.verified and report.runs_flown and report.success_rate == 0.0
+    assert any(s.startswith("TECS_CLMB_MAX is 5") for s in report.setup_shortfalls)
     assert report.flight_losses > 10 and not report.ok
 
 

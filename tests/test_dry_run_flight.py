@@ -53,7 +53,7 @@ def steep_plan(dataset_paths):
 
 def test_steep_cs3d_mission_is_caught_by_a_px4_vehicle(steep_plan, dataset_paths):
     landmarks = load_scenario(dataset_paths[2], {**DS2, **LIMITS})
-    report = dry_run(steep_plan, landmarks, flavour="px4")
+    report = dry_run(steep_plan, landmarks, flavour="px4", vehicle_as_is=True)
     _caught(report.to_dict())
     # PX4 will not count a waypoint reached off its altitude: it circles there.
     assert report.flown_to_b > report.planned_length or not report.arrived
@@ -79,8 +79,9 @@ def test_airplane_legs_within_15_degrees_need_arduplane_set_up_for_them(
     probability (a floor: planned with the default flight reserve)."""
     landmarks = load_scenario(dataset_paths[2], {**DS2, **LIMITS})
     assert airplane_plan.scenario.vehicle.leg_model == "airplane"
-    shipped = dry_run(airplane_plan, landmarks, flavour="ardupilot", runs=20)
+    shipped = dry_run(airplane_plan, landmarks, flavour="ardupilot", runs=20, vehicle_as_is=True)
     assert shipped.verified and shipped.flight_losses > 0 and not shipped.ok
+    assert shipped.setup_shortfalls  # what it was not set up for, named
     setup = {"TECS_CLMB_MAX": 11.0, "TECS_SINK_MAX": 11.0, "NAVL1_LIM_BANK": 45.0}
     report = dry_run(airplane_plan, landmarks, flavour="ardupilot", runs=60, set_params=setup)
     assert "climb 11 m/s" in report.autopilot
@@ -116,8 +117,8 @@ def test_airplane_legs_within_the_limits_are_lost_by_px4s_switch_distance(
 def test_the_certain_route_of_dataset_2_at_20_25_degrees_is_lost_by_the_flight(dataset_paths):
     """Climb 20 and descent 25 degrees (8.6 and 10.6 m/s at 25 m/s): dataset 2's certain route
     (planned probability 1, a 60 m reserve) needs more than either autopilot's mission climb
-    rate (ArduPlane 5, PX4 3 m/s): every run misses a correction point and is lost by the
-    flight; the dry run no longer says it arrives."""
+    rate as shipped (ArduPlane 5, PX4 3 m/s): a vehicle left at them misses a correction point
+    in every run and is lost by the flight; the dry run no longer says it arrives."""
     limits = {"turn_radius": 200.0, "max_climb_angle": 20.0, "max_descent_angle": 25.0}
     scenario = load_scenario(dataset_paths[2], {**DS2, **limits, "reserve": 60.0})
     certain = plan(
@@ -130,7 +131,7 @@ def test_the_certain_route_of_dataset_2_at_20_25_degrees_is_lost_by_the_flight(d
     assert all(-25.0 - 1e-9 <= s.leg.path_angle <= 20.0 + 1e-9 for s in certain.route.stops[1:])
     landmarks = load_scenario(dataset_paths[2], {**DS2, **limits})
     for flavour in ("ardupilot", "px4"):
-        report = dry_run(certain, landmarks, flavour=flavour, runs=6)
+        report = dry_run(certain, landmarks, flavour=flavour, runs=6, vehicle_as_is=True)
         assert report.verified and report.flight_losses == 6 and not report.ok, flavour
         assert report.missed
 
@@ -167,7 +168,10 @@ def test_steep_cs3d_mission_is_caught_through_mock_vehicle_and_upload_processes(
     texts: list[str] = []
     try:
         conn = ["--connect", f"udpout:127.0.0.1:{port}", "--quiet", "--wait", "60"]
-        assert main(["upload", str(mission), *conn]) == 0, capsys.readouterr().out
+        # the operator's workflow: the mission with the setup plan --out wrote (the flight
+        # then shows that no setup for 15 degrees flies cs3d's steep legs)
+        setup = ["--params", str(out / "vehicle.param")]
+        assert main(["upload", *setup, str(mission), *conn]) == 0, capsys.readouterr().err
         link = open_link(f"udpout:127.0.0.1:{port}")
         try:
             deadline = time.monotonic() + 120.0  # generous: ends on the vehicle's last word
@@ -209,4 +213,6 @@ def test_px4_overflies_b_of_a_plan_without_run_outs(capsys):
     d = json.loads(capsys.readouterr().out)
     assert rc == 0 and d["verified"] and d["arrived"] and d["ok"], (d["route"], d["why"])
     assert d["corrections_as_planned"] and d["flown_to_b"] is not None
-    assert all(r["outcome"] == "ok" for r in d["rows"])
+    # every correction made (an unreliable fix may fail in the seeded draw, overflown all the same)
+    assert all(r["outcome"] == "ok" or (r["outcome"] == "failed" and r["unreliable"])
+               for r in d["rows"])  # fmt: skip

@@ -13,10 +13,10 @@ import math
 
 import pytest
 
+from gcs_planner.aircraft.derive import derive_envelope
 from gcs_planner.autopilot import effective
 from gcs_planner.cli import build_parser, main
 from gcs_planner.cli.common import load_scenario_from_args, plan_from_args
-from gcs_planner.cli.vehicle_from import derive_envelope
 from gcs_planner.dry_run import EXIT_LOST, plan_assumptions
 from gcs_planner.envelope_fit import legs_outside_envelope
 from gcs_planner.geometry.trajectory import scenario_trajectory

@@ -22,9 +22,9 @@ import math
 import numpy as np
 import pytest
 
+from gcs_planner.aircraft.derive import derive_envelope
 from gcs_planner.cli import build_parser
 from gcs_planner.cli.common import load_scenario_from_args
-from gcs_planner.cli.vehicle_from import derive_envelope
 from gcs_planner.core.planner import plan
 from gcs_planner.errors import InfeasibleError
 from gcs_planner.geometry.airplane import AirplaneLeg

@@ -36,11 +36,16 @@ def test_bundled_scenario_flies_on_jsbsim_through_upload_and_read_back(capsys, f
     assert d["airframe_limits"] == []
     # Every planned correction made, in order, each within the capture radius.
     assert d["corrections_as_planned"] is True
-    assert [r["outcome"] for r in d["rows"]] == ["ok"] * (len(d["route"]) - 2)
+    # (an unreliable landmark's fix may fail in the seeded draw: overflown all the same)
+    assert len(d["rows"]) == len(d["route"]) - 2
+    assert all(r["outcome"] == "ok" or (r["outcome"] == "failed" and r["unreliable"])
+               for r in d["rows"])  # fmt: skip
     assert all(r["miss"] <= d["capture_radius"] for r in d["rows"])
     # A real airframe does not fly the planned path to the metre: it is longer than the plan
-    # (turns entered late) but within the plan's flight reserve.
-    assert 0.0 < d["flown_difference"] < d["reserve"]
+    # (turns entered late), but between two corrections of an error by no more than the plan's
+    # flight reserve (which is per stretch, not for the whole route).
+    assert 0.0 < d["flown_difference"]
+    assert d["max_overrun"] is not None and d["max_overrun"] <= d["reserve"]
 
 
 def _straight_airframe() -> tuple[JSBSimAirframe, Envelope]:

@@ -312,7 +312,12 @@ def test_plan_policy_writes_every_mission_and_the_file(tmp_path, capsys) -> None
     sc, _, _ = _replanned(167)
     csv = write_scenario_csv(sc, tmp_path / "sc.csv")
     out = tmp_path / "out"
-    assert main(["plan", str(csv), *_flags(sc), "--out", str(out), "--policy"]) == 0
+    # A random scenario of the contest's model: its unlimited climbs are steeper than any
+    # autopilot's limits, so its missions are written only when asked for.
+    risky = ["--allow-risky"]
+    assert main(["plan", str(csv), *_flags(sc), "--out", str(out), "--policy"]) == 3
+    assert "no ardupilot setup flies this plan" in capsys.readouterr().err
+    assert main(["plan", str(csv), *_flags(sc), "--out", str(out), "--policy", *risky]) == 0
     text = capsys.readouterr().out
     assert "contingency policy: 3 mission(s), 2 switch(es)" in text
     assert "chosen route 0" in text and "most reliable route" in text
@@ -332,7 +337,7 @@ def test_plan_policy_writes_every_mission_and_the_file(tmp_path, capsys) -> None
         (out / "mission.plan").read_text()
     )
     # A second run replaces the folder it wrote (its branch files included).
-    assert main(["plan", str(csv), *_flags(sc), "--out", str(out), "--policy"]) == 0
+    assert main(["plan", str(csv), *_flags(sc), "--out", str(out), "--policy", *risky]) == 0
 
 
 def test_plan_policy_needs_out(tmp_path, capsys) -> None:

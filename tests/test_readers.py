@@ -301,9 +301,12 @@ def _a_feasible_route(scenario: Scenario) -> tuple[int, ...] | None:
 def test_bundled_example_loads_and_has_feasible_routes_with_margin() -> None:
     scenario = load_scenario(EXAMPLE / "scenario.toml")
     assert scenario.name == "example"
+    # the aircraft the example states (missions/README.md): 200 m turns, 15 deg climbs
     assert scenario.params == Parameters(
-        25, 15, 20, 25, 30, 0.001, 200, 0.8, 5, reserve=DEFAULT_RESERVE_M
-    )
+        25, 15, 20, 25, 30, 0.001, 200, 0.8, 5, max_climb_angle=15.0, max_descent_angle=15.0,
+        reserve=DEFAULT_RESERVE_M,
+    )  # fmt: skip
+    assert scenario.cruise_airspeed == 25.0
     assert scenario.origin == Origin(30.5, 123.5, 0.0)
     counts = scenario.counts()
     assert 50 <= counts["points"] <= 80 and counts["unreliable"] > 0

@@ -6,6 +6,7 @@ plan's need named, and nothing is uploaded; ``--set-params`` lists and sets them
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 import pytest
@@ -67,25 +68,40 @@ def test_px4_climbing_slower_than_the_plan_is_refused_naming_the_parameter(
     tmp_path, capsys, dataset_paths
 ):
     plan = _plan(tmp_path, capsys, dataset_paths, "--firmware", "px4", "--max-climb-rate", "4")
+    (need,) = [n for n in needs(json.loads(plan.read_text()), "px4")
+               if n.name == "FW_T_CLMB_R_SP"]  # fmt: skip
+    # at least the plan's rate; more where a leg's climb must fit after PX4's level run-out
+    assert need.least >= 4.0
     port = free_udp_port()
     with MockVehicle(f"udpin:127.0.0.1:{port}", flavour="px4") as vehicle:
         before = list(vehicle.mission)
         assert _upload(port, plan) == 4
         err = capsys.readouterr().err
         # PX4 climbs in missions at FW_T_CLMB_R_SP (3 m/s shipped), bounded by FW_T_CLMB_MAX
-        assert "FW_T_CLMB_R_SP is 3" in err and "at least 4" in err
-        assert "FW_T_CLMB_MAX" not in err  # 5 m/s: enough
+        assert "FW_T_CLMB_R_SP is 3" in err and f"at least {need.least:.4g}" in err
         assert list(vehicle.mission) == before
         assert _upload(port, plan, "--set-params") == 0
-        assert vehicle.parameters["FW_T_CLMB_R_SP"] == pytest.approx(4.0)
-        assert vehicle.parameters["FW_T_CLMB_MAX"] == 5.0  # untouched
+        assert vehicle.parameters["FW_T_CLMB_R_SP"] == pytest.approx(need.set_to, abs=1e-4)
+        # the bound is raised only as far as the need, and never below its shipped 5 m/s
+        assert vehicle.parameters["FW_T_CLMB_MAX"] == pytest.approx(max(5.0, need.set_to))
 
 
-def test_a_plan_stated_as_angles_and_a_radius_needs_nothing(tmp_path, capsys, dataset_paths):
+def test_a_plan_stated_as_angles_and_a_radius_needs_their_rates(tmp_path, capsys, dataset_paths):
+    """Stated angles name no rates, but the aircraft still climbs at Vg tan(angle): the
+    vehicle is checked for them as for a derived envelope, and set with --set-params."""
     plan = _plan(tmp_path, capsys, dataset_paths, "--turn-radius", "200",
                  "--max-climb-angle", "15", "--max-descent-angle", "15")  # fmt: skip
-    assert needs(json.loads(plan.read_text()), "ardupilot") == []
+    data = json.loads(plan.read_text())
+    by_name = {n.name: n for n in needs(data, "ardupilot")}
+    top = max(p["z"] for p in data["points"])
+    from gcs_planner.vehicle import tas_from_eas
+
+    vg = tas_from_eas(data["vehicle"]["cruise_airspeed"], top)
+    assert by_name["TECS_CLMB_MAX"].least == pytest.approx(vg * math.tan(math.radians(15)))
     port = free_udp_port()
     with MockVehicle(f"udpin:127.0.0.1:{port}", flavour="ardupilot") as vehicle:
-        assert _upload(port, plan) == 0
+        assert _upload(port, plan) == 4
+        assert "TECS_CLMB_MAX is 5" in capsys.readouterr().err
+        assert _upload(port, plan, "--set-params") == 0
         assert len(vehicle.mission) > 1
+        assert vehicle.parameters["TECS_CLMB_MAX"] >= by_name["TECS_CLMB_MAX"].least

@@ -122,7 +122,10 @@ def test_text_output_of_a_per_leg_envelope(line_csv, capsys):
 
 
 def test_direct_statements_leave_the_front_unchanged(line_csv, capsys):
-    direct = ["--turn-radius", "300", "--max-climb-angle", "12", "--max-descent-angle", "10"]
+    # The straight runs at the landmarks are derived for the target autopilot (ArduPilot unless
+    # --firmware) unless stated: stated too, nothing is left to derive.
+    direct = ["--turn-radius", "300", "--max-climb-angle", "12", "--max-descent-angle", "10",
+              "--approach", "150", "--departure", "150"]  # fmt: skip
     before = plan_json([str(line_csv), *FLAGS, *direct], capsys)
     after = plan_json([str(line_csv), *FLAGS, *direct, "--firmware", "px4", "--wind", "5"],
                       capsys)  # fmt: skip
@@ -130,6 +133,20 @@ def test_direct_statements_leave_the_front_unchanged(line_csv, capsys):
     assert after["vehicle"]["envelope"] is None  # nothing derived: today's plan, said so
     assert after["parameters"] == before["parameters"]
     assert after["front"] == before["front"]
+
+
+def test_runs_follow_the_target_autopilot_of_a_stated_envelope(line_csv, capsys):
+    """A stated envelope keeps its radius and angles under any autopilot; the runs at the
+    landmarks are the target autopilot's settle distance at the largest ground speed."""
+    direct = ["--turn-radius", "300", "--max-climb-angle", "12", "--max-descent-angle", "10"]
+    ardu = plan_json([str(line_csv), *FLAGS, *direct], capsys)["parameters"]
+    px4 = plan_json([str(line_csv), *FLAGS, *direct, "--firmware", "px4"], capsys)["parameters"]
+    for key in ("turn_radius", "max_climb_angle", "max_descent_angle"):
+        assert ardu[key] == px4[key]
+    # no airspeed stated: the scenario's default 25 m/s, or PX4's shipped 15 with --firmware
+    assert ardu["approach"] == pytest.approx(17 * 0.75 * tas_from_eas(25.0, 3400.0) / math.pi)
+    assert px4["approach"] == pytest.approx(10 * 0.7 * tas_from_eas(15.0, 3400.0))
+    assert ardu["departure"] == ardu["approach"] and px4["departure"] == px4["approach"]
 
 
 def test_the_wind_scales_a_stated_radius_when_no_bank_is_given(line_csv, capsys):

@@ -19,6 +19,7 @@ from gcs_planner.dry_run import (
     DEVIATION_STEP_M,
     DRY_RUN_ACCEPTANCE_RADIUS_M,
     EXIT_LOST,
+    EXIT_RISKY,
     DryRunReport,
     LostRunRow,
     dry_run,
@@ -39,7 +40,9 @@ SHOWN_ENVELOPE_SHORTFALLS = 8
 
 EPILOG = f"""exit codes: 0 the mission verified and, with --runs N, no run was lost by the flight
 and the success rate is consistent with the planned probability (without --runs: the one seeded
-flight, a demonstration, arrived); 2 bad input; 3 no feasible route; {LinkError.exit_code} the
+flight, a demonstration, arrived) and the route arrives with at least --min-probability (or
+--allow-risky); 2 bad input; 3 no feasible route, or a route below --min-probability;
+{LinkError.exit_code} the
 upload failed or the read-back differs; {EXIT_LOST} the mission verified but the verdict failed:
 a run lost by the flight, a success rate not consistent with the plan, a mission the airframe cannot
 fly, or legs that do not fit the aircraft's envelope in the wind flown (the output says where
@@ -91,10 +94,22 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "TECS_CLMB_MAX=8 or NAVL1_LIM_BANK=45",
     )
     g.add_argument(
+        "--vehicle-as-is",
+        action="store_true",
+        help="fly the vehicle at its own parameters, without the plan's vehicle setup (what an "
+        "unprepared aircraft does); by default the setup plan --out writes is set with the "
+        "mission, as the operator loads it",
+    )
+    g.add_argument(
+        "--allow-risky",
+        action="store_true",
+        help="exit 0 even when the route arrives with a probability below --min-probability",
+    )
+    g.add_argument(
         "--set-params",
         action="store_true",
-        help="set the parameters the plan's derived envelope needs and the vehicle lacks, as "
-        "upload --set-params does (otherwise such a vehicle is refused, exit 4)",
+        help="deprecated: the plan's vehicle setup is now set by default (--vehicle-as-is "
+        "flies without it)",
     )
     g.add_argument(
         "--navigate-on-truth",
@@ -220,6 +235,12 @@ def run(args: argparse.Namespace) -> int:
             raise InputError("the policy dry run flies the point mass only", field="--flight-model")
         refuse_plan_flags(args)
         return run_policy(args, _number, parse_params(args.param))
+    if args.set_params:
+        print(
+            "gcs-planner: note: --set-params is deprecated: the plan's vehicle setup is set by "
+            "default (--vehicle-as-is flies without it)",
+            file=sys.stderr,
+        )
     runs = int(_number(args.runs, "--runs", int, 0))
     wind = parse_wind(args.wind, args.gust)
     settings = parse_params(args.param)
@@ -267,7 +288,7 @@ def run(args: argparse.Namespace) -> int:
         wind=wind,
         navigate_on_estimate=not args.navigate_on_truth,
         set_params=settings,
-        set_plan_params=args.set_params,
+        vehicle_as_is=args.vehicle_as_is,
         flight_model=model,
     )
     if track_out is not None and flown:
@@ -281,17 +302,53 @@ def run(args: argparse.Namespace) -> int:
             if exc.field is None:
                 raise InputError(exc.reason, file=exc.file, field="--track-out") from None
             raise
+    floor = result.min_probability
+    risky = report.planned_probability < floor and not args.allow_risky
     if args.json:
-        sys.stdout.write(json.dumps(report.to_dict(), indent=2) + "\n")
+        out = report.to_dict()
+        out["min_probability"] = floor
+        out["verdict"] = safety_line(report, floor, args.allow_risky)
+        sys.stdout.write(json.dumps(out, indent=2) + "\n")
     else:
         print(render(report))
+        print(safety_line(report, floor, args.allow_risky))
     if not report.verified:
         print(f"gcs-planner: error: {report.link_error}", file=sys.stderr)
         return LinkError.exit_code
     if not report.ok:
         print(f"gcs-planner: {verdict_line(report)}", file=sys.stderr)
         return EXIT_LOST
+    if risky:
+        print(
+            f"gcs-planner: the route arrives with P {report.planned_probability:.4f}, below "
+            f"--min-probability {floor:g}: pass --allow-risky to accept it",
+            file=sys.stderr,
+        )
+        return EXIT_RISKY
     return 0
+
+
+def safety_line(r: DryRunReport, floor: float, allow_risky: bool) -> str:
+    """The verdict an operator acts on, in one line: verified, flown, and the route's arrival
+    probability against the planner's threshold."""
+    if not r.verified:
+        return "VERDICT: NOT VERIFIED: the upload failed; nothing flew"
+    flown = "flown: " + ("OK" if r.ok else "FAILED (" + verdict_line(r) + ")")
+    if r.demonstration:
+        flown += " (one seeded flight: a demonstration, --runs N for a verdict)"
+    p = r.planned_probability
+    if p >= floor:
+        odds = f"arrives with P {p:.4f} >= {floor:g} (--min-probability)"
+    elif allow_risky:
+        odds = f"RISKY: arrives with P {p:.4f} < {floor:g} (--min-probability), accepted by "
+        odds += "--allow-risky"
+    else:
+        odds = f"RISKY: arrives with P {p:.4f} < {floor:g} (--min-probability)"
+    good = r.ok and (p >= floor or allow_risky) and not r.demonstration
+    head = "VERDICT: GO" if good else "VERDICT: NO GO"
+    if r.ok and r.demonstration and (p >= floor or allow_risky):
+        head = "VERDICT: DEMONSTRATION ONLY"
+    return f"{head}: verified; {flown}; {odds}"
 
 
 def verdict_line(r: DryRunReport) -> str:
@@ -309,12 +366,22 @@ def verdict_line(r: DryRunReport) -> str:
     if r.runs == 0:
         if not r.arrived:
             parts.append(f"lost: {r.why}")
-        return "; ".join(parts) if r.envelope_shortfalls else f"lost: {r.why}"
+            if r.setup_shortfalls:
+                parts.append(_first_cause(r))
+        return "; ".join(parts)
     if r.flight_losses:
         parts.append(f"{r.flight_losses} of {r.runs} runs lost by the flight")
+    if (r.flight_losses or r.missed) and r.setup_shortfalls:
+        parts.append(_first_cause(r))
     if not r.probability_within_ci:
         parts.append("the success rate is not consistent with the planned probability")
     return "verdict failed: " + "; ".join(parts or ["see the report"])
+
+
+def _first_cause(r: DryRunReport) -> str:
+    """What the vehicle was not set up for, first of all (the setup's order: airspeed, then
+    climb and sink, roll, loiters)."""
+    return "first cause: the vehicle is not set up for the plan: " + r.setup_shortfalls[0]
 
 
 def render(r: DryRunReport) -> str:
@@ -334,6 +401,18 @@ def render(r: DryRunReport) -> str:
         out.append(f"upload: NOT verified after {r.upload_attempts} attempt(s): {r.link_error}")
     for n, error in enumerate(r.upload_errors[: r.upload_attempts - 1 if r.verified else -1], 1):
         out.append(f"  attempt {n} failed: {error}")
+    if not r.verified:
+        return "\n".join(out)  # nothing flew: nothing more to say
+    if r.vehicle_as_is:
+        out.append("setup: none set: the vehicle flies at its own parameters (--vehicle-as-is)")
+    elif r.setup:
+        out.append(
+            f"setup: the plan's vehicle setup set with the mission ({len(r.setup)} parameters: "
+            + ", ".join(r.setup)
+            + ")"
+        )
+    for short in r.setup_shortfalls:
+        out.append(f"  NOT SET UP: {short}")
     out += ["", _table(r), ""]
     within = "within" if r.length_within_tolerance else "OUTSIDE"
     if r.length_within_tolerance is None:

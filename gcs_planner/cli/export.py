@@ -6,6 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from gcs_planner.atomic import write_atomic
 from gcs_planner.errors import InputError
 from gcs_planner.mission.builder import (
     ALTITUDE_FRAMES,
@@ -15,6 +16,8 @@ from gcs_planner.mission.builder import (
     FIRMWARES,
 )
 from gcs_planner.mission.export import FORMATS, export
+from gcs_planner.mission.param_files import SETUP_FILES, render_setup
+from gcs_planner.mission.vehicle_setup import needs as setup_needs
 from gcs_planner.policy import DEFAULT_MIN_PROBABILITY
 from gcs_planner.scenario.georef import DEFAULT_ORIGIN_WARNING, parse_home, parse_origin
 
@@ -23,7 +26,12 @@ def add_mission_arguments(p: argparse.ArgumentParser) -> None:
     """The mission options, shared with any command that builds a mission from a plan."""
     g = p.add_argument_group("mission")
     g.add_argument("--route-index", type=int, help="route of the front (default: the chosen one)")
-    g.add_argument("--firmware", choices=FIRMWARES, default="ardupilot", help="default ardupilot")
+    g.add_argument(
+        "--firmware",
+        choices=FIRMWARES,
+        help="the autopilot the mission is for (default: the one the plan was made for, "
+        "plan.json's setup.autopilot; else ardupilot)",
+    )
     g.add_argument(
         "--altitude-frame",
         choices=tuple(ALTITUDE_FRAMES),
@@ -126,17 +134,75 @@ def risk_check(args: argparse.Namespace, plan: dict) -> str | None:
     return check_exportable(float(probability), k, float(floor), args.allow_risky)
 
 
+# The suffixes that say which file a name is: an --out ending in another format's (a KML
+# named x.plan) is a mistake that a ground station would find later, loading it as a mission.
+# Other suffixes (none, .txt, .json, ...) are the user's choice.
+SUFFIXES = {
+    "plan": (".plan",),
+    "waypoints": (".waypoints",),
+    "geojson": (".geojson",),
+    "kml": (".kml",),
+    "csv": (".csv",),
+    "png": (".png",),
+    "front-png": (".png",),
+    "error-budget-png": (".png",),
+}
+
+
+def check_out_suffix(fmt: str, out: Path) -> None:
+    """InputError naming --out when its suffix is another format's."""
+    suffix = out.suffix.lower()
+    own = SUFFIXES.get(fmt, ())
+    others = [f for f, ends in SUFFIXES.items() if suffix in ends and f != fmt]
+    if not others or suffix in own:
+        return
+    raise InputError(
+        f"ends in {suffix}, a {' or '.join(others)} file, but --format {fmt} writes "
+        f"{' or '.join(own)}: name it {out.with_suffix(own[0]).name} or give --format "
+        f"{others[0]}",
+        file=str(out),
+        field="--out",
+    )
+
+
+# The formats that are missions an autopilot flies: the vehicle setup is written beside them.
+MISSION_FORMATS = ("plan", "waypoints")
+
+
+def plan_autopilot(plan: dict) -> str:
+    """The autopilot ``plan`` (a plan JSON) was made for: its setup's, else ArduPilot."""
+    setup = plan.get("setup")
+    name = setup.get("autopilot") if isinstance(setup, dict) else None
+    return name if name in FIRMWARES else "ardupilot"
+
+
 def run(args: argparse.Namespace) -> int:
     from gcs_planner.atomic import check_output_file
     from gcs_planner.plan_json import load_plan
 
+    check_out_suffix(args.fmt, args.out)
     check_output_file(args.out)
     plan = load_plan(args.plan)
+    args.firmware = args.firmware or plan_autopilot(plan)
     warning = risk_check(args, plan)
+    setup = setup_needs(plan, args.firmware) if args.fmt in MISSION_FORMATS else []
+    unflyable = [f"{n.name}: {n.impossible}" for n in setup if n.impossible]
+    if unflyable:
+        from gcs_planner.policy import RiskyRouteError
+
+        cannot = f"no {args.firmware} setup flies this plan ({'; '.join(unflyable)})"
+        if not args.allow_risky:
+            raise RiskyRouteError(f"{cannot}; not exported: pass --allow-risky to export it")
+        warning = f"{warning}; {cannot}" if warning else cannot
     path, mission = export(plan, args.fmt, args.out, **mission_options(args, str(args.plan)))
+    print(f"wrote {path} (route {mission.route_index}, {len(mission.items)} mission items)")
+    if setup:
+        # The vehicle setup the mission relies on, beside it (as plan --out writes it).
+        for name, text in render_setup(setup, args.firmware, str(args.plan)):
+            write_atomic(path.parent / name, text)
+        print(f"wrote the vehicle setup for {args.firmware} beside it: {', '.join(SETUP_FILES)}")
     if warning:
         print(f"gcs-planner: warning: {warning}", file=sys.stderr)
     if mission.origin_is_default:
         print(f"gcs-planner: warning: {DEFAULT_ORIGIN_WARNING}", file=sys.stderr)
-    print(f"wrote {path} (route {mission.route_index}, {len(mission.items)} mission items)")
     return 0

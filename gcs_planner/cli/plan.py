@@ -22,6 +22,9 @@ from gcs_planner.cli.vehicle_from import (
     apply_vehicle_from,
     derive_envelope,
 )
+from gcs_planner.mission.param_files import render_setup
+from gcs_planner.mission.vehicle_setup import needs as setup_needs
+from gcs_planner.mission.vehicle_setup import setup_lines, setup_to_dict
 
 if TYPE_CHECKING:
     from gcs_planner.core.planner import Plan
@@ -89,6 +92,9 @@ def run(args: argparse.Namespace) -> int:
 
         raise InputError(f"must be >= 1, not {args.policy_levels}", field="--policy-levels")
     switch_seconds = _switch_time(args)
+    from gcs_planner.cli.common import check_plan_flags
+
+    check_plan_flags(args)  # --objectives, --max-corrections, ...: before the scenario is read
     if args.policy and not args.out:
         from gcs_planner.errors import InputError
 
@@ -104,18 +110,26 @@ def run(args: argparse.Namespace) -> int:
         check_output_dir(args.out, replaceable=names)  # before the search, not after it
     apply_vehicle_from(args)
     scenario = load_scenario_from_args(args)
-    scenario = derive_envelope(args, scenario, wind_text=args.wind)
+    # The autopilot the plan is for (ArduPilot unless --firmware): its path follower sets the
+    # straight runs at the landmarks, and the vehicle setup names its parameters.
+    scenario = derive_envelope(
+        args, scenario, wind_text=args.wind, flown_by=args.firmware or "ardupilot"
+    )
     scenario = apply_from_state(args, scenario)
     room = None
     if args.policy:
         scenario, room = _switch_room(scenario, switch_seconds)
     result = plan_from_args(args, scenario)
     plan_dict = plan_json.plan_to_dict(result)
+    firmware = args.firmware or "ardupilot"
+    setup = setup_needs(plan_dict, firmware)
+    plan_dict["setup"] = setup_to_dict(setup, firmware)
     text = plan_json.dumps_dict(plan_dict)
     if args.json:
         sys.stdout.write(text)
     else:
         print(render(result))
+        print("\n" + "\n".join(setup_lines(setup, firmware)))
     if not args.out:
         return 0
     policy = None
@@ -152,12 +166,24 @@ def run(args: argparse.Namespace) -> int:
         raise RiskyRouteError(f"{capture}; not exported: pass --allow-risky to export it anyway")
     if capture:
         warning = f"{warning}; {capture}" if warning else capture
-    extra: list[tuple[str, str | bytes]] = []
+    unflyable = [f"{n.name}: {n.impossible}" for n in setup if n.impossible]
+    if unflyable:
+        # No value of the autopilot's parameters flies it: not handed out unasked.
+        cannot = f"no {firmware} setup flies this plan ({'; '.join(unflyable)})"
+        if not args.allow_risky:
+            from gcs_planner.policy import RiskyRouteError
+
+            raise RiskyRouteError(
+                f"{cannot}; not exported: state the aircraft's climb limits (max_climb_angle, "
+                "max_descent_angle) so the plan keeps to what it flies, or pass --allow-risky"
+            )
+        warning = f"{warning}; {cannot}" if warning else cannot
+    extra: list[tuple[str, str | bytes]] = render_setup(setup, firmware, str(args.scenario))
     if policy is not None:
         from gcs_planner.mission.policy_export import render_policy_files
 
-        extra = render_policy_files(result, plan_dict, policy)
-    written = write_outputs(result, plan_dict, text, args.out, extra)
+        extra += render_policy_files(result, plan_dict, policy)
+    written = write_outputs(result, plan_dict, text, args.out, extra, firmware)
     if not args.json:
         print(f"\nwrote {', '.join(str(p) for p in written)}")
     if warning:
@@ -170,14 +196,19 @@ def run(args: argparse.Namespace) -> int:
 
 
 def write_outputs(
-    result: Plan, plan_dict: dict, text: str, out: Path, extra: list | None = None
+    result: Plan,
+    plan_dict: dict,
+    text: str,
+    out: Path,
+    extra: list | None = None,
+    firmware: str = "ardupilot",
 ) -> list[Path]:
-    """plan.json beside the mission files of the chosen route (default mission options; the
-    `export` command takes the others), written as one folder: all of it or none (a Ctrl-C
-    part-way leaves the previous folder, or none)."""
+    """plan.json and the vehicle setup beside the mission files of the chosen route for
+    ``firmware`` (default mission options; the `export` command takes the others), written as
+    one folder: all of it or none (a Ctrl-C part-way leaves the previous folder, or none)."""
     from gcs_planner.mission.export import write_all
 
-    return write_all(plan_dict, out, extra=(("plan.json", text), *(extra or ())))
+    return write_all(plan_dict, out, extra=(("plan.json", text), *(extra or ())), firmware=firmware)
 
 
 COLUMNS = (

@@ -16,7 +16,10 @@ from gcs_planner.link.mission_file import load_mission_file
 from gcs_planner.link.params import set_parameter
 from gcs_planner.link.progress import Progress
 from gcs_planner.link.signing import key_from_passphrase
-from gcs_planner.link.vehicle_check import refusal, vehicle_shortfalls
+from gcs_planner.link.vehicle_check import ParameterNeed, refusal, vehicle_shortfalls
+from gcs_planner.mission import param_files
+from gcs_planner.mission.param_files import SetupFile
+from gcs_planner.mission.vehicle_setup import needs as setup_needs
 
 
 def add_link_arguments(p: argparse.ArgumentParser) -> None:
@@ -84,8 +87,9 @@ def id_in(low: int, high: int) -> Callable[[str], int]:
 
 def connect_client(args: argparse.Namespace) -> MissionClient:
     """Open the link, wait for the vehicle, return a client (the caller closes ``client.link``)."""
-    if args.timeout <= 0 or args.retries < 0:
-        raise LinkError("--timeout must be > 0 and --retries >= 0")
+    from gcs_planner.cli.common import check_link_flags
+
+    check_link_flags(args)  # bad input, exit 2: before the link is opened
     key = key_from_passphrase(args.signing_key) if args.signing_key else None
     link = open_link(
         args.connect,
@@ -152,8 +156,12 @@ def run(args: argparse.Namespace) -> int:
                 f"{args.file} is a {mission.firmware} mission but the vehicle runs "
                 f"{vehicle.firmware}: export it again with --firmware {vehicle.firmware}"
             )
-        if not args.no_param_check and Path(args.file).suffix.lower() == ".json":
+        if args.params is not None:
+            _set_setup(client, args.params, vehicle.firmware)
+        elif not args.no_param_check and Path(args.file).suffix.lower() == ".json":
             _check_parameters(client, args, vehicle.firmware)
+        elif not args.no_param_check:
+            _check_setup_beside(client, args.file, vehicle.firmware)
         radius = args.loiter_radius if args.loiter_radius is not None else mission.loiter_radius
         if args.keep_loiter_radius:
             radius = None
@@ -220,6 +228,76 @@ def _check_parameters(client: MissionClient, args: argparse.Namespace, firmware:
     print(f"set {len(short)} parameter(s) for the plan", file=sys.stderr)
 
 
+def _setup_for(path: Path | str, firmware: str) -> SetupFile:
+    """The setup file, refused when it is for another autopilot than the vehicle's."""
+    setup = param_files.read(path)
+    if setup.autopilot and firmware in FIRMWARES and setup.autopilot != firmware:
+        raise LinkError(
+            f"{path} is a vehicle setup for {setup.autopilot} but the vehicle runs {firmware}: "
+            f"plan again with --firmware {firmware}. Nothing was uploaded"
+        )
+    return setup
+
+
+def _set_setup(client: MissionClient, path: Path, firmware: str) -> None:
+    """``upload --params FILE``: set every parameter of the setup before the mission, read each
+    back, and refuse the upload (nothing uploaded) naming those the vehicle did not take."""
+    setup = _setup_for(path, firmware)
+    ap = autopilot_for(firmware) if firmware in FIRMWARES else None
+    target = client._target()
+    failed: list[str] = []
+    for name, value in setup.values.items():
+        spec = ap.spec(name) if ap is not None else None
+        try:
+            set_parameter(
+                client.link, target, name, value,
+                *(() if spec is None else (spec.ptype,)),
+                timeout=client.timeout, retries=client.retries,
+            )  # fmt: skip
+        except LinkError as exc:
+            failed.append(f"{name} = {value:g} ({exc})")
+    if failed:
+        raise LinkError(
+            f"the vehicle did not take {len(failed)} of the {len(setup.values)} parameters of "
+            f"{path}: " + "; ".join(failed) + ". Nothing was uploaded"
+        )
+    print(f"set and read back {len(setup.values)} parameter(s) of {path}", file=sys.stderr)
+
+
+def _check_setup_beside(client: MissionClient, mission: str, firmware: str) -> None:
+    """A .plan or .waypoints with the setup ``plan --out`` wrote beside it: the vehicle's
+    parameters against the plan's needs (plan.json beside it too), else against the file's
+    values; refused naming each shortfall."""
+    path = param_files.find_beside(mission)
+    if path is None or firmware not in FIRMWARES:
+        return
+    setup = _setup_for(path, firmware)
+    plan_path = Path(mission).parent / "plan.json"
+    wanted = []
+    if plan_path.is_file():
+        from gcs_planner.plan_json import load_plan
+
+        plan = load_plan(str(plan_path))
+        wanted = setup_needs(plan, firmware)
+    if not wanted:
+        wanted = [
+            ParameterNeed(name, value, value, f"{path} sets it", most=value)
+            for name, value in setup.values.items()
+        ]
+    target = client._target()
+    short = vehicle_shortfalls(
+        client.link, target, {}, firmware, timeout=client.timeout, retries=client.retries,
+        wanted=wanted,
+    )  # fmt: skip
+    if short:
+        raise LinkError(
+            refusal(
+                short,
+                f"set them with --params {path} (or upload --no-param-check to fly it as it is)",
+            )
+        )
+
+
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "upload",
@@ -248,9 +326,18 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "written; without it such a vehicle is refused and nothing is uploaded",
     )
     p.add_argument(
+        "--params",
+        type=Path,
+        metavar="FILE",
+        help="the vehicle setup to set before the mission (.param or .params, as plan --out "
+        "writes it): each parameter set and read back; a vehicle that does not take one is "
+        "refused and nothing is uploaded",
+    )
+    p.add_argument(
         "--no-param-check",
         action="store_true",
-        help="do not check the vehicle's parameters against the plan's envelope",
+        help="do not check the vehicle's parameters against the plan's vehicle setup (found "
+        "beside the mission, or in the plan JSON)",
     )
     p.add_argument(
         "--verify",

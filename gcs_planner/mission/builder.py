@@ -209,6 +209,14 @@ def check_plan(plan: Any, source: str = "") -> None:
         raise _bad("'parameters' must be an object (docs/plan-json.md)", source, "parameters")
     if "turn_radius" not in params:
         raise _bad("'parameters.turn_radius' is missing", source, "parameters.turn_radius")
+    radius = params["turn_radius"]
+    if not _is_number(radius) or not radius >= 0:
+        raise _bad(
+            f"'parameters.turn_radius' must be a finite number of metres >= 0 (0: straight "
+            f"legs), got {radius!r}",
+            source,
+            "parameters.turn_radius",
+        )
     points = plan.get("points")
     if points is not None and not isinstance(points, list):
         raise _bad("'points' must be a list of points", source, "points")
@@ -237,6 +245,51 @@ def _check_entry(entry: Any, k: int, ids: set[str] | None, source: str) -> None:
                 source,
                 f"front[{k}].route",
             )
+    _check_figures(entry, f"front[{k}]", source, required=("length",))
+    corrections = entry.get("corrections", 0)
+    if isinstance(corrections, bool) or not isinstance(corrections, int) or corrections < 0:
+        raise _bad(
+            f"front[{k}].corrections must be a whole number >= 0, got {corrections!r}",
+            source,
+            f"front[{k}].corrections",
+        )
+    for i, leg in enumerate(legs):
+        if isinstance(leg, dict):
+            _check_figures(leg, f"front[{k}].legs[{i}]", source)
+
+
+# The figures of a route and of its legs that readers print, plot and write to files: each a
+# finite number (probabilities in [0, 1]). Lengths are metres flown, never negative.
+_FIGURES = (
+    "length", "probability", "gap", "lower_bound", "arc", "straight", "turn_angle_deg",
+    "path_angle_deg", "cumulative", "v_error", "h_error", "v_limit", "h_limit", "v_margin",
+    "h_margin", "p_arrive",
+)  # fmt: skip
+_NOT_NEGATIVE = ("length", "gap", "lower_bound", "arc", "straight", "cumulative")
+_PROBABILITIES = ("probability", "p_arrive")
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def _check_figures(entry: dict, where: str, source: str, required: tuple[str, ...] = ()) -> None:
+    """InputError naming ``where.<field>`` for a figure that is not a finite number in range
+    (NaN, null, text, a probability of 1.7, a negative length); those in ``required`` must be
+    there."""
+    for name in _FIGURES:
+        if name not in entry and name not in required:
+            continue
+        value = entry.get(name)
+        if name in _PROBABILITIES:
+            ok, want = _is_number(value) and 0.0 <= value <= 1.0, "a probability in [0, 1]"
+        elif name in _NOT_NEGATIVE:
+            ok, want = _is_number(value) and value >= 0.0, "a finite number >= 0"
+        else:
+            ok, want = _is_number(value), "a finite number"
+        if not ok:
+            got = "nothing" if name not in entry else repr(value)
+            raise _bad(f"{where}.{name} must be {want}, got {got}", source, f"{where}.{name}")
 
 
 def route_entry(plan: dict, route_index: int | None = None, source: str = "") -> tuple[int, dict]:
@@ -424,12 +477,16 @@ def plan_cruise_airspeed(plan: dict, source: str = "") -> float:
     try:
         speed = float(vehicle["cruise_airspeed"])
     except (TypeError, ValueError) as exc:
-        raise _bad("vehicle.cruise_airspeed must be a number", source, "cruise_airspeed") from exc
+        raise _bad(
+            f"vehicle.cruise_airspeed must be a number, got {vehicle['cruise_airspeed']!r}",
+            source,
+            "vehicle.cruise_airspeed",
+        ) from exc
     if not math.isfinite(speed) or not 0.0 < speed <= 1000.0:
         raise _bad(
             f"vehicle.cruise_airspeed must lie in (0, 1000] m/s, got {speed!r}",
             source,
-            "cruise_airspeed",
+            "vehicle.cruise_airspeed",
         )
     return speed
 
@@ -444,10 +501,16 @@ def plan_design_wind(plan: dict, source: str = "") -> float:
     try:
         wind = float(envelope["design_wind"])
     except (TypeError, ValueError) as exc:
-        raise _bad("vehicle.envelope.design_wind must be a number", source, "design_wind") from exc
+        raise _bad(
+            "vehicle.envelope.design_wind must be a number",
+            source,
+            "vehicle.envelope.design_wind",
+        ) from exc
     if not math.isfinite(wind) or wind < 0:
         raise _bad(
-            f"vehicle.envelope.design_wind must be >= 0 m/s, got {wind!r}", source, "design_wind"
+            f"vehicle.envelope.design_wind must be >= 0 m/s, got {wind!r}",
+            source,
+            "vehicle.envelope.design_wind",
         )
     return wind
 
@@ -576,6 +639,13 @@ def build_mission(
             # every landmark"): an autopilot that switches to the next item early does so on
             # this line, beyond the landmark.
             note = f"departure {ids[i]} ({leg.run_out:.0f} m straight on)"
+            if firmware == "px4":
+                # PX4 climbs at once towards its current item's altitude and switches to it npfg's
+                # switch distance before the landmark: a run-out on the leg's slope would have it
+                # climbing away before it overflies the landmark (missed by rate x switch time).
+                # Level at the landmark's altitude, it crosses it there; the setup's rates cover
+                # the leg's climb over what is left (mission/vehicle_setup.py).
+                departure = np.array([departure[0], departure[1], xyz[i][2]])
             add(MAV_CMD_NAV_WAYPOINT, mav_frame, note, param2=capture, **at(departure))
         helix = helix_loiter(leg)
         arc = arc_waypoints(leg)

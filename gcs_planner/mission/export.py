@@ -15,6 +15,7 @@ from gcs_planner.atomic import write_atomic, write_folder_atomic
 from gcs_planner.errors import InputError
 from gcs_planner.mission.builder import Mission, build_mission
 from gcs_planner.mission.geo_exports import csv_text, geojson_text, kml_text
+from gcs_planner.mission.param_files import SETUP_FILES
 from gcs_planner.mission.qgc_plan import dumps_plan
 from gcs_planner.mission.waypoints import dumps_waypoints
 
@@ -58,7 +59,7 @@ def export(
 
 # The files `write_all` writes, with what its caller may add (plan.json): an existing output
 # folder holding only these is an earlier run's, which `plan --out` may replace.
-ALL_FILES = (*(name for name, _ in FORMATS.values()), "plan.json")
+ALL_FILES = (*(name for name, _ in FORMATS.values()), "plan.json", *SETUP_FILES)
 
 
 def render_all(plan: dict, **mission_options: Any) -> list[tuple[str, str | bytes]]:
