@@ -10,8 +10,8 @@ against the planned one and the largest deviation from the planned path.
 
 Each flight is timed twice in the same run: compiled (the plain steps in sim/flight_kernel.py,
 the default) and in the Python navigators (``compiled=False``, the reference), with their ratio.
-``--dry-run-runs N`` also times the whole ``gcs-planner dry-run`` of dataset 2 (README's
-command) with ``--runs N`` per autopilot, compiled, against the Python flight when
+``--dry-run-runs N`` also times the whole ``gcs-planner dry-run`` of dataset 2 (the command
+docs/benchmarks.md quotes) with ``--runs N`` per autopilot, compiled, against the Python flight when
 ``--python-dry-run`` is given (PX4's takes minutes), else against the figures measured before
 the kernel (stated as such: ArduPlane 11.1 s, PX4 241.7 s for 200 runs, issue 26's session).
 
@@ -259,7 +259,7 @@ def render_long(rows: list[LongRow]) -> str:
     return table(head, body)
 
 
-# README's dataset 2 dry run; --runs and --firmware are added.
+# The dataset 2 dry run docs/benchmarks.md quotes; --runs and --firmware are added.
 DRY_RUN_ARGS = ["dry-run", str(DATA / "dataset2.xlsx"), "--alpha1", "20", "--alpha2", "10",
                 "--beta1", "15", "--beta2", "20", "--theta", "20", "--delta", "0.001",
                 "--choose", "most-reliable"]  # fmt: skip

@@ -87,7 +87,8 @@ WINDOW_MAX_S = 1800.0
 # quiet this many wall seconds: a DO_SET_MISSION_CURRENT whose acknowledgement was lost is sent
 # again after the ground station's timeout (gcs_planner/link/protocol.py, 1.5 s), and a copy
 # taken at the cruise scale would find the aircraft a thousand seconds further on and turn it
-# back to the item set (run 59 of README's 400-run dry run: an item set current 14.3 km on).
+# back to the item set (run 59 of docs/flying-policies.md's 400-run dry run: an item set
+# current 14.3 km on).
 SETTLE_WALL_S = 2 * DEFAULT_TIMEOUT_S
 
 

@@ -87,8 +87,8 @@ def test_the_plan_for_a_10_ms_wind_is_never_lost_by_the_flight(
     """Dataset 2 on ArduPlane lost 8 of 200 runs by the flight with the constant 200 m reserve
     (its routes are unlikely, so most runs end at a failed correction); PX4 switches early and
     flies helices. Planned for a 10 m/s design wind and flown in it from drawn directions by a
-    vehicle set up for the plan, no run is lost by the flight (README, benchmarks.wind_flight,
-    200 runs)."""
+    vehicle set up for the plan, no run is lost by the flight (docs/measurements.md,
+    benchmarks.wind_flight, 200 runs)."""
     rc = main(["dry-run", str(dataset_paths[workbook]), *limits, *shipped(firmware),
                "--firmware", firmware, "--wind", "10", "--runs", "20", "--json", "--quiet",
                "--allow-risky"])  # fmt: skip

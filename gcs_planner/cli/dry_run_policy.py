@@ -11,6 +11,7 @@ from dataclasses import asdict
 from gcs_planner.cli.common import load_scenario_from_args
 from gcs_planner.cli.fly import load_policy
 from gcs_planner.errors import InputError, LinkError
+from gcs_planner.mission import param_files
 from gcs_planner.policy_dry_run import (
     PolicyDryRunReport,
     check_against_scenario,
@@ -66,6 +67,22 @@ def run_policy(
     check_against_scenario(policy, landmarks, DEFAULT_CAPTURE_RADIUS_M, args.policy)
     probability = policy_probability(args.policy)
     quiet = args.json
+    # The operator's workflow: the vehicle setup plan --out wrote beside policy.json is set with
+    # the missions (the user's own --param values win); --vehicle-as-is flies without it.
+    setup_path = None if args.vehicle_as_is else param_files.find_beside(args.policy)
+    if setup_path is not None:
+        setup = param_files.read(setup_path)
+        flavour = policy.missions[policy.primary].firmware
+        if setup.autopilot and setup.autopilot != flavour:
+            raise InputError(
+                f"a vehicle setup for {setup.autopilot}, but the policy's missions are for "
+                f"{flavour}: plan the policy again with --firmware {setup.autopilot}",
+                file=str(setup_path),
+            )
+        settings = {**setup.values, **settings}
+        if not quiet:
+            print(f"gcs-planner: the vehicle setup {setup_path} is set with the missions",
+                  file=sys.stderr)  # fmt: skip
 
     def say(line: str) -> None:
         if not quiet:

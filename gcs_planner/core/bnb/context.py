@@ -67,7 +67,8 @@ class Options:
     # that Python proves within this many labels never compiles it, and the probes stay in
     # Python until the search has compiled. Dataset 2's default plan proves in Python in about
     # 7 s (6,100 labels and 13,300 probe labels); compiling the search and the probes takes
-    # about 22 s of CPU before it can start (README "Set-up"). Chosen by ``Options.first_run``.
+    # about 22 s of CPU before it can start (docs/benchmarks.md, "The first plan after
+    # installing"). Chosen by ``Options.first_run``.
     uncached_trial: int = 20_000
     probes_after_search: bool = False
     # Seconds past the time limit a stopped search may spend telling which of its open partial

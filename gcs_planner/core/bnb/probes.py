@@ -75,8 +75,9 @@ class _Prober:
         ):
             if self.compiled is None:
                 # Numba compiles the kernel on its first use after installing (about 6 s of
-                # CPU on the 2-core test machine after the search's, 17 s without; README
-                # "Set-up") and loads it from its cache after that.
+                # CPU on the 2-core test machine after the search's, 17 s without; see
+                # docs/benchmarks.md, "The first plan after installing") and loads it from its
+                # cache after that.
                 budget.setup("the compiled probes (compiled once after installing)")
                 from gcs_planner.core.probe_kernel import CompiledProbes
 

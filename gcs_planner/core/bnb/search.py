@@ -386,8 +386,9 @@ def _compiled_search(
     t0 = time.perf_counter()
     if "gcs_planner.core.search_kernel" not in sys.modules:
         # Numba compiles the kernel on its first use after installing (about 17 s of CPU on
-        # the 2-core test machine, with the expansion it shares with the probes; README
-        # "Set-up") and loads it from its cache after that.
+        # the 2-core test machine, with the expansion it shares with the probes; see
+        # docs/benchmarks.md, "The first plan after installing") and loads it from its cache
+        # after that.
         budget.setup("the compiled search (compiled once after installing)")
     from gcs_planner.core import search_kernel as sk
 
