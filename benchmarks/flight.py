@@ -35,12 +35,12 @@ import numpy as np
 
 from benchmarks.cases import DATA, load_case
 from benchmarks.report import seconds, table
+from gcs_planner.aircraft.profile import FIRMWARES
 from gcs_planner.core.planner import plan
-from gcs_planner.dry_run import DRY_RUN_ACCEPTANCE_RADIUS_M, max_deviation
+from gcs_planner.dryrun.run import DRY_RUN_ACCEPTANCE_RADIUS_M, max_deviation
 from gcs_planner.mission.builder import build_mission
 from gcs_planner.mission.geo_exports import trajectory_local
-from gcs_planner.plan_json import plan_to_dict
-from gcs_planner.vehicle import FIRMWARES
+from gcs_planner.mission.plan_json import plan_to_dict
 from sim import replay as replay_mod
 from sim.guidance import AutopilotParams
 from sim.wind import WindSpec
@@ -273,8 +273,8 @@ def _time_dry_run(flavour: str, runs: int, compiled: bool) -> tuple[float, str]:
     import io
     from functools import partial
 
-    from gcs_planner import dry_run as dry_run_mod
     from gcs_planner.cli import main as cli_main
+    from gcs_planner.dryrun import run as dry_run_mod
 
     original = dry_run_mod.replay_mod.replay
     out = io.StringIO()

@@ -1,5 +1,5 @@
 """How far gusts wander the mock vehicle's track on straight legs, against the derived reserve's
-rule (gcs_planner/flight_reserve.py: wander = GUST_MARGIN x F (sigma / Vg)^2 / 2, F the closed
+rule (gcs_planner/aircraft/reserve.py: wander = GUST_MARGIN x F (sigma / Vg)^2 / 2, F the closed
 loop's share of the gust's power, track_wander).
 
 The chosen route of a workbook (Table 2 limits, the autopilot's shipped envelope, design wind
@@ -28,7 +28,7 @@ BANDS = (2.0, 5.0, 8.0, 11.0, 14.0, 17.0, 20.0, 23.0, 26.0, 29.0, 32.0)
 
 def straight_legs(result, firmware: str, from_deg: float, seed: int) -> list[tuple[float, float]]:
     """(ground speed, share the track is longer than its chord) of each long straight leg."""
-    from gcs_planner.vehicle import tas_from_eas
+    from gcs_planner.aircraft.profile import tas_from_eas
 
     path = flight(result, firmware, WIND, GUST, seed, from_deg).flown
     pts, seqs = path.points, np.asarray(path.seqs)

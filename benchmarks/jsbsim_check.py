@@ -22,7 +22,7 @@ from pathlib import Path
 
 from benchmarks.report import machine, table
 from gcs_planner.core.planner import plan
-from gcs_planner.dry_run import dry_run
+from gcs_planner.dryrun.run import dry_run
 from gcs_planner.scenario.readers import load_scenario
 from sim.aircraft import InstantBankFlightModel
 from sim.jsbsim_airframe import DEFAULT_AIRCRAFT, CheckedPointMass, FlightModel

@@ -23,7 +23,8 @@ import time
 
 from benchmarks.cases import DATA
 from benchmarks.report import table
-from gcs_planner.autopilot import effective
+from gcs_planner.aircraft.autopilot import effective
+from gcs_planner.aircraft.profile import tas_from_eas
 from gcs_planner.core.contingency import Policy, evaluate
 from gcs_planner.core.planner import plan
 from gcs_planner.core.policy_front import replanned_front
@@ -31,7 +32,6 @@ from gcs_planner.core.replan import replan_on_failure
 from gcs_planner.core.switch_room import DEFAULT_SWITCH_TIME_S, switch_room, with_switch_room
 from gcs_planner.library import load_scenario
 from gcs_planner.scenario.model import Scenario
-from gcs_planner.vehicle import tas_from_eas
 
 TABLE2 = {"alpha1": 20, "alpha2": 10, "beta1": 15, "beta2": 20, "theta": 20, "delta": 0.001}
 

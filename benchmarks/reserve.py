@@ -6,7 +6,7 @@ For each workbook (its Table 2 limits), autopilot (the envelope in its shipped t
 vehicle's flight kernel (sim/replay.py, as ``dry-run --set-params`` sets the autopilot up: the
 plan's rates, roll limit, ArduPlane's NAVL1_LIM_BANK, the loiter radius, a 1 m acceptance
 radius) in that wind from drawn directions. Measured: the most any flight flew beyond the plan
-between a reset of an error and a check of it (gcs_planner.dry_run.stretch_overrun, over the
+between a reset of an error and a check of it (gcs_planner.dryrun.run.stretch_overrun, over the
 landmarks the track met); the flights fly their true position so that every stretch is flown
 (a flight on the estimate ends where a failed correction loses it; its track differs by the
 estimate's metres only).
@@ -72,7 +72,7 @@ def planned(dataset: int, firmware: str, wind: float, gust: float, per_leg: bool
 
 def fly(result, firmware: str, wind: float, gust: float, seed: int) -> float | None:
     """The overrun of one flight of the chosen route (None when no stretch was flown)."""
-    from gcs_planner.dry_run import stretch_overrun
+    from gcs_planner.dryrun.run import stretch_overrun
 
     met, flown_to_b = flown_at(result, firmware, wind, gust, seed)
     rows = [
@@ -95,10 +95,10 @@ def flown_at(
 def flight(result, firmware: str, wind: float, gust: float, seed: int, from_deg=None):
     """The replay report of one flight of the chosen route, the wind from ``from_deg`` (None:
     a direction drawn from ``seed``)."""
+    from gcs_planner.aircraft.profile import ENVELOPE_PARAMS
     from gcs_planner.link.vehicle_check import needs
     from gcs_planner.mission.builder import build_mission
-    from gcs_planner.plan_json import plan_to_dict
-    from gcs_planner.vehicle import ENVELOPE_PARAMS
+    from gcs_planner.mission.plan_json import plan_to_dict
     from sim.guidance import AutopilotParams
     from sim.replay import replay
     from sim.wind import WindSpec
@@ -124,7 +124,7 @@ def flight(result, firmware: str, wind: float, gust: float, seed: int, from_deg=
 def measure(
     dataset: int, firmware: str, wind: float, gust: float, flights: int, per_leg: bool = False
 ) -> Measured:
-    from gcs_planner.plan_json import reserve_of
+    from gcs_planner.mission.plan_json import reserve_of
 
     result = planned(dataset, firmware, wind, gust, per_leg)
     basis = result.scenario.reserve_basis

@@ -35,7 +35,7 @@ from benchmarks import (
 from benchmarks import sweep as sweep_bench
 from benchmarks.cases import DATA, DATASETS, valid_spec
 from benchmarks.report import machine
-from gcs_planner.atomic import write_atomic
+from gcs_planner.runtime.atomic import write_atomic
 
 DEFAULT_OUT = Path(__file__).resolve().parent / "results"
 COMMAND = "python -m benchmarks"

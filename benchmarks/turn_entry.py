@@ -3,7 +3,7 @@
 The flights of benchmarks.reserve (each workbook's chosen route, the shipped envelopes, design
 wind 0, 5, 10 m/s with 1.5 m/s gusts in wind, drawn wind directions, flown on the truth), each
 stretch between a reset of an error (or A) and a check of it split as
-gcs_planner/flight_reserve.py ``route_check`` splits it: what the stretch flew beyond the plan
+gcs_planner/aircraft/reserve.py ``route_check`` splits it: what the stretch flew beyond the plan
 against its leg-by-leg need at the rule's d (ArduPlane L1/2 + its roll-in, PX4 R/2) and each
 leg's own gusts, and the d that would make the need equal to what it flew, (overrun - gusts) /
 (sum of 1 - cos(turn) + 2 per helix and the start at A): the most over the stretches with 60
@@ -19,7 +19,7 @@ import math
 import sys
 
 from benchmarks.reserve import GUST, flown_at, planned
-from gcs_planner.flight_reserve import altitude_of
+from gcs_planner.aircraft.reserve import altitude_of
 
 
 def stretches(

@@ -5,10 +5,10 @@ from __future__ import annotations
 import statistics
 
 from benchmarks.report import seconds, table
+from gcs_planner.aircraft.profile import FIRMWARES
 from gcs_planner.link.connection import open_link
 from gcs_planner.link.mission_client import MissionClient
 from gcs_planner.mission.items import MissionItem
-from gcs_planner.vehicle import FIRMWARES
 from sim.vehicle import MockVehicle, free_udp_port
 
 FLAVOURS = FIRMWARES

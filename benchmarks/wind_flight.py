@@ -27,7 +27,7 @@ from pathlib import Path
 
 from benchmarks.cases import DATA
 from benchmarks.wind import FLAGS, NAMES, TABLE2, wind_label
-from gcs_planner.autopilot import effective
+from gcs_planner.aircraft.autopilot import effective
 
 
 @dataclass

@@ -40,10 +40,10 @@ _WHERE = {
     "Parameters": "gcs_planner.scenario.model",
     "Origin": "gcs_planner.scenario.model",
     "Kind": "gcs_planner.scenario.model",
-    "VehicleProfile": "gcs_planner.vehicle",
-    "DEFAULT_MIN_PROBABILITY": "gcs_planner.policy",
-    "RiskyRouteError": "gcs_planner.policy",
-    "RiskyRouteWarning": "gcs_planner.policy",
+    "VehicleProfile": "gcs_planner.aircraft.profile",
+    "DEFAULT_MIN_PROBABILITY": "gcs_planner.core.choose",
+    "RiskyRouteError": "gcs_planner.core.choose",
+    "RiskyRouteWarning": "gcs_planner.core.choose",
     "GcsPlannerError": "gcs_planner.errors",
     "InputError": "gcs_planner.errors",
     "InfeasibleError": "gcs_planner.errors",
@@ -70,13 +70,13 @@ __all__ = [
 ]
 
 if TYPE_CHECKING:
+    from gcs_planner.aircraft.profile import VehicleProfile
+    from gcs_planner.core.choose import DEFAULT_MIN_PROBABILITY, RiskyRouteError, RiskyRouteWarning
     from gcs_planner.core.planner import OBJECTIVES, Plan, plan
     from gcs_planner.core.route import Route
     from gcs_planner.errors import GcsPlannerError, InfeasibleError, InputError
     from gcs_planner.library import choose, load_scenario, write_mission
-    from gcs_planner.policy import DEFAULT_MIN_PROBABILITY, RiskyRouteError, RiskyRouteWarning
     from gcs_planner.scenario.model import Kind, Origin, Parameters, Scenario
-    from gcs_planner.vehicle import VehicleProfile
 
 
 def __getattr__(name: str) -> Any:

@@ -14,13 +14,13 @@ from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from gcs_planner.errors import InputError
-from gcs_planner.policy import (
+from gcs_planner.core.choose import (
     DEFAULT_MIN_PROBABILITY,
     RiskyRouteWarning,
     check_exportable,
     choose_index,
 )
+from gcs_planner.errors import InputError
 from gcs_planner.scenario.model import Origin
 
 if TYPE_CHECKING:
@@ -123,11 +123,11 @@ def write_mission(
     ``acceptance_radius``, ``cruise_speed``, ``at_end``, ``origin``).
 
     A route less likely to arrive than the plan's ``min_probability`` raises
-    :class:`~gcs_planner.policy.RiskyRouteError` unless ``allow_risky``; any route below the
-    safe default is written with a :class:`~gcs_planner.policy.RiskyRouteWarning`.
+    :class:`~gcs_planner.core.choose.RiskyRouteError` unless ``allow_risky``; any route below the
+    safe default is written with a :class:`~gcs_planner.core.choose.RiskyRouteWarning`.
     """
     from gcs_planner.mission.export import export
-    from gcs_planner.plan_json import plan_to_dict
+    from gcs_planner.mission.plan_json import plan_to_dict
 
     out = Path(path)
     fmt = SUFFIX_FORMATS.get(out.suffix.lower())

@@ -29,7 +29,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Protocol
 
-from gcs_planner.vehicle import ROLL_RESPONSE_S, G
+from gcs_planner.aircraft.profile import ROLL_RESPONSE_S, G
 
 # With unlimited climb (the contest's model) the aircraft still cannot fly straight up: it keeps
 # this much of its airspeed horizontal.
@@ -46,7 +46,7 @@ STEEPEST_DEG = 89.0
 # under 1.3 s. So the bank follows the one asked as a first-order lag of ROLL_TAU_S = 0.8 s,
 # at most ROLL_RATE_DEG_S = 70 deg/s: the autopilots' time constant plus the airframe's lag,
 # measured, and PX4's rate limit. (The planner's derived reserve counts the same lag: it is the
-# aircraft's, gcs_planner.vehicle.ROLL_RESPONSE_S.)
+# aircraft's, gcs_planner.aircraft.profile.ROLL_RESPONSE_S.)
 ROLL_TAU_S = ROLL_RESPONSE_S
 ROLL_RATE_DEG_S = 70.0
 # The bank's substep while it moves (a 0.5 s step is ten), and how close to the bank asked it

@@ -33,7 +33,7 @@ import math
 import numpy as np
 from numba import njit
 
-from gcs_planner.vehicle import G
+from gcs_planner.aircraft.profile import G
 from sim import atmosphere
 from sim.aircraft import (
     ROLL_ONE_ARC_DEG_S,

@@ -23,9 +23,9 @@ from functools import cached_property
 
 import numpy as np
 
+from gcs_planner.aircraft.profile import G, VehicleProfile
 from gcs_planner.mission.items import GLOBAL_AMSL_FRAMES, GLOBAL_RELATIVE_FRAMES, MissionItem
 from gcs_planner.scenario.georef import LocalFrame
-from gcs_planner.vehicle import G, VehicleProfile
 from sim import atmosphere, flight_kernel
 from sim.aircraft import AircraftState, FlightModelFace
 from sim.jsbsim_airframe import AirframeLimit, LegNeed

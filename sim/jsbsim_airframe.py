@@ -45,7 +45,7 @@ from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 
-from gcs_planner.vehicle import G
+from gcs_planner.aircraft.profile import G
 from sim import atmosphere
 from sim.aircraft import AircraftState, Envelope
 

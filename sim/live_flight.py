@@ -45,9 +45,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
+from gcs_planner.aircraft.profile import VehicleProfile
 from gcs_planner.mission.items import MissionItem
 from gcs_planner.scenario.model import Kind, Scenario
-from gcs_planner.vehicle import VehicleProfile
 from sim import flight_kernel, guidance
 from sim.aircraft import AircraftState
 from sim.ins import InsCorrection, InsEstimate

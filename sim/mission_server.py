@@ -47,7 +47,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from typing import Any
 
-from gcs_planner.autopilot import autopilot_for
+from gcs_planner.aircraft.autopilot import autopilot_for
 from gcs_planner.link.connection import mavlink
 from gcs_planner.link.protocol import GLOBAL_FLOAT_FRAMES, GLOBAL_INT_FRAMES, item_to_message
 from gcs_planner.mission.items import (

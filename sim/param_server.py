@@ -2,7 +2,7 @@
 PARAM_VALUE, as ArduPilot and PX4 answer them.
 
 It serves its firmware's parameters as the firmware ships them (the records of
-:mod:`gcs_planner.autopilot`: ArduPlane TECS_CLMB_MAX 5, ROLL_LIMIT_DEG 45, ...; PX4
+:mod:`gcs_planner.aircraft.autopilot`: ArduPlane TECS_CLMB_MAX 5, ROLL_LIMIT_DEG 45, ...; PX4
 FW_T_CLMB_R_SP 3, FW_R_LIM 50, ...), except where the scenario's aircraft says otherwise: its
 cruise airspeed, its turning radius as the loiter radius, and its bank limit when the scenario
 gives one (``max_bank_angle``). The plan's climb and descent limits are the plan's assumptions,
@@ -23,9 +23,9 @@ import threading
 from collections.abc import Callable
 from typing import Any
 
-from gcs_planner.autopilot import EffectiveParameters, autopilot_for, effective
+from gcs_planner.aircraft.autopilot import EffectiveParameters, autopilot_for, effective
+from gcs_planner.aircraft.profile import VehicleProfile
 from gcs_planner.link.connection import mavlink
-from gcs_planner.vehicle import VehicleProfile
 
 INT_RANGES = {
     mavlink.MAV_PARAM_TYPE_INT8: (-(2**7), 2**7 - 1),
@@ -54,7 +54,7 @@ def parameter_table(
     if profile is not None:
         put(ap.envelope["cruise_airspeed"], profile.cruise_airspeed)
         # An airframe set up to cruise at its airspeed holds it within its airspeed range
-        # (both autopilots bound the cruise by it: see gcs_planner.autopilot).
+        # (both autopilots bound the cruise by it: see gcs_planner.aircraft.autopilot).
         low_name, high_name = ap.airspeed_range
         put(low_name, min(table[low_name][0], profile.cruise_airspeed))
         put(high_name, max(table[high_name][0], profile.cruise_airspeed))
@@ -119,7 +119,7 @@ class ParamServer:
 
     @property
     def effective(self) -> EffectiveParameters:
-        """The parameters the flight uses now (:func:`gcs_planner.autopilot.effective`)."""
+        """The parameters the flight uses now (:func:`gcs_planner.aircraft.autopilot.effective`)."""
         return effective(self.flavour, self.values)
 
     def send_value(self, name: str) -> None:

@@ -44,7 +44,12 @@ from functools import cached_property
 import numpy as np
 from scipy.spatial import cKDTree
 
-from gcs_planner.confidence import wilson_interval
+from gcs_planner.aircraft.profile import (
+    DEFAULT_CAPTURE_RADIUS_M,
+    DEFAULT_CRUISE_AIRSPEED,
+    VehicleProfile,
+)
+from gcs_planner.dryrun.confidence import wilson_interval
 from gcs_planner.mission.items import (
     GLOBAL_AMSL_FRAMES,
     GLOBAL_RELATIVE_FRAMES,
@@ -53,7 +58,6 @@ from gcs_planner.mission.items import (
 )
 from gcs_planner.scenario.georef import DEFAULT_ORIGIN, LocalFrame
 from gcs_planner.scenario.model import Kind, Parameters, Scenario
-from gcs_planner.vehicle import DEFAULT_CAPTURE_RADIUS_M, DEFAULT_CRUISE_AIRSPEED, VehicleProfile
 from sim import flight_kernel, guidance
 from sim.ins import DEFAULT_ERROR_UNIT_M, InsEstimate
 from sim.wind import WindModel, WindSpec
@@ -199,7 +203,7 @@ class LostRun:
     """A run that was lost: whether its flight had missed a landmark of the mission before, and
     the landmarks (by id) whose correction failed before the loss. The ground station, which
     knows the plan, tells from these whether the plan itself would have been lost with the same
-    outcomes (gcs_planner/dry_run.py): the vehicle knows only its mission."""
+    outcomes (gcs_planner/dryrun/run.py): the vehicle knows only its mission."""
 
     missed: bool
     failed: tuple[str, ...]

@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from gcs_planner.autopilot import (
+from gcs_planner.aircraft.autopilot import (
     ARDUPLANE_MODE_AUTO,
     PX4_MAIN_MODE_AUTO,
     PX4_MODE_AUTO_MISSION,
@@ -41,7 +41,8 @@ MAV_STATE_ACTIVE = 4
 MAV_SEVERITY_CRITICAL = 2
 MAV_SEVERITY_WARNING = 4
 MAV_SEVERITY_INFO = 6
-# The mission modes' numbers live in the autopilot records (gcs_planner/autopilot.py); named
+# The mission modes' numbers live in the autopilot records (gcs_planner/aircraft/autopilot.py);
+# named
 # here too for the readers of this module.
 __all__ = [
     "ARDUPLANE_MODE_AUTO", "PX4_MAIN_MODE_AUTO", "PX4_MODE_AUTO_MISSION",

@@ -7,7 +7,8 @@ MISSION_CURRENT at 1 Hz, and hands each message to the part that serves it: the 
 counted in ``handler_errors`` and the vehicle goes on answering.
 
 It serves its firmware's parameters as shipped (:mod:`sim.param_server`, the records of
-:mod:`gcs_planner.autopilot`); :meth:`MockVehicle.autopilot_parameters` gives the flight the
+:mod:`gcs_planner.aircraft.autopilot`); :meth:`MockVehicle.autopilot_parameters` gives the flight
+the
 effective ones. MAV_CMD_MISSION_START and MAV_CMD_DO_SET_MODE to the mission mode (ArduPlane
 AUTO, PX4 AUTO/MISSION: what MAVSDK's ``start_mission()`` sends) start the flight;
 EXTENDED_SYS_STATE says landed (on the ground) until it starts, in the air while it plays, on
@@ -33,12 +34,12 @@ import time
 from collections.abc import Iterable
 from typing import Any
 
-from gcs_planner.autopilot import EffectiveParameters, autopilot_for
+from gcs_planner.aircraft.autopilot import EffectiveParameters, autopilot_for
+from gcs_planner.aircraft.profile import FIRMWARES
 from gcs_planner.link.connection import Link, mavlink
 from gcs_planner.link.pacing import RadioFlow
 from gcs_planner.mission.items import MissionItem
 from gcs_planner.scenario.model import Scenario
-from gcs_planner.vehicle import FIRMWARES
 from sim import replay as replay_mod
 from sim import telemetry
 from sim.faults import FaultInjector, FaultRates
@@ -229,7 +230,7 @@ class MockVehicle:
         """The parameters the flight flies with now (shipped defaults, the scenario's aircraft,
         and whatever the ground station set): cruise airspeed, climb and sink rates, bank limit,
         loiter and acceptance radii, L1 (ArduPlane) or npfg (PX4) constants. See
-        :class:`gcs_planner.autopilot.EffectiveParameters`."""
+        :class:`gcs_planner.aircraft.autopilot.EffectiveParameters`."""
         return self.params.effective
 
     @property

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gcs_planner.vehicle import DRYDEN_SCALE_LENGTH_M
+from gcs_planner.aircraft.profile import DRYDEN_SCALE_LENGTH_M
 
 _BATCH = 4096
 

@@ -17,13 +17,13 @@ import math
 import pytest
 from test_bnb import enumerate_front, turning_scenario
 
-from gcs_planner import plan_json
 from gcs_planner.cli import main
 from gcs_planner.core.bnb import bnb_front
 from gcs_planner.core.budget import Budget, Progress
 from gcs_planner.core.planner import plan
 from gcs_planner.errors import InfeasibleError
-from gcs_planner.progress import SearchProgress
+from gcs_planner.mission import plan_json
+from gcs_planner.runtime.progress import SearchProgress
 from gcs_planner.scenario.generate import random_scenario
 from gcs_planner.scenario.model import Parameters
 

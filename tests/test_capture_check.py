@@ -8,12 +8,12 @@ from __future__ import annotations
 import json
 import math
 
-from gcs_planner.cli import main
-from gcs_planner.vehicle import (
+from gcs_planner.aircraft.profile import (
     DEFAULT_CAPTURE_RADIUS_M,
     DEFAULT_ERROR_UNIT_M,
     TRACKING_ALLOWANCE_M,
 )
+from gcs_planner.cli import main
 
 # Five points 12 km apart: with delta 0.005 each leg adds 60 error units (6 m) to both errors.
 ROWS = [("P0", 0, "A"), ("P1", 12_000, "V"), ("P2", 24_000, "H"), ("P3", 36_000, "V"),

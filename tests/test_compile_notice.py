@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 from helpers import write_scenario_csv
 
-from gcs_planner import compile_notice
+from gcs_planner.runtime import compile_notice
 from gcs_planner.scenario.generate import DATASET1, random_scenario
 
 ENTRY = Path(sys.executable).parent / "gcs-planner"
@@ -168,7 +168,7 @@ def test_the_check_reads_numba_files_without_loading_numba(
     _fake_cache(tmp_path / "other", "0.0.1")
     assert compile_notice.uncached_seconds() == sum(compile_notice.KERNELS.values())
 
-    code = "import sys; from gcs_planner import compile_notice as c; c.uncached_seconds(); "
+    code = "import sys; from gcs_planner.runtime import compile_notice as c; c.uncached_seconds(); "
     code += "print('numba' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"

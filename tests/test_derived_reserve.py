@@ -1,5 +1,5 @@
 """The flight reserve derived from what it must cover (turn entry, gusts) when the envelope is
-derived from the autopilot's terms and nobody states a reserve (gcs_planner/flight_reserve.py),
+derived from the autopilot's terms and nobody states a reserve (gcs_planner/aircraft/reserve.py),
 its line in the plan's summary and its block in the plan JSON; and the mock vehicle's flights
 of the contest routes staying within it."""
 
@@ -13,9 +13,9 @@ import pytest
 from conftest import DATA
 
 from benchmarks.reserve import SHIPPED, TABLE2, flown_at, fly, planned
+from gcs_planner.aircraft.profile import DRYDEN_SCALE_LENGTH_M, ROLL_RESPONSE_S
+from gcs_planner.aircraft.reserve import GUST_MARGIN, MAX_SHARE, DerivedReserve, track_wander
 from gcs_planner.cli import main
-from gcs_planner.flight_reserve import GUST_MARGIN, MAX_SHARE, DerivedReserve, track_wander
-from gcs_planner.vehicle import DRYDEN_SCALE_LENGTH_M, ROLL_RESPONSE_S
 
 DS1 = [f"--{k}={v:g}" for k, v in TABLE2[1].items()]
 AP = [f"--{k.replace('_', '-')}={v:g}" for k, v in SHIPPED["ardupilot"].items()]
@@ -128,8 +128,8 @@ def test_the_mock_vehicle_flies_no_stretch_longer_than_the_derived_reserve_cover
     check of an error stays within the derived reserve, and within the route's own leg-by-leg
     need (its turns, helices and gusts)."""
     from benchmarks.turn_entry import stretches
-    from gcs_planner.flight_reserve import altitude_of
-    from gcs_planner.plan_json import reserve_of
+    from gcs_planner.aircraft.reserve import altitude_of
+    from gcs_planner.mission.plan_json import reserve_of
 
     result = planned(dataset, firmware, wind, gust)
     reserve = result.scenario.params.reserve
@@ -158,8 +158,8 @@ def test_each_autopilot_enters_its_turns_as_late_as_its_guidance() -> None:
     """ArduPlane trails by half its L1 distance (the run-in it settles over) and the roll-in's
     lag at the ground speed, PX4 by half the radius; an autopilot not named by the larger, so
     it holds for either."""
-    from gcs_planner.autopilot import effective
-    from gcs_planner.flight_reserve import late_entry
+    from gcs_planner.aircraft.autopilot import effective
+    from gcs_planner.aircraft.reserve import late_entry
 
     for radius, speed in ((44.0, 20.7), (96.0, 30.7), (400.0, 30.7)):
         l1 = effective("ardupilot", {}).settle_distance(speed)
@@ -256,7 +256,7 @@ def test_the_gusts_wander_is_the_closed_loops_share_of_their_power(period, dampi
 
 def test_gusts_wander_most_into_a_headwind_at_the_lowest_point() -> None:
     """The share is taken at the slowest ground speed: the lowest point's TAS into the wind."""
-    from gcs_planner.vehicle import tas_from_eas
+    from gcs_planner.aircraft.profile import tas_from_eas
 
     b = basis(wind=10.0, slowest_tas=15.0, eas=12.0, wander=0.2)
     assert b.slowest_ground_speed == pytest.approx(5.0)

@@ -10,9 +10,9 @@ import json
 
 import pytest
 
-from gcs_planner.autopilot import effective
+from gcs_planner.aircraft.autopilot import effective
 from gcs_planner.cli import main
-from gcs_planner.dry_run import EXIT_LOST
+from gcs_planner.dryrun.run import EXIT_LOST
 
 DS1 = ["--alpha1", "25", "--alpha2", "15", "--beta1", "20", "--beta2", "25", "--theta", "30",
        "--delta", "0.001", "--max-climb-rate", "5", "--max-sink-rate", "5",
@@ -70,7 +70,8 @@ DS2 = ["--alpha1", "20", "--alpha2", "10", "--beta1", "15", "--beta2", "20", "--
 
 
 def shipped(firmware: str) -> list[str]:
-    """The autopilot's shipped envelope (gcs_planner/autopilot.py), stated as a user planning
+    """The autopilot's shipped envelope (gcs_planner/aircraft/autopilot.py), stated as a user
+    planning
     for it would: dry-run's --firmware names the flown autopilot only."""
     e = effective(firmware, {})
     return ["--cruise-airspeed", f"{e.cruise_airspeed:g}", "--max-bank-angle",

@@ -11,7 +11,7 @@ import pytest
 
 from gcs_planner.cli import main
 from gcs_planner.core.planner import plan
-from gcs_planner.dry_run import EXIT_LOST, dry_run
+from gcs_planner.dryrun.run import EXIT_LOST, dry_run
 from gcs_planner.errors import LinkError
 from gcs_planner.scenario.readers import load_scenario
 
@@ -247,7 +247,7 @@ def test_vehicle_flies_its_own_landmarks_not_the_planners(tmp_path, line_plan):
 
 
 def test_refused_upload_is_never_reported_as_a_success(capsys, line_csv, monkeypatch):
-    import gcs_planner.dry_run as module
+    import gcs_planner.dryrun.run as module
 
     class SmallVehicle(module.MockVehicle):
         """An autopilot that stores fewer items than the mission has."""

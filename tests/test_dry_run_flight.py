@@ -10,7 +10,7 @@ import pytest
 
 from gcs_planner.cli import main
 from gcs_planner.core.planner import plan
-from gcs_planner.dry_run import EXIT_LOST, dry_run
+from gcs_planner.dryrun.run import EXIT_LOST, dry_run
 from gcs_planner.scenario.readers import load_scenario
 
 DS2 = {"alpha1": 20, "alpha2": 10, "beta1": 15, "beta2": 20, "theta": 20, "delta": 0.001}

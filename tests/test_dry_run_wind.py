@@ -10,7 +10,7 @@ import pytest
 
 from gcs_planner.cli import main
 from gcs_planner.core.planner import plan
-from gcs_planner.dry_run import EXIT_LOST, dry_run
+from gcs_planner.dryrun.run import EXIT_LOST, dry_run
 from gcs_planner.scenario.readers import load_scenario
 from sim.wind import WindSpec
 

@@ -14,12 +14,12 @@ from pathlib import Path
 import pytest
 from test_mission_builder import make_plan
 
-from gcs_planner.atomic import write_atomic, write_folder_atomic
 from gcs_planner.cli import main
 from gcs_planner.errors import InputError
 from gcs_planner.mission import export as export_module
 from gcs_planner.mission.builder import build_mission
-from gcs_planner.plan_json import load_plan
+from gcs_planner.mission.plan_json import load_plan
+from gcs_planner.runtime.atomic import write_atomic, write_folder_atomic
 
 ROWS = [("P0", 0, 0, "A"), ("P1", 12_000, 300, "V"), ("P2", 24_000, 0, "H"), ("P3", 36_000, 0, "B")]
 FLAGS = ["--alpha1", "25", "--alpha2", "15", "--beta1", "20", "--beta2", "25", "--theta", "30",

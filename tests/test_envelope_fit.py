@@ -13,14 +13,14 @@ import math
 
 import pytest
 
+from gcs_planner.aircraft.autopilot import effective
 from gcs_planner.aircraft.derive import derive_envelope
-from gcs_planner.autopilot import effective
+from gcs_planner.aircraft.envelope_fit import legs_outside_envelope
+from gcs_planner.aircraft.profile import G, tas_from_eas
 from gcs_planner.cli import build_parser, main
 from gcs_planner.cli.common import load_scenario_from_args, plan_from_args
-from gcs_planner.dry_run import EXIT_LOST, plan_assumptions
-from gcs_planner.envelope_fit import legs_outside_envelope
+from gcs_planner.dryrun.run import EXIT_LOST, plan_assumptions
 from gcs_planner.geometry.trajectory import scenario_trajectory
-from gcs_planner.vehicle import G, tas_from_eas
 
 DS2 = ["--alpha1", "20", "--alpha2", "10", "--beta1", "15", "--beta2", "20", "--theta", "20",
        "--delta", "0.001", "--max-climb-rate", "5", "--max-sink-rate", "5",

@@ -23,6 +23,7 @@ import numpy as np
 import pytest
 
 from gcs_planner.aircraft.derive import derive_envelope
+from gcs_planner.aircraft.profile import DerivedEnvelope, G, tas_from_eas
 from gcs_planner.cli import build_parser
 from gcs_planner.cli.common import load_scenario_from_args
 from gcs_planner.core.planner import plan
@@ -30,7 +31,6 @@ from gcs_planner.errors import InfeasibleError
 from gcs_planner.geometry.airplane import AirplaneLeg
 from gcs_planner.geometry.trajectory import scenario_trajectory
 from gcs_planner.scenario.model import Kind
-from gcs_planner.vehicle import DerivedEnvelope, G, tas_from_eas
 
 TABLE2 = {
     1: ["--alpha1", "25", "--alpha2", "15", "--beta1", "20", "--beta2", "25", "--theta", "30"],

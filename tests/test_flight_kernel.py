@@ -28,7 +28,7 @@ from test_mission_builder import make_plan, steep_scenario
 
 from gcs_planner.core.planner import plan
 from gcs_planner.mission.builder import build_mission
-from gcs_planner.plan_json import plan_to_dict
+from gcs_planner.mission.plan_json import plan_to_dict
 from gcs_planner.scenario.readers import load_scenario
 from sim import flight_kernel
 from sim.aircraft import ROLL_RATE_DEG_S

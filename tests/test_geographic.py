@@ -14,8 +14,8 @@ from pyproj import Geod
 from gcs_planner import load_scenario, plan, write_mission
 from gcs_planner.cli import main
 from gcs_planner.mission.builder import build_mission
+from gcs_planner.mission.plan_json import plan_to_dict
 from gcs_planner.mission.qgc_plan import read_plan
-from gcs_planner.plan_json import plan_to_dict
 from gcs_planner.scenario.georef import LocalFrame
 from gcs_planner.scenario.model import Kind, Origin
 

@@ -9,10 +9,10 @@ import math
 import numpy as np
 import pytest
 
+from gcs_planner.aircraft.profile import VehicleProfile
 from gcs_planner.mission.items import MissionItem
 from gcs_planner.scenario.georef import LocalFrame
 from gcs_planner.scenario.model import Origin
-from gcs_planner.vehicle import VehicleProfile
 from sim.atmosphere import eas2tas
 from sim.guidance import AutopilotParams, fly
 

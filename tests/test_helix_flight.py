@@ -18,15 +18,15 @@ import numpy as np
 import pytest
 from test_mission_builder import make_plan, steep_scenario
 
+from gcs_planner.aircraft.profile import DEFAULT_CAPTURE_RADIUS_M
 from gcs_planner.core.bnb import flown_route
 from gcs_planner.core.planner import plan
 from gcs_planner.geometry.airplane import airplane_leg
 from gcs_planner.mission.builder import build_mission, px4_leaves_on_heading, route_legs
-from gcs_planner.plan_json import plan_to_dict
+from gcs_planner.mission.plan_json import plan_to_dict
 from gcs_planner.scenario.georef import LocalFrame
 from gcs_planner.scenario.model import Kind, Scenario
 from gcs_planner.scenario.readers import load_scenario
-from gcs_planner.vehicle import DEFAULT_CAPTURE_RADIUS_M
 from sim.atmosphere import eas2tas
 from sim.guidance import AutopilotParams
 from sim.replay import replay

@@ -11,10 +11,10 @@ import pytest
 
 pytest.importorskip("jsbsim", reason="the jsbsim extra is not installed (pip install '.[jsbsim]')")
 
+from gcs_planner.aircraft.profile import G, VehicleProfile  # noqa: E402
 from gcs_planner.cli import main  # noqa: E402
-from gcs_planner.dry_run import EXIT_LOST  # noqa: E402
+from gcs_planner.dryrun.run import EXIT_LOST  # noqa: E402
 from gcs_planner.scenario.georef import DEFAULT_ORIGIN, LocalFrame  # noqa: E402
-from gcs_planner.vehicle import G, VehicleProfile  # noqa: E402
 from sim import guidance  # noqa: E402
 from sim.aircraft import AircraftState, Envelope  # noqa: E402
 from sim.jsbsim_airframe import FlightModel, JSBSimAirframe, LegNeed  # noqa: E402

@@ -9,10 +9,10 @@ from pathlib import Path
 
 import pytest
 
-from gcs_planner.atomic import write_atomic
 from gcs_planner.cli import main
 from gcs_planner.errors import InputError
 from gcs_planner.link.connection import check_connection
+from gcs_planner.runtime.atomic import write_atomic
 from sim.vehicle import MockVehicle, free_udp_port
 
 WORKBOOK = Path(__file__).resolve().parents[2] / "shared" / "data" / "gmcm2019f" / "dataset1.xlsx"

@@ -1,4 +1,4 @@
-"""Which lost runs the flight lost (gcs_planner/dry_run.py ``lost_by_the_flight``): a run is
+"""Which lost runs the flight lost (gcs_planner/dryrun/run.py ``lost_by_the_flight``): a run is
 lost by its corrections only where the plan itself, flown as planned with the same outcomes, is
 lost too. Held against the exact probability model: summed over every outcome of a route's
 unreliable points, weighted by its chance, the outcomes the plan survives make up exactly the
@@ -16,7 +16,7 @@ from test_plan_exact import tall_scenario
 
 from gcs_planner.core.bnb import flown_route
 from gcs_planner.core.probability import success_probability
-from gcs_planner.dry_run import lost_by_the_flight
+from gcs_planner.dryrun.run import lost_by_the_flight
 
 
 def _routes(seed: int):

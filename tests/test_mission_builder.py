@@ -15,11 +15,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from gcs_planner import plan_json
-from gcs_planner.autopilot import effective
+from gcs_planner.aircraft.autopilot import effective
 from gcs_planner.core.bnb import flown_route
 from gcs_planner.errors import InputError
 from gcs_planner.geometry.dubins import cs_leg
+from gcs_planner.mission import plan_json
 from gcs_planner.mission.builder import (
     DEFAULT_ACCEPTANCE_RADIUS,
     DEFAULT_CRUISE_SPEED,
@@ -213,8 +213,8 @@ def test_px4_flies_straight_on_beyond_b_when_the_plan_has_no_run_out():
     get_acceptance_radius): the exporter continues the last leg beyond B, on its arrival
     heading at B's altitude, for npfg's settle distance at B's true airspeed (the run-out a
     derived plan keeps at every landmark). A plan with its own run-out keeps it."""
-    from gcs_planner.autopilot import effective
-    from gcs_planner.vehicle import tas_from_eas
+    from gcs_planner.aircraft.autopilot import effective
+    from gcs_planner.aircraft.profile import tas_from_eas
 
     plan = make_plan()
     assert plan["parameters"]["departure"] == 0

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from gcs_planner.autopilot import AUTOPILOTS, effective
+from gcs_planner.aircraft.autopilot import AUTOPILOTS, effective
 from gcs_planner.link.connection import Link, mavlink, open_link
 from gcs_planner.link.mission_client import MissionClient
 from gcs_planner.mission.items import MissionItem

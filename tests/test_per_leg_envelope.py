@@ -21,9 +21,9 @@ from test_plan_exact import TWO, assert_plans_enumeration, enumerate_fronts, tal
 from test_probes import probed_scenario
 from test_search_kernel import assert_compiled_flies_as_python
 
+from gcs_planner.aircraft.profile import DerivedEnvelope
 from gcs_planner.geometry.airplane import LegEnvelope
 from gcs_planner.geometry.legs import AirplaneLegs, leg_envelope, scenario_leg_model
-from gcs_planner.vehicle import DerivedEnvelope
 
 PER_LEG = ("turn_radius", "max_climb_angle", "max_descent_angle")
 

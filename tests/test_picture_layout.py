@@ -15,8 +15,8 @@ import pytest
 from matplotlib.text import Text
 from test_mission_builder import ORIGIN, make_plan
 
-from gcs_planner import plan_json
 from gcs_planner.core.planner import plan as plan_scenario
+from gcs_planner.mission import plan_json
 from gcs_planner.mission.geo_exports import trajectory_local
 from gcs_planner.mission.pictures import (
     DPI,

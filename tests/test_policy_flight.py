@@ -1,4 +1,4 @@
-"""The ground station in the loop flying a contingency policy (gcs_planner/policy_flight.py,
+"""The ground station in the loop flying a contingency policy (gcs_planner/policies/flight.py,
 `gcs-planner fly`, `dry-run --policy`) against the live mock vehicle (sim/live_vehicle.py) over
 UDP loopback: it switches to the branch when the fix at P fails and the vehicle overflies the
 branch's point; with every fix made it stays on the primary; under 5 % link loss; a branch that
@@ -24,7 +24,7 @@ from gcs_planner.link.correction_report import format_report, parse_report
 from gcs_planner.link.mission_client import MissionClient
 from gcs_planner.link.protocol import mission_differences
 from gcs_planner.mission.policy_missions import PolicyMissions
-from gcs_planner.policy_flight import PolicyFlight
+from gcs_planner.policies.flight import PolicyFlight
 from sim.live_flight import passed_within
 from sim.vehicle import MockVehicle, free_udp_port
 

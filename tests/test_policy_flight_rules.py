@@ -11,8 +11,8 @@ import pytest
 
 from gcs_planner.errors import InputError
 from gcs_planner.mission.policy_file import FORMAT, VERSION
-from gcs_planner.policy_dry_run import policy_probability, policy_switch_room
-from gcs_planner.policy_flight import _resume_item
+from gcs_planner.policies.dry_run import policy_probability, policy_switch_room
+from gcs_planner.policies.flight import _resume_item
 from sim.live_vehicle import SETTLE_WALL_S, _Window
 
 # Missions as item lists: the primary and a branch that shares its first four items.

@@ -27,9 +27,9 @@ from gcs_planner.core.replan import replan_on_failure
 from gcs_planner.errors import InfeasibleError, InputError
 from gcs_planner.geometry.legs import scenario_leg_model
 from gcs_planner.mission.items import MAV_CMD_NAV_WAYPOINT
+from gcs_planner.mission.plan_json import plan_to_dict
 from gcs_planner.mission.policy_build import policy_mission_plans, policy_missions
 from gcs_planner.mission.policy_file import read_policy, write_policy
-from gcs_planner.plan_json import plan_to_dict
 from gcs_planner.scenario.model import Kind, Parameters, Scenario
 
 

@@ -386,7 +386,7 @@ def test_paper_route_on_dataset1() -> None:
 
 
 def test_wilson_interval_reaches_its_ends_exactly() -> None:
-    from gcs_planner.confidence import wilson_interval
+    from gcs_planner.dryrun.confidence import wilson_interval
 
     for runs in (1, 7, 100, 1000, 12345):
         assert wilson_interval(runs, runs, 0.99)[1] == 1.0

@@ -89,7 +89,8 @@ def test_the_kernel_shares_the_models_constants() -> None:
     assert dominance_kernel.MAX_UNIONS == dominance.MAX_UNIONS
 
 
-# The kernels' inner functions have no wrapper for Python callers (``gcs_planner.jit.inner``):
+# The kernels' inner functions have no wrapper for Python callers
+# (``gcs_planner.runtime.jit.inner``):
 # the tests call each through a compiled function of their own.
 @njit
 def stochastically_dominates(*args):  # noqa: ANN002, ANN201

@@ -1,4 +1,5 @@
-"""The one progress display (gcs_planner.progress): silent off a terminal and with --quiet, and
+"""The one progress display (gcs_planner.runtime.progress): silent off a terminal and with --quiet,
+and
 on a terminal every redraw leaves exactly the last line on screen (no tail of a longer line
 before it: the old sweep printer showed "ETA 21ss")."""
 
@@ -13,7 +14,7 @@ import pytest
 from gcs_planner.cli import main
 from gcs_planner.core.budget import Progress as Report
 from gcs_planner.link.progress import Progress as TransferProgress
-from gcs_planner.progress import Counter, SearchProgress, StatusLine
+from gcs_planner.runtime.progress import Counter, SearchProgress, StatusLine
 
 
 class FakeTerminal(io.StringIO):

@@ -11,12 +11,12 @@ import numpy as np
 import openpyxl
 import pytest
 
+from gcs_planner.aircraft.profile import DEFAULT_RESERVE_M
 from gcs_planner.core.route import evaluate_route
 from gcs_planner.errors import InputError
 from gcs_planner.scenario.generate import DATASET1, random_scenario
 from gcs_planner.scenario.model import PARAMETER_NAMES, Kind, Origin, Parameters, Scenario
 from gcs_planner.scenario.readers import load_scenario
-from gcs_planner.vehicle import DEFAULT_RESERVE_M
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "gmcm2019f"
 EXAMPLE = Path(__file__).resolve().parents[1] / "missions" / "example"

@@ -17,11 +17,11 @@ import openpyxl
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from gcs_planner.aircraft.profile import DEFAULT_RESERVE_M, DEFAULT_RESERVE_MAX_SHARE
 from gcs_planner.errors import InputError
 from gcs_planner.scenario.generate import DATASET1
 from gcs_planner.scenario.model import PARAMETER_NAMES, Kind, Origin, Parameters, Scenario
 from gcs_planner.scenario.readers import MAX_COORDINATE, SAME_POINT_M, load_scenario
-from gcs_planner.vehicle import DEFAULT_RESERVE_M, DEFAULT_RESERVE_MAX_SHARE
 
 REQUIRED = {k: getattr(DATASET1, k) for k in PARAMETER_NAMES}
 COLUMNS = ["id", "x", "y", "z", "kind", "unreliable"]

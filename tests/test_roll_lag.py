@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from gcs_planner.vehicle import G
+from gcs_planner.aircraft.profile import G
 from sim import flight_kernel as fk
 from sim.aircraft import (
     ROLL_ONE_ARC_DEG_S,

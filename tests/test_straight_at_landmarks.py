@@ -25,7 +25,7 @@ from gcs_planner.geometry.airplane import airplane_leg, tangent_lengths
 from gcs_planner.geometry.legs import AirplaneLegs, leg_model_of, scenario_leg_model
 from gcs_planner.mission.builder import build_mission, resolve_origin
 from gcs_planner.mission.items import HELIX_COMMANDS, MAV_CMD_NAV_WAYPOINT
-from gcs_planner.plan_json import plan_to_dict
+from gcs_planner.mission.plan_json import plan_to_dict
 from gcs_planner.scenario.georef import LocalFrame
 
 
@@ -240,7 +240,7 @@ def _plan_json(capsys, dataset_paths, *extra) -> dict:
 
 
 def test_the_runs_are_derived_from_the_autopilot_and_stated(capsys, dataset_paths) -> None:
-    from gcs_planner.autopilot import effective
+    from gcs_planner.aircraft.autopilot import effective
 
     px4 = _plan_json(capsys, dataset_paths, "--firmware", "px4", "--wind", "5")
     env = px4["vehicle"]["envelope"]

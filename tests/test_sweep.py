@@ -9,10 +9,10 @@ from pathlib import Path
 
 import pytest
 
+from gcs_planner.aircraft.profile import turn_radius_from
 from gcs_planner.cli import main
 from gcs_planner.sweep import expand, read_spec, run_cell
 from gcs_planner.sweep.spec import GeneratedSource
-from gcs_planner.vehicle import turn_radius_from
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLE_SPEC = ROOT / "missions" / "sweep-example.toml"
@@ -253,7 +253,7 @@ def test_failed_cells_have_a_false_chosen_and_columns_carry_units(tmp_path: Path
     (chosen,) = [r for r in rows if r["chosen"]]
     # the level of the interval, as the dry run computed it
     from gcs_planner.core.planner import plan
-    from gcs_planner.dry_run import dry_run
+    from gcs_planner.dryrun.run import dry_run
     from gcs_planner.sweep.task import load_cell_scenario
 
     cell = expand(spec)[1]

@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 from test_mission_builder import make_plan
 
+from gcs_planner.aircraft.profile import tas_from_eas
 from gcs_planner.cli import main
 from gcs_planner.core.bnb import flown_route
 from gcs_planner.core.switch_room import (
@@ -24,7 +25,6 @@ from gcs_planner.core.switch_room import (
 from gcs_planner.mission.builder import build_mission
 from gcs_planner.scenario.generate import DATASET1
 from gcs_planner.scenario.model import Kind, Origin, Scenario
-from gcs_planner.vehicle import tas_from_eas
 from sim.guidance import AutopilotParams
 from sim.live_flight import LiveFlight
 

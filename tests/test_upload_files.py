@@ -31,8 +31,8 @@ def test_a_px4_waypoints_file_is_uploaded_to_a_px4_vehicle(plan_json, tmp_path, 
     # gcs-planner no longer writes PX4 .waypoints (readers disagree on row 0); files written by
     # earlier releases (row 0 home, the items from row 1) are still uploaded as QGC reads them.
     from gcs_planner.mission.builder import build_mission
+    from gcs_planner.mission.plan_json import load_plan
     from gcs_planner.mission.waypoints import dumps_items
-    from gcs_planner.plan_json import load_plan
 
     m = build_mission(load_plan(plan_json), firmware="px4")
     wp = tmp_path / "px4.waypoints"

@@ -94,7 +94,7 @@ def test_a_plan_stated_as_angles_and_a_radius_needs_their_rates(tmp_path, capsys
     data = json.loads(plan.read_text())
     by_name = {n.name: n for n in needs(data, "ardupilot")}
     top = max(p["z"] for p in data["points"])
-    from gcs_planner.vehicle import tas_from_eas
+    from gcs_planner.aircraft.profile import tas_from_eas
 
     vg = tas_from_eas(data["vehicle"]["cruise_airspeed"], top)
     assert by_name["TECS_CLMB_MAX"].least == pytest.approx(vg * math.tan(math.radians(15)))

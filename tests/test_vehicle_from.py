@@ -6,9 +6,9 @@ from __future__ import annotations
 import pytest
 
 import gcs_planner.cli.plan as plan_cli
-from gcs_planner.autopilot import effective
+from gcs_planner.aircraft.autopilot import effective
+from gcs_planner.aircraft.profile import ENVELOPE_PARAMS
 from gcs_planner.cli import main
-from gcs_planner.vehicle import ENVELOPE_PARAMS
 from sim.param_server import parameter_table
 from sim.vehicle import MockVehicle, free_udp_port
 

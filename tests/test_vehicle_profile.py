@@ -11,8 +11,13 @@ import math
 import pytest
 
 import gcs_planner.cli.plan as plan_cli
+from gcs_planner.aircraft.profile import (
+    DerivedEnvelope,
+    isa_density_ratio,
+    parse_wind,
+    tas_from_eas,
+)
 from gcs_planner.cli import main
-from gcs_planner.vehicle import DerivedEnvelope, isa_density_ratio, parse_wind, tas_from_eas
 from sim.param_server import parameter_table
 from sim.vehicle import MockVehicle, free_udp_port
 

@@ -12,11 +12,11 @@ from pathlib import Path
 import pytest
 from pymavlink.mavparm import MAVParmDict
 
+from gcs_planner.aircraft.profile import tas_from_eas
 from gcs_planner.cli import main
 from gcs_planner.errors import InputError
 from gcs_planner.mission import param_files
 from gcs_planner.mission.vehicle_setup import needs
-from gcs_planner.vehicle import tas_from_eas
 from sim.navigators.params import AutopilotParams
 from sim.vehicle import MockVehicle, free_udp_port
 

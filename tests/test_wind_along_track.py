@@ -23,9 +23,9 @@ from test_plan_exact import TWO, assert_plans_enumeration, enumerate_fronts, tal
 from test_probes import probed_scenario
 from test_search_kernel import assert_compiled_flies_as_python
 
+from gcs_planner.aircraft.profile import DerivedEnvelope
 from gcs_planner.geometry.airplane import LegEnvelope, track_factor
 from gcs_planner.geometry.legs import AirplaneLegs, leg_envelope
-from gcs_planner.vehicle import DerivedEnvelope
 
 
 def along_track(scenario, eas: float, bank: float, climb: float, sink: float, wind: float,

@@ -1,4 +1,4 @@
-"""The clock of a plan's time limit stops while numba compiles (gcs_planner.work_clock): the
+"""The clock of a plan's time limit stops while numba compiles (gcs_planner.runtime.work_clock): the
 first plan after an install must not spend its limit on compiling kernels it compiles once."""
 
 from __future__ import annotations
@@ -7,8 +7,8 @@ import time
 
 from numba.core import event
 
-from gcs_planner import work_clock
 from gcs_planner.core.budget import Budget
+from gcs_planner.runtime import work_clock
 
 
 def _compile(seconds: float, nested: bool = False) -> None:

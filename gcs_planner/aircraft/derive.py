@@ -1,7 +1,8 @@
 """The aircraft the plan is for, derived from its autopilot's terms: cruise EAS, bank limit,
 climb and sink rates, the autopilot, the design wind and gust. From them the envelope the legs
 use (turning radius, climb and descent angles), the straight runs at every landmark and the
-flight reserve are derived (:class:`gcs_planner.vehicle.DerivedEnvelope`); what the scenario
+flight reserve are derived (:class:`gcs_planner.aircraft.profile.DerivedEnvelope`); what the
+scenario
 states of its aircraft (turn_radius, the climb angles, cruise_airspeed) wins over an
 autopilot's shipped defaults. The command line and the library build the planning problem
 here, the same way (``gcs-planner plan`` and :func:`gcs_planner.load_scenario`).
@@ -16,11 +17,11 @@ import sys
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 
-from gcs_planner.autopilot import autopilot_for, effective
+from gcs_planner.aircraft.autopilot import autopilot_for, effective
+from gcs_planner.aircraft.profile import DerivedEnvelope, bank_angle_for, parse_wind
+from gcs_planner.aircraft.reserve import MAX_SHARE, DerivedReserve, gust_wander, late_entry
 from gcs_planner.errors import InputError
-from gcs_planner.flight_reserve import MAX_SHARE, DerivedReserve, gust_wander, late_entry
 from gcs_planner.scenario.model import Scenario
-from gcs_planner.vehicle import DerivedEnvelope, bank_angle_for, parse_wind
 
 
 @dataclass(frozen=True)

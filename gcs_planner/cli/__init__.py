@@ -89,7 +89,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _interrupted() -> int:
-    from gcs_planner.interrupt import EXIT_CODE, MESSAGE
+    from gcs_planner.runtime.interrupt import EXIT_CODE, MESSAGE
 
     print(MESSAGE, file=sys.stderr)
     return EXIT_CODE

@@ -9,11 +9,11 @@ import sys
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
+from gcs_planner.aircraft.profile import LEG_MODELS
 from gcs_planner.core.budget import DEFAULT_TIME_LIMIT
+from gcs_planner.core.choose import DEFAULT_MIN_PROBABILITY
 from gcs_planner.errors import InputError
-from gcs_planner.policy import DEFAULT_MIN_PROBABILITY
-from gcs_planner.progress import on_terminal
-from gcs_planner.vehicle import LEG_MODELS
+from gcs_planner.runtime.progress import on_terminal
 
 if TYPE_CHECKING:
     from gcs_planner.core.planner import Plan
@@ -210,7 +210,7 @@ def _suggest_compiling(quiet: bool) -> None:
     compiled them yet (core/bnb/context.first_run): how to make later plans faster."""
     if quiet or not on_terminal(sys.stderr) or "gcs_planner.core.search_kernel" in sys.modules:
         return
-    from gcs_planner.precompile import missing
+    from gcs_planner.runtime.precompile import missing
 
     if missing():
         print(
@@ -270,7 +270,7 @@ def plan_from_args(args: argparse.Namespace, scenario: Scenario) -> Plan:
     from gcs_planner.core.planner import plan
 
     objectives, weights = check_plan_flags(args)
-    from gcs_planner.progress import SearchProgress
+    from gcs_planner.runtime.progress import SearchProgress
 
     # The CLI's 0 is "no limit", as unset is (the library's max_labels=0 allows no label).
     max_labels = getattr(args, "max_labels", None)
@@ -279,7 +279,7 @@ def plan_from_args(args: argparse.Namespace, scenario: Scenario) -> Plan:
         quiet=getattr(args, "quiet", False),
         force=getattr(args, "progress", False),
     )
-    from gcs_planner import compile_notice, interrupt
+    from gcs_planner.runtime import compile_notice, interrupt
 
     # Before the progress display starts (one display on the terminal at a time): a fresh
     # install's first plan compiles for tens of seconds before it can show any progress.

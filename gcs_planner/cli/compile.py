@@ -1,5 +1,5 @@
 """`gcs-planner compile`: compile the planner's numba kernels now, once, rather than at the first
-plan that needs them (gcs_planner/precompile.py)."""
+plan that needs them (gcs_planner/runtime/precompile.py)."""
 
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from gcs_planner.precompile import compile_kernels, missing
+    from gcs_planner.runtime.precompile import compile_kernels, missing
 
     before = missing()
     print("not compiled yet: " + (", ".join(before) if before else "none (all cached)"))

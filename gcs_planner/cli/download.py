@@ -7,11 +7,11 @@ import json
 from dataclasses import asdict
 from pathlib import Path
 
-from gcs_planner.atomic import check_output_file, write_atomic
 from gcs_planner.cli.upload import add_link_arguments, connect_client
 from gcs_planner.errors import InputError, LinkError
 from gcs_planner.mission.items import GLOBAL_FRAMES, POSITION_COMMANDS, MissionItem
 from gcs_planner.mission.waypoints import PX4_REFUSED, dumps_items
+from gcs_planner.runtime.atomic import check_output_file, write_atomic
 
 
 def _items_json(items: list[MissionItem], firmware: str) -> str:

@@ -15,7 +15,7 @@ from gcs_planner.cli.common import (
 )
 from gcs_planner.cli.dry_run_policy import add_policy_arguments, refuse_plan_flags, run_policy
 from gcs_planner.cli.vehicle_from import add_envelope_arguments, derive_envelope
-from gcs_planner.dry_run import (
+from gcs_planner.dryrun.run import (
     DEVIATION_STEP_M,
     DRY_RUN_ACCEPTANCE_RADIUS_M,
     EXIT_LOST,
@@ -24,12 +24,12 @@ from gcs_planner.dry_run import (
     LostRunRow,
     dry_run,
 )
-from gcs_planner.dry_run_track import write_track
+from gcs_planner.dryrun.track import write_track
 from gcs_planner.errors import InputError, LinkError
 from gcs_planner.link.mission_client import FIRMWARES
 from gcs_planner.link.protocol import DEFAULT_TIMEOUT_S
 from gcs_planner.mission.geo_exports import trajectory_local
-from gcs_planner.plan_json import plan_to_dict
+from gcs_planner.mission.plan_json import plan_to_dict
 from sim.replay import CHORD_SHORTFALL, QUANTISATION_M
 from sim.wind import WindSpec
 

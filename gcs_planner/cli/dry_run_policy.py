@@ -1,5 +1,5 @@
 """`gcs-planner dry-run SCENARIO --policy policy.json --runs N`: fly a contingency policy end to
-end with the mock vehicle and the ground station in the loop (gcs_planner/policy_dry_run.py)."""
+end with the mock vehicle and the ground station in the loop (gcs_planner/policies/dry_run.py)."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ from gcs_planner.cli.common import load_scenario_from_args
 from gcs_planner.cli.fly import load_policy
 from gcs_planner.errors import InputError, LinkError
 from gcs_planner.mission import param_files
-from gcs_planner.policy_dry_run import (
+from gcs_planner.policies.dry_run import (
     PolicyDryRunReport,
     check_against_scenario,
     policy_dry_run,

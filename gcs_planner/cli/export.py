@@ -6,7 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from gcs_planner.atomic import write_atomic
+from gcs_planner.core.choose import DEFAULT_MIN_PROBABILITY
 from gcs_planner.errors import InputError
 from gcs_planner.mission.builder import (
     ALTITUDE_FRAMES,
@@ -18,7 +18,7 @@ from gcs_planner.mission.builder import (
 from gcs_planner.mission.export import FORMATS, export
 from gcs_planner.mission.param_files import SETUP_FILES, render_setup
 from gcs_planner.mission.vehicle_setup import needs as setup_needs
-from gcs_planner.policy import DEFAULT_MIN_PROBABILITY
+from gcs_planner.runtime.atomic import write_atomic
 from gcs_planner.scenario.georef import DEFAULT_ORIGIN_WARNING, parse_home, parse_origin
 
 
@@ -118,7 +118,7 @@ def add_risk_arguments(p: argparse.ArgumentParser) -> None:
 
 def risk_check(args: argparse.Namespace, plan: dict) -> str | None:
     """The warning to print for the route being exported, or RiskyRouteError (see policy)."""
-    from gcs_planner.policy import check_exportable
+    from gcs_planner.core.choose import check_exportable
 
     k = plan["chosen"] if args.route_index is None else args.route_index
     if not isinstance(k, int) or not 0 <= k < len(plan["front"]):
@@ -177,8 +177,8 @@ def plan_autopilot(plan: dict) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-    from gcs_planner.atomic import check_output_file
-    from gcs_planner.plan_json import load_plan
+    from gcs_planner.mission.plan_json import load_plan
+    from gcs_planner.runtime.atomic import check_output_file
 
     check_out_suffix(args.fmt, args.out)
     check_output_file(args.out)
@@ -188,7 +188,7 @@ def run(args: argparse.Namespace) -> int:
     setup = setup_needs(plan, args.firmware) if args.fmt in MISSION_FORMATS else []
     unflyable = [f"{n.name}: {n.impossible}" for n in setup if n.impossible]
     if unflyable:
-        from gcs_planner.policy import RiskyRouteError
+        from gcs_planner.core.choose import RiskyRouteError
 
         cannot = f"no {args.firmware} setup flies this plan ({'; '.join(unflyable)})"
         if not args.allow_risky:

@@ -1,5 +1,5 @@
 """`gcs-planner fly POLICY --connect CONN`: the ground station in the loop that flies a
-contingency policy (gcs_planner/policy_flight.py)."""
+contingency policy (gcs_planner/policies/flight.py)."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import sys
 from gcs_planner.cli.upload import add_link_arguments, connect_client
 from gcs_planner.errors import InputError, LinkError
 from gcs_planner.mission.policy_missions import PolicyMissions
-from gcs_planner.policy_flight import DEFAULT_SILENCE_S, PolicyFlight, check_policy
+from gcs_planner.policies.flight import DEFAULT_SILENCE_S, PolicyFlight, check_policy
 
 EPILOG = f"""exit codes: 0 the flight is over (the vehicle disarmed) with every switch the policy
 called for made and confirmed; 2 bad input (a policy file that does not hold together, or whose

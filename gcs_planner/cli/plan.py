@@ -8,7 +8,6 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from gcs_planner.atomic import check_output_dir
 from gcs_planner.cli.common import (
     add_plan_arguments,
     add_scenario_arguments,
@@ -25,12 +24,13 @@ from gcs_planner.cli.vehicle_from import (
 from gcs_planner.mission.param_files import render_setup
 from gcs_planner.mission.vehicle_setup import needs as setup_needs
 from gcs_planner.mission.vehicle_setup import setup_lines, setup_to_dict
+from gcs_planner.runtime.atomic import check_output_dir
 
 if TYPE_CHECKING:
+    from gcs_planner.aircraft.reserve import DerivedReserve
     from gcs_planner.core.planner import Plan
     from gcs_planner.core.route import Route
     from gcs_planner.core.switch_room import SwitchRoom
-    from gcs_planner.flight_reserve import DerivedReserve
     from gcs_planner.scenario.model import Scenario
 
 
@@ -84,8 +84,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from gcs_planner import plan_json
-    from gcs_planner.policy import check_exportable
+    from gcs_planner.core.choose import check_exportable
+    from gcs_planner.mission import plan_json
 
     if args.policy_levels < 1:
         from gcs_planner.errors import InputError
@@ -161,7 +161,7 @@ def run(args: argparse.Namespace) -> int:
     if capture and not args.allow_risky:
         # A correction point the true track may pass outside its capture radius: the mission is
         # likely lost there, so it is not handed out without being asked for.
-        from gcs_planner.policy import RiskyRouteError
+        from gcs_planner.core.choose import RiskyRouteError
 
         raise RiskyRouteError(f"{capture}; not exported: pass --allow-risky to export it anyway")
     if capture:
@@ -171,7 +171,7 @@ def run(args: argparse.Namespace) -> int:
         # No value of the autopilot's parameters flies it: not handed out unasked.
         cannot = f"no {firmware} setup flies this plan ({'; '.join(unflyable)})"
         if not args.allow_risky:
-            from gcs_planner.policy import RiskyRouteError
+            from gcs_planner.core.choose import RiskyRouteError
 
             raise RiskyRouteError(
                 f"{cannot}; not exported: state the aircraft's climb limits (max_climb_angle, "
@@ -291,7 +291,7 @@ def reserve_line(reserve: float, basis: DerivedReserve | None = None) -> str:
 
 def reserve_check_line(result: Plan) -> list[str]:
     """The derived reserve against the chosen route's own stretches, leg by leg."""
-    from gcs_planner.plan_json import reserve_of
+    from gcs_planner.mission.plan_json import reserve_of
 
     check = reserve_of(result).get("chosen_route")
     if not check:
@@ -310,7 +310,7 @@ def reserve_check_line(result: Plan) -> list[str]:
 
 
 def _capture_lines(result: Plan) -> list[str]:
-    from gcs_planner.plan_json import capture_of
+    from gcs_planner.mission.plan_json import capture_of
 
     c = capture_of(result)
     if c["warning"]:

@@ -150,7 +150,7 @@ def run(args: argparse.Namespace) -> int:
             f"must be > 0 (got {args.no_workers_timeout:g})", field="--no-workers-timeout"
         )
 
-    from gcs_planner.interrupt import EXIT_CODE
+    from gcs_planner.runtime.interrupt import EXIT_CODE
     from gcs_planner.sweep import read_spec, run_sweep
     from gcs_planner.sweep.runner import SweepInterrupted
 

@@ -7,7 +7,7 @@ import sys
 from collections.abc import Callable
 from pathlib import Path
 
-from gcs_planner.autopilot import autopilot_for
+from gcs_planner.aircraft.autopilot import autopilot_for
 from gcs_planner.cli.common import add_quiet_argument
 from gcs_planner.errors import LinkError
 from gcs_planner.link.connection import open_link
@@ -194,7 +194,7 @@ def _check_parameters(client: MissionClient, args: argparse.Namespace, firmware:
     needs (``link.vehicle_check``); set them with ``--set-params`` (listed first), else refuse
     naming each parameter, its value and the plan's need."""
     # The plan JSON's reader imports the planner: loaded only for a plan JSON.
-    from gcs_planner.plan_json import load_plan
+    from gcs_planner.mission.plan_json import load_plan
 
     if firmware not in FIRMWARES:
         return
@@ -275,7 +275,7 @@ def _check_setup_beside(client: MissionClient, mission: str, firmware: str) -> N
     plan_path = Path(mission).parent / "plan.json"
     wanted = []
     if plan_path.is_file():
-        from gcs_planner.plan_json import load_plan
+        from gcs_planner.mission.plan_json import load_plan
 
         plan = load_plan(str(plan_path))
         wanted = setup_needs(plan, firmware)

@@ -2,7 +2,8 @@
 climb and sink rates and the autopilot, from flags, ``--vehicle-from CONNECT`` (the autopilot's
 own parameters) or the autopilot's shipped defaults (``--firmware``), and the design wind
 (``--wind``). From them the envelope the legs use (turning radius, climb and descent angles) is
-derived (:class:`gcs_planner.vehicle.DerivedEnvelope`); ``--turn-radius``, ``--max-climb-angle``
+derived (:class:`gcs_planner.aircraft.profile.DerivedEnvelope`); ``--turn-radius``,
+``--max-climb-angle``
 and ``--max-descent-angle`` remain direct statements of the envelope and win over derivation.
 Flags given on the command line win over what the autopilot says."""
 
@@ -12,9 +13,9 @@ import argparse
 import math
 import sys
 
+from gcs_planner.aircraft.autopilot import autopilot_for, effective
 from gcs_planner.aircraft.derive import derive_envelope, with_derived_reserve
-from gcs_planner.autopilot import autopilot_for, effective
-from gcs_planner.vehicle import FIRMWARES
+from gcs_planner.aircraft.profile import FIRMWARES
 
 __all__ = [
     "add_envelope_arguments",
@@ -80,7 +81,7 @@ def add_envelope_arguments(
 def apply_vehicle_from(args: argparse.Namespace) -> None:
     """Fill the autopilot-term flags the user left unset from the vehicle on
     ``args.vehicle_from``: cruise airspeed, bank limit and the rates a mission flies with
-    (:func:`gcs_planner.autopilot.effective`: ArduPlane TECS_CLMB_MAX / TECS_SINK_MAX; PX4
+    (:func:`gcs_planner.aircraft.autopilot.effective`: ArduPlane TECS_CLMB_MAX / TECS_SINK_MAX; PX4
     min(FW_T_CLMB_R_SP, FW_T_CLMB_MAX) and min(FW_T_SINK_R_SP, FW_T_SINK_MAX), the rates its
     position controller gives TECS in missions)."""
     if not getattr(args, "vehicle_from", None):

@@ -11,7 +11,7 @@ work of the limit. It covers the bounds a search builds first too (cost-to-go la
 and failure bounds, the seeds), which are cut short or skipped once it has passed; reading the
 scenario and building its reach graph come before it can act. Progress is reported to a
 callback at most every ``every`` seconds, so a slow terminal never slows the search (the
-console's callback is :class:`gcs_planner.progress.SearchProgress`).
+console's callback is :class:`gcs_planner.runtime.progress.SearchProgress`).
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from gcs_planner import interrupt, work_clock
+from gcs_planner.runtime import interrupt, work_clock
 
 # The defaults of the CLI, plan() and sweeps: a time limit, no label limit. A label count
 # means nothing to a user and stops hard scenarios far short of what a minute proves (issue
@@ -112,7 +112,8 @@ class Budget:
         (``cost_to_go``'s ``stop``).
 
         A Ctrl-C counts as expired: this runs inside the compiled search's ``objmode`` tick,
-        where raising would escape as a SystemError (see :mod:`gcs_planner.interrupt`), so the
+        where raising would escape as a SystemError (see :mod:`gcs_planner.runtime.interrupt`), so
+        the
         search stops cleanly and :meth:`stopped` raises once back in Python."""
         if interrupt.requested():
             return True

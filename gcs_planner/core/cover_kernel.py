@@ -11,7 +11,7 @@ import numpy as np
 
 from gcs_planner.core.kernel_records import Failures
 from gcs_planner.core.probability import PROB_EPS
-from gcs_planner.jit import inner
+from gcs_planner.runtime.jit import inner
 
 MASS_SLACK = 1e-13  # as failure_bounds._MASS_SLACK
 

@@ -10,7 +10,7 @@ import numpy as np
 
 from gcs_planner.core.kernel_records import Pairs
 from gcs_planner.core.probability import PROB_EPS
-from gcs_planner.jit import inner
+from gcs_planner.runtime.jit import inner
 
 MAX_UNIONS = 256  # as bnb.MAX_UNIONS
 

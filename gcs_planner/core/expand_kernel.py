@@ -30,7 +30,7 @@ from gcs_planner.core.cover_kernel import covers, larger, likely, row
 from gcs_planner.core.dominance_kernel import kept_dominates
 from gcs_planner.core.kernel_records import Graph, Nogoods, Pairs, Partial, ToGo
 from gcs_planner.core.key_table_kernel import KeyTable, empty_table, kept_at, put, with_room
-from gcs_planner.jit import inner
+from gcs_planner.runtime.jit import inner
 
 KIND_V, KIND_H = 2, 3
 

@@ -14,7 +14,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from gcs_planner.jit import inner
+from gcs_planner.runtime.jit import inner
 
 # Two odd multipliers below 2**63 (numba types a larger literal as uint64, and int64 times
 # uint64 as a float): products wrap in int64, and the high bits are folded into the low.

@@ -14,7 +14,7 @@ import numpy as np
 from gcs_planner.core.expand_kernel import Labels
 from gcs_planner.core.kernel_records import Nogoods, empty_nogoods
 from gcs_planner.core.key_table_kernel import KeyTable, kept_at, key_table, put, with_room
-from gcs_planner.jit import inner, kernel
+from gcs_planner.runtime.jit import inner, kernel
 
 
 @kernel

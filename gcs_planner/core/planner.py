@@ -13,6 +13,7 @@ from dataclasses import dataclass, field, replace
 
 from gcs_planner.core.bnb import DEFAULT_MAX_LABELS, PROB_EPS, bnb_front, flown_route
 from gcs_planner.core.budget import DEFAULT_TIME_LIMIT, Budget, ProgressCallback
+from gcs_planner.core.choose import DEFAULT_MIN_PROBABILITY, choose_index, default_objectives
 from gcs_planner.core.choose import choose as choose_route
 from gcs_planner.core.diagnose import why_infeasible
 from gcs_planner.core.focus import focus, large
@@ -23,7 +24,6 @@ from gcs_planner.core.search import straight_front
 from gcs_planner.core.seeding import certain_front, reliable_seeds
 from gcs_planner.errors import InfeasibleError
 from gcs_planner.geometry.legs import scenario_leg_model
-from gcs_planner.policy import DEFAULT_MIN_PROBABILITY, choose_index, default_objectives
 from gcs_planner.scenario.model import Scenario
 
 OBJECTIVES = ("length", "corrections", "probability")
@@ -121,7 +121,8 @@ def plan(
 ) -> Plan:
     """Plan a scenario. Raises InfeasibleError (with the reason) when no route exists.
 
-    ``objectives`` None: the policy's (:func:`gcs_planner.policy.default_objectives`). The route
+    ``objectives`` None: the policy's (:func:`gcs_planner.core.choose.default_objectives`). The
+    route
     is chosen among the front routes at least ``min_probability`` likely to arrive; when none
     is, the most reliable one is chosen and ``threshold_met`` is False. The front is reported
     whole either way.

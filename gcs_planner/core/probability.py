@@ -48,8 +48,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gcs_planner.confidence import wilson_interval
 from gcs_planner.core.route import Leg, straight_legs
+from gcs_planner.dryrun.confidence import wilson_interval
 from gcs_planner.scenario.model import Kind, Parameters, Scenario
 
 State = tuple[float, float]

@@ -44,7 +44,7 @@ from gcs_planner.core.kernel_records import (
 )
 from gcs_planner.core.key_table_kernel import KeyTable, kept_at
 from gcs_planner.core.nogood_kernel import NogoodStore, expanded_rows
-from gcs_planner.jit import kernel
+from gcs_planner.runtime.jit import kernel
 
 
 @kernel

@@ -29,7 +29,7 @@ from gcs_planner.core.key_table_kernel import empty_table
 from gcs_planner.core.probability import PROB_EPS
 from gcs_planner.geometry.airplane_kernel import airplane_lengths_each, free_airplane_lengths
 from gcs_planner.geometry.dubins_kernel import cs_lengths
-from gcs_planner.jit import inner, kernel
+from gcs_planner.runtime.jit import inner, kernel
 
 LEGS_ARRAYS, LEGS_PAIRS, LEGS_AIRPLANE, LEGS_CS3D = 0, 1, 2, 3
 # Labels between two looks at the budget (time limit, progress).

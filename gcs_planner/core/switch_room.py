@@ -22,8 +22,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from gcs_planner.aircraft.profile import tas_from_eas
 from gcs_planner.scenario.model import Scenario
-from gcs_planner.vehicle import tas_from_eas
 
 # Seconds from the fix to the branch flying: the report (sent three times, 0.5 s apart), the
 # upload of a mission of ~150 items and its read-back over a telemetry radio with some loss

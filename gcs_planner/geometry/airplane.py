@@ -35,14 +35,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gcs_planner.geometry.dubins import COINCIDENT_M, TWO_PI, _core
-from gcs_planner.vehicle import (
+from gcs_planner.aircraft.profile import (
     ISA_DENSITY_EXPONENT,
     ISA_LAPSE_K_PER_M,
     ISA_T0_K,
     ISA_TROPOPAUSE_M,
 )
-from gcs_planner.vehicle import G as G_MSS
+from gcs_planner.aircraft.profile import G as G_MSS
+from gcs_planner.geometry.dubins import COINCIDENT_M, TWO_PI, _core
 
 # Rounding slack on "steep enough for a helix": a leg needing 1e-9 m more horizontal path than it
 # has is flown without one (the difference is far below anything an aircraft can fly).

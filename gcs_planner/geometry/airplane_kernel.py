@@ -17,7 +17,7 @@ import numpy as np
 from gcs_planner.geometry.airplane import STEEP_SLACK_M
 from gcs_planner.geometry.dubins import COINCIDENT_M, TWO_PI
 from gcs_planner.geometry.dubins_kernel import cs_arc
-from gcs_planner.jit import inner, kernel
+from gcs_planner.runtime.jit import inner, kernel
 
 
 @kernel

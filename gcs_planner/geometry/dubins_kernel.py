@@ -10,7 +10,7 @@ import math
 import numpy as np
 
 from gcs_planner.geometry.dubins import COINCIDENT_M, STRAIGHT_TOL, TWO_PI
-from gcs_planner.jit import inner, kernel
+from gcs_planner.runtime.jit import inner, kernel
 
 
 @inner

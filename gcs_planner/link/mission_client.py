@@ -40,6 +40,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from gcs_planner.aircraft.profile import FIRMWARE_OF_AUTOPILOT, FIRMWARES, LOITER_RADIUS_PARAM
 from gcs_planner.errors import InputError, LinkError
 from gcs_planner.link.connection import Link, mavlink
 from gcs_planner.link.ftp import (
@@ -81,7 +82,6 @@ from gcs_planner.link.protocol import (
 from gcs_planner.link.rtt import RoundTrip
 from gcs_planner.link.validate import item_problem
 from gcs_planner.mission.items import MAV_MISSION_TYPE_MISSION, MissionItem
-from gcs_planner.vehicle import FIRMWARE_OF_AUTOPILOT, FIRMWARES, LOITER_RADIUS_PARAM
 
 # Requests outstanding at once when a download starts (MAVProxy keeps five); the window then
 # follows the link (pacing.Window). The shortest wait before a resend however fast the link

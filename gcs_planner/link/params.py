@@ -9,10 +9,10 @@ from __future__ import annotations
 import math
 import time
 
+from gcs_planner.aircraft.profile import LOITER_RADIUS_PARAM
 from gcs_planner.errors import LinkError
 from gcs_planner.link.connection import Link, mavlink
 from gcs_planner.link.protocol import DEFAULT_RETRIES, DEFAULT_TIMEOUT_S
-from gcs_planner.vehicle import LOITER_RADIUS_PARAM
 
 # name and MAV_PARAM_TYPE of the loiter radius, per firmware.
 LOITER_RADIUS = LOITER_RADIUS_PARAM

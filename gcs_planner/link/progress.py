@@ -1,12 +1,12 @@
 """The transfer bar of upload and download: items sent or read out of the mission's count, the
-rate and the time left, on stderr (see :mod:`gcs_planner.progress`, the one display of every
+rate and the time left, on stderr (see :mod:`gcs_planner.runtime.progress`, the one display of every
 command); silent when stderr is not a terminal or the user asked for quiet."""
 
 from __future__ import annotations
 
 from typing import TextIO
 
-from gcs_planner.progress import Counter
+from gcs_planner.runtime.progress import Counter
 
 
 class Progress(Counter):

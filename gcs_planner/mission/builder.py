@@ -64,6 +64,14 @@ from typing import Any
 
 import numpy as np
 
+from gcs_planner.aircraft.profile import (
+    DEFAULT_ACCEPTANCE_RADIUS_M,
+    DEFAULT_CRUISE_AIRSPEED,
+    FIRMWARES,
+    LOITER_RADIUS_PARAM,
+    MAX_ARC_STEP_DEG,
+    MAX_CHORD_ERROR_M,
+)
 from gcs_planner.errors import InputError
 from gcs_planner.geometry.airplane import AirplaneLeg
 from gcs_planner.geometry.legs import FlownLeg
@@ -83,14 +91,6 @@ from gcs_planner.mission.items import (
 )
 from gcs_planner.scenario.georef import DEFAULT_ORIGIN, LocalFrame, validate_origin
 from gcs_planner.scenario.model import Origin
-from gcs_planner.vehicle import (
-    DEFAULT_ACCEPTANCE_RADIUS_M,
-    DEFAULT_CRUISE_AIRSPEED,
-    FIRMWARES,
-    LOITER_RADIUS_PARAM,
-    MAX_ARC_STEP_DEG,
-    MAX_CHORD_ERROR_M,
-)
 
 # The waypoint acceptance radius (param2 of each correction waypoint): within it the autopilot
 # counts the waypoint reached. 50 m is a quarter of the 200 m turning radius: loose enough that a
@@ -787,8 +787,8 @@ def _px4_run_out_beyond_b(
     None for straight legs."""
     if radius <= 0 or not isinstance(last, AirplaneLeg):
         return None
-    from gcs_planner.autopilot import effective
-    from gcs_planner.vehicle import tas_from_eas
+    from gcs_planner.aircraft.autopilot import effective
+    from gcs_planner.aircraft.profile import tas_from_eas
 
     ground_speed = tas_from_eas(eas, float(last.end[2]) + base_alt) + plan_design_wind(plan, source)
     return _straight_on_beyond_b(last, effective("px4", {}).settle_distance(ground_speed))

@@ -11,13 +11,13 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
-from gcs_planner.atomic import write_atomic, write_folder_atomic
 from gcs_planner.errors import InputError
 from gcs_planner.mission.builder import Mission, build_mission
 from gcs_planner.mission.geo_exports import csv_text, geojson_text, kml_text
 from gcs_planner.mission.param_files import SETUP_FILES
 from gcs_planner.mission.qgc_plan import dumps_plan
 from gcs_planner.mission.waypoints import dumps_waypoints
+from gcs_planner.runtime.atomic import write_atomic, write_folder_atomic
 
 # format -> (file name in write_all, renderer of the file's content)
 FORMATS: dict[str, tuple[str, Callable[[dict, Mission], str | bytes]]] = {

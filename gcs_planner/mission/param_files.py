@@ -21,7 +21,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from gcs_planner.autopilot import PARAM_TYPE_REAL32, autopilot_for
+from gcs_planner.aircraft.autopilot import PARAM_TYPE_REAL32, autopilot_for
 from gcs_planner.errors import InputError
 from gcs_planner.mission.vehicle_setup import ParameterNeed
 

@@ -29,8 +29,8 @@ from gcs_planner.core.bnb.flown import flown_route
 from gcs_planner.core.contingency import Policy, validate
 from gcs_planner.errors import GcsPlannerError
 from gcs_planner.mission.builder import Mission, build_mission
+from gcs_planner.mission.plan_json import route_to_dict
 from gcs_planner.mission.policy_missions import PolicyMissions, Switch
-from gcs_planner.plan_json import route_to_dict
 from gcs_planner.scenario.model import Scenario
 
 PRIMARY = "primary"

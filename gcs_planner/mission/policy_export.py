@@ -137,9 +137,9 @@ def make_policy(
 def _capture_warning(scenario: Scenario, points: tuple[int, ...]) -> str | None:
     """The plan's capture check (core/capture.py) over a branch mission's whole path: the
     worst error on arrival over its correction outcomes against the capture radius."""
+    from gcs_planner.aircraft.profile import TRACKING_ALLOWANCE_M
     from gcs_planner.core.bnb.flown import flown_route
     from gcs_planner.core.capture import capture_check, capture_warning
-    from gcs_planner.vehicle import TRACKING_ALLOWANCE_M
 
     s = scenario
     stops = flown_route(s, points).stops
@@ -199,7 +199,7 @@ def check_policy_exportable(
 ) -> str | None:
     """As policy.check_exportable, for the policy's probability of arriving: RiskyRouteError
     below ``min_probability`` unless allowed, a warning below the safe default."""
-    from gcs_planner.policy import DEFAULT_MIN_PROBABILITY, PROB_EPS, RiskyRouteError
+    from gcs_planner.core.choose import DEFAULT_MIN_PROBABILITY, PROB_EPS, RiskyRouteError
 
     p = exp.value.probability
     said = (

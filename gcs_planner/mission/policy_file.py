@@ -15,14 +15,14 @@ import os
 from pathlib import Path
 from typing import Any
 
-from gcs_planner.atomic import write_atomic
+from gcs_planner.aircraft.profile import FIRMWARES
 from gcs_planner.core.contingency import Policy, PolicyValue
 from gcs_planner.errors import InputError
 from gcs_planner.mission.builder import ALTITUDE_FRAMES, END_ACTIONS, Mission
 from gcs_planner.mission.items import MissionItem
 from gcs_planner.mission.policy_missions import PolicyMissions, Switch
+from gcs_planner.runtime.atomic import write_atomic
 from gcs_planner.scenario.model import Kind, Origin, Scenario
-from gcs_planner.vehicle import FIRMWARES
 
 FORMAT = "gcs-planner-policy"
 VERSION = 1
@@ -309,7 +309,7 @@ def _switch(r: _Reader, d: Any, field: str, missions: dict[str, Mission]) -> Swi
 
 def load_policy_dict(path: str | os.PathLike[str]) -> dict[str, Any]:
     """The JSON object of a policy file, its format and version checked."""
-    from gcs_planner.plan_json import read_json
+    from gcs_planner.mission.plan_json import read_json
 
     data = read_json(path, "policy JSON")
     r = _Reader(str(path))

@@ -19,7 +19,7 @@ import os
 from pathlib import Path
 from typing import Any
 
-from gcs_planner.atomic import write_atomic
+from gcs_planner.aircraft.profile import AUTOPILOT_IDS
 from gcs_planner.errors import InputError
 from gcs_planner.mission.builder import HOVER_SPEED, Mission
 from gcs_planner.mission.items import (
@@ -31,7 +31,7 @@ from gcs_planner.mission.items import (
     MissionFile,
     MissionItem,
 )
-from gcs_planner.vehicle import AUTOPILOT_IDS
+from gcs_planner.runtime.atomic import write_atomic
 
 MAV_AUTOPILOT = AUTOPILOT_IDS
 MAV_TYPE_FIXED_WING = 1

@@ -35,8 +35,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from gcs_planner.autopilot import autopilot_for
-from gcs_planner.vehicle import UNLIMITED_ANGLE_DEG, G, tas_from_eas
+from gcs_planner.aircraft.autopilot import autopilot_for
+from gcs_planner.aircraft.profile import UNLIMITED_ANGLE_DEG, G, tas_from_eas
 
 # Slack for rates and angles written and read back as float32.
 _SLACK = 1e-4

@@ -26,7 +26,6 @@ from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
 
-from gcs_planner.atomic import write_atomic
 from gcs_planner.errors import InputError
 from gcs_planner.mission.builder import FIRMWARES, Mission
 from gcs_planner.mission.items import (
@@ -36,6 +35,7 @@ from gcs_planner.mission.items import (
     MissionFile,
     MissionItem,
 )
+from gcs_planner.runtime.atomic import write_atomic
 
 HEADER = "QGC WPL 110"
 FIELDS = (

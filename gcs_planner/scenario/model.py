@@ -12,8 +12,7 @@ from enum import IntEnum
 
 import numpy as np
 
-from gcs_planner.flight_reserve import DerivedReserve
-from gcs_planner.vehicle import (
+from gcs_planner.aircraft.profile import (
     DEFAULT_CAPTURE_RADIUS_M,
     DEFAULT_CRUISE_AIRSPEED,
     DEFAULT_ERROR_UNIT_M,
@@ -21,6 +20,7 @@ from gcs_planner.vehicle import (
     DerivedEnvelope,
     VehicleProfile,
 )
+from gcs_planner.aircraft.reserve import DerivedReserve
 
 
 class Kind(IntEnum):

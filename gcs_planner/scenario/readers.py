@@ -18,10 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from gcs_planner.errors import InputError
-from gcs_planner.scenario import csv_reader, geographic, toml_reader
-from gcs_planner.scenario.model import PARAMETER_NAMES, Kind, Origin, Parameters, Scenario
-from gcs_planner.vehicle import (
+from gcs_planner.aircraft.profile import (
     DEFAULT_CRUISE_AIRSPEED,
     DEFAULT_LEG_MODEL,
     DEFAULT_RESERVE_M,
@@ -30,6 +27,9 @@ from gcs_planner.vehicle import (
     MAX_BANK_DEG,
     turn_radius_from,
 )
+from gcs_planner.errors import InputError
+from gcs_planner.scenario import csv_reader, geographic, toml_reader
+from gcs_planner.scenario.model import PARAMETER_NAMES, Kind, Origin, Parameters, Scenario
 
 COMMAND_LINE = "command line"
 PARAMETER_KEYS = tuple(f.name for f in fields(Parameters))

@@ -16,8 +16,8 @@ import json
 from pathlib import Path
 
 from gcs_planner import __version__
-from gcs_planner.atomic import write_atomic
 from gcs_planner.errors import InputError
+from gcs_planner.runtime.atomic import write_atomic
 from gcs_planner.sweep.cells import Cell
 from gcs_planner.sweep.spec import SweepSpec
 

@@ -33,7 +33,7 @@ from pathlib import Path
 from typing import TextIO
 
 from gcs_planner.errors import InputError
-from gcs_planner.progress import Counter
+from gcs_planner.runtime.progress import Counter
 from gcs_planner.sweep.batch import Batcher, error_row, run_batch
 from gcs_planner.sweep.cells import Cell, expand
 from gcs_planner.sweep.spec import ClusterSpec, SweepSpec, read_spec

@@ -59,6 +59,7 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
+from gcs_planner.aircraft.profile import LEG_MODELS, MAX_BANK_DEG
 from gcs_planner.core.budget import DEFAULT_MAX_LABELS, DEFAULT_TIME_LIMIT
 from gcs_planner.core.choose import CHOICES
 from gcs_planner.core.planner import OBJECTIVES
@@ -67,7 +68,6 @@ from gcs_planner.scenario.generate import DATASET1, DATASET2
 from gcs_planner.scenario.model import Parameters
 from gcs_planner.scenario.readers import PARAMETER_KEYS
 from gcs_planner.scenario.toml_reader import load_toml
-from gcs_planner.vehicle import LEG_MODELS, MAX_BANK_DEG
 
 if sys.version_info >= (3, 11):
     pass

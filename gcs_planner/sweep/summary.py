@@ -15,7 +15,7 @@ import statistics
 from collections import defaultdict
 from pathlib import Path
 
-from gcs_planner.atomic import write_atomic
+from gcs_planner.runtime.atomic import write_atomic
 
 # Beyond this many scenarios, individual lines become noise: show the median and a band.
 MAX_LINES = 12

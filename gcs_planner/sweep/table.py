@@ -1,6 +1,7 @@
 """The result table: one row per cell and front route, as DIR/results.parquet and results.csv.
 
-Both files are rewritten whole and atomically (gcs_planner.atomic), so whatever moment a sweep is
+Both files are rewritten whole and atomically (gcs_planner.runtime.atomic), so whatever moment a
+sweep is
 stopped at, each file is a complete table of the cells finished by its last write — which is all
 ``--resume`` needs to know what is done. The columns are fixed, so a table with only failed cells
 still reads with the same schema in pandas, polars or DuckDB.
@@ -15,8 +16,8 @@ import pyarrow as pa
 import pyarrow.csv as pa_csv
 import pyarrow.parquet as pq
 
-from gcs_planner.atomic import write_atomic
 from gcs_planner.errors import InputError
+from gcs_planner.runtime.atomic import write_atomic
 from gcs_planner.sweep.task import PARAMETER_FIELDS
 
 PARQUET = "results.parquet"

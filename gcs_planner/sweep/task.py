@@ -16,12 +16,12 @@ import socket
 import time
 from datetime import datetime, timezone
 
+from gcs_planner.aircraft.profile import turn_radius_from
 from gcs_planner.errors import InfeasibleError
 from gcs_planner.scenario.model import Scenario
 from gcs_planner.scenario.readers import PARAMETER_KEYS
 from gcs_planner.sweep.cells import Cell
 from gcs_planner.sweep.spec import BASE_PARAMETERS, FileSource, GeneratedSource
-from gcs_planner.vehicle import turn_radius_from
 
 # Every planning parameter of a scenario (the reserve included), swept alike on files and on
 # generated scenarios, each a column of the table.
@@ -143,7 +143,7 @@ def run_cell(cell: Cell) -> list[dict]:
 def _replay(result, cell: Cell) -> dict:
     """The optional dry-run step: the chosen route replayed ``dry_run_runs`` times on the mock
     vehicle, whose landmark database is the scenario loaded a second time (as `dry-run` does)."""
-    from gcs_planner.dry_run import dry_run
+    from gcs_planner.dryrun.run import dry_run
 
     landmarks = load_cell_scenario(cell)
     report = dry_run(result, landmarks, runs=cell.dry_run_runs, seed=cell.dry_run_seed)

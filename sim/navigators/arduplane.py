@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import math
 
-from gcs_planner.vehicle import G
+from gcs_planner.aircraft.profile import G
 from sim.navigators.base import (
     L1_DAMPING,
     L1_PERIOD_S,

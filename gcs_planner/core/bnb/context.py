@@ -13,7 +13,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from gcs_planner.compile_notice import kernel_cached
 from gcs_planner.core.bnb.flown import _compiled_flight, flown_route
 from gcs_planner.core.bnb.incumbents import Ceiling, Found
 from gcs_planner.core.budget import Budget
@@ -24,6 +23,7 @@ from gcs_planner.core.probability import success_probability
 from gcs_planner.core.reach import ReachGraph, build_reach_graph
 from gcs_planner.core.route import Leg, evaluate_route
 from gcs_planner.geometry.legs import LegModel, scenario_leg_model
+from gcs_planner.runtime.compile_notice import kernel_cached
 from gcs_planner.scenario.model import Kind, Scenario
 
 if TYPE_CHECKING:

@@ -14,7 +14,6 @@ from typing import NamedTuple
 
 import numpy as np
 
-from gcs_planner import work_clock
 from gcs_planner.core.bnb.context import _Context
 from gcs_planner.core.bnb.dominance import _dominated_by, _kept, _key, _larger
 from gcs_planner.core.bnb.incumbents import BnbResult, Found, _dominated, _Incumbents
@@ -24,6 +23,7 @@ from gcs_planner.core.prefilter import FanBound, covered_fan
 from gcs_planner.core.probability import propagate
 from gcs_planner.core.proof import lower_bounds, settled
 from gcs_planner.geometry.legs import KernelLegs
+from gcs_planner.runtime import work_clock
 from gcs_planner.scenario.model import Kind
 
 # Critical points the compiled search and probes carry as bits of a mask.

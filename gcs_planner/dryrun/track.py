@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from gcs_planner.atomic import write_atomic
+from gcs_planner.runtime.atomic import write_atomic
 from gcs_planner.scenario.model import Scenario
 from sim import replay as replay_mod
 

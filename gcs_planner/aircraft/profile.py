@@ -16,11 +16,11 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from gcs_planner.autopilot import AUTOPILOTS
+from gcs_planner.aircraft.autopilot import AUTOPILOTS
 
 # MAV_PARAM_TYPE: INT16 = 4, REAL32 = 9 (re-exported: the link and the mock name them from here).
-from gcs_planner.autopilot import PARAM_TYPE_INT16 as PARAM_TYPE_INT16
-from gcs_planner.autopilot import PARAM_TYPE_REAL32 as PARAM_TYPE_REAL32
+from gcs_planner.aircraft.autopilot import PARAM_TYPE_INT16 as PARAM_TYPE_INT16
+from gcs_planner.aircraft.autopilot import PARAM_TYPE_REAL32 as PARAM_TYPE_REAL32
 
 # Standard gravity (m/s^2), as both autopilots use for the bank/turn-rate relation.
 G = 9.80665
@@ -28,12 +28,12 @@ G = 9.80665
 # constant (s). The autopilots' roll loops ask for it over ArduPlane RLL2SRV_TCONST 0.5 s and
 # PX4 FW_R_TC 0.4 s; the airframe lags the rate asked (JSBSim's c172r under those loops: 0.8 s,
 # sim/aircraft.py). The mock vehicle rolls at it, and a turn is entered about this long late
-# (the derived reserve, gcs_planner/flight_reserve.py).
+# (the derived reserve, gcs_planner/aircraft/reserve.py).
 ROLL_RESPONSE_S = 0.8
 # The gusts' scale length (m): MIL-F-8785C's Dryden model above 2,000 ft (1,750 ft). A gust
 # stays correlated for this many metres of air flown through (its time, L / TAS); the dry run
 # draws its gusts with it (sim/wind.py) and the derived reserve counts their wander with it
-# (gcs_planner/flight_reserve.py).
+# (gcs_planner/aircraft/reserve.py).
 DRYDEN_SCALE_LENGTH_M = 533.0
 
 # The leg models (docs/model.md, "Leg geometry"). "airplane" is the default whenever R > 0;
@@ -55,7 +55,8 @@ MAX_BANK_DEG = 60.0
 # ---------------------------------------------------------------------------------------------
 # Autopilot words
 
-# Each firmware's rules live in its record (gcs_planner/autopilot.py); these are the words the
+# Each firmware's rules live in its record (gcs_planner/aircraft/autopilot.py); these are the words
+# the
 # link, the exporters and the mock vehicle have always used, read from there.
 FIRMWARES = tuple(AUTOPILOTS)
 # MAV_AUTOPILOT enum values (common.xml): ARDUPILOTMEGA = 3, PX4 = 12.

@@ -1,6 +1,6 @@
 """The dry run of a contingency policy: each run is a flight of the mock vehicle (a live one,
 sim/live_vehicle.py) on UDP loopback with the ground station in the loop
-(gcs_planner/policy_flight.py) switching missions in flight, through the link losses asked for.
+(gcs_planner/policies/flight.py) switching missions in flight, through the link losses asked for.
 The success rate, with its Wilson interval, is set against the policy's exact probability.
 
 Time: the vehicle flies ``time_scale`` simulated seconds per wall second (sim/live_vehicle.py)
@@ -21,13 +21,13 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from gcs_planner.confidence import wilson_interval
+from gcs_planner.dryrun.confidence import wilson_interval
 from gcs_planner.errors import InputError, LinkError
 from gcs_planner.link.connection import open_link
 from gcs_planner.link.mission_client import MissionClient
 from gcs_planner.link.params import set_parameter
 from gcs_planner.mission.policy_missions import PolicyMissions
-from gcs_planner.policy_flight import PolicyFlight
+from gcs_planner.policies.flight import PolicyFlight
 from gcs_planner.scenario.model import Kind, Scenario
 from sim.faults import FaultRates
 from sim.guidance import nav_commands

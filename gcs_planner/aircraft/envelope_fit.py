@@ -31,11 +31,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from gcs_planner.aircraft.profile import G, tas_from_eas
 from gcs_planner.geometry.airplane import AirplaneLeg, track_factor, wind_towards
 from gcs_planner.geometry.legs import path_angle_deg
 from gcs_planner.geometry.trajectory import scenario_trajectory
 from gcs_planner.scenario.model import Kind, Scenario
-from gcs_planner.vehicle import G, tas_from_eas
 
 # A leg at its limit in the design wind is at it to the last bits of a float: the search
 # compares the same numbers, the check recomputes them through another path.

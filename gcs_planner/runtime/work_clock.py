@@ -15,7 +15,7 @@ import threading
 import time
 from typing import Any
 
-from gcs_planner.compile_notice import when_numba_loads
+from gcs_planner.runtime.compile_notice import when_numba_loads
 
 _lock = threading.Lock()
 _compiled = 0.0  # seconds of compiles that have ended, in this process

@@ -27,7 +27,7 @@ Sources (read, modelled, not copied):
   FW_T_SINK_MAX), ``px4_custom_mode.h`` (main mode AUTO 4, sub mode MISSION 4).
 
 This module imports nothing of the planner, the link or the simulator (like
-:mod:`gcs_planner.vehicle`, which states its words from it), so every room can import it.
+:mod:`gcs_planner.aircraft.profile`, which states its words from it), so every room can import it.
 """
 
 from __future__ import annotations

@@ -40,11 +40,11 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
-from gcs_planner.autopilot import effective
+from gcs_planner.aircraft.autopilot import effective
+from gcs_planner.aircraft.envelope_fit import LegShortfall, legs_outside_envelope
 from gcs_planner.core.planner import Plan
 from gcs_planner.core.probability import outcomes
 from gcs_planner.core.route import Route
-from gcs_planner.envelope_fit import LegShortfall, legs_outside_envelope
 from gcs_planner.errors import LinkError
 from gcs_planner.link.connection import mavlink, open_link
 from gcs_planner.link.mission_client import MissionClient
@@ -54,8 +54,8 @@ from gcs_planner.link.vehicle_check import Shortfall, refusal, shortfalls
 from gcs_planner.mission.builder import build_mission
 from gcs_planner.mission.geo_exports import trajectory_local
 from gcs_planner.mission.items import HELIX_COMMANDS
+from gcs_planner.mission.plan_json import plan_to_dict
 from gcs_planner.mission.vehicle_setup import needs as setup_needs
-from gcs_planner.plan_json import plan_to_dict
 from gcs_planner.scenario.model import Parameters, Scenario
 from sim import replay as replay_mod
 from sim.faults import FaultRates
@@ -188,7 +188,8 @@ class DryRunReport:
     flight_model: str = "point mass"
     airframe_limits: tuple[str, ...] = ()
     airframe_shortfalls: tuple[str, ...] = ()
-    # Checked before the flight (gcs_planner/envelope_fit.py): every leg that does not fit the
+    # Checked before the flight (gcs_planner/aircraft/envelope_fit.py): every leg that does not fit
+    # the
     # plan's aircraft's envelope in the wind flown (``envelope_wind`` m/s, any direction), with
     # what it needs and what the aircraft can do; None when the plan states no aircraft in
     # the autopilot's terms (no envelope to derive: the flight is the only judge).

@@ -13,7 +13,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 
-from gcs_planner.compile_notice import kernel_cached
+from gcs_planner.runtime.compile_notice import kernel_cached
 
 # (module, function, what it is for), in the order they are compiled.
 KERNELS = (

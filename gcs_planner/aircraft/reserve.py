@@ -12,7 +12,7 @@ An aircraft under its autopilot flies more than the planned legs between two res
   autopilot's: ArduPlane's L1 controller steers at a point L1 = NAVL1_PERIOD * NAVL1_DAMPING *
   Vg / pi ahead on the chord of the densified arc it is flying (AP_L1_Control::update_waypoint),
   so it trails the arc by L1 / 2, and the aircraft's bank follows the bank asked as a lag of
-  tau = ROLL_RESPONSE_S (gcs_planner/vehicle.py), which starts each turn about tau late:
+  tau = ROLL_RESPONSE_S (gcs_planner/aircraft/profile.py), which starts each turn about tau late:
   d = L1 / 2 + tau Vg. (L1 / 2 alone fell short once the mock rolled into its turns: dataset 2
   at 10 m/s needed 0.55 L1 in its turns; benchmarks/turn_entry.py.)
   PX4's npfg (npfg.cpp) steers along the path within its track error bound and turns within a
@@ -54,7 +54,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-from gcs_planner.vehicle import (
+from gcs_planner.aircraft.profile import (
     DEFAULT_RESERVE_MAX_SHARE,
     DRYDEN_SCALE_LENGTH_M,
     ROLL_RESPONSE_S,
@@ -298,7 +298,7 @@ def late_entry(
     NAVL1_DAMPING), else the shipped defaults."""
     # ArduPlane's L1 trails the arc; both autopilots' aircraft roll in over ROLL_RESPONSE_S,
     # which npfg's R/2 already holds (it turns within a few metres of the arc).
-    from gcs_planner.autopilot import effective
+    from gcs_planner.aircraft.autopilot import effective
 
     own = dict(values or {}) if autopilot == "ardupilot" else {}
     l1 = effective("ardupilot", own).settle_distance(ground_speed)
@@ -353,7 +353,7 @@ def gust_wander(
     loop passes most of it); None: the larger of both autopilots'. ``values``: the vehicle's
     own parameters (its NAVL1_PERIOD / NAVL1_DAMPING or NPFG_PERIOD / NPFG_DAMPING), else the
     shipped defaults."""
-    from gcs_planner.autopilot import effective
+    from gcs_planner.aircraft.autopilot import effective
 
     tau = DRYDEN_SCALE_LENGTH_M / max(tas, 1.0)
     ap = effective("ardupilot", dict(values or {}) if autopilot == "ardupilot" else {})
@@ -380,7 +380,7 @@ def gust_wander(
 def _tuned(firmware: str, values: Mapping[str, float] | None) -> str:
     """The text ``" (the vehicle's NAVL1_PERIOD 20, ...)"`` for the guidance parameters
     ``values`` gives, ``""`` when it gives none (the shipped defaults)."""
-    from gcs_planner.autopilot import autopilot_for
+    from gcs_planner.aircraft.autopilot import autopilot_for
 
     given = [f"{k} {float(values[k]):g}" for k in autopilot_for(firmware).guidance
              if values and k in values]  # fmt: skip
