@@ -190,3 +190,17 @@ def test_arduplane_ignores_and_px4_clamps_a_speed_outside_its_range():
     assert px4.commanded_airspeed(25.0) == 20.0 and px4.commanded_airspeed(5.0) == 10.0
     set_up = AutopilotParams.from_parameters("ardupilot", {"AIRSPEED_MAX": 30.0})
     assert set_up.commanded_airspeed(25.0) == 25.0
+
+
+def test_a_stated_envelope_is_set_up_for_its_design_wind(tmp_path):
+    """plan --wind 5 of the coast (angles stated, not derived): the setup climbs at the
+    angles over the fastest ground speed, TAS + 5, as a downwind leg flies them."""
+    out = tmp_path / "windy"
+    assert main(["plan", COAST, "--wind", "5", "--out", str(out), "--quiet"]) == 0
+    plan = json.loads((out / "plan.json").read_text())
+    vg = tas_from_eas(25.0, max(p["z"] for p in plan["points"])) + 5.0
+    listed = {p["name"]: p for p in plan["setup"]["parameters"]}
+    assert listed["TECS_CLMB_MAX"]["least"] == pytest.approx(vg * math.tan(math.radians(15)))
+    assert param_files.read(out / "vehicle.param").values["TECS_CLMB_MAX"] >= vg * math.tan(
+        math.radians(15)
+    )

@@ -344,3 +344,20 @@ def _toml_terms(
 # What a scenario may state of its aircraft; each one stated wins over an autopilot's shipped
 # defaults (the aircraft is the scenario's; the vehicle setup makes the autopilot fly it).
 _AIRCRAFT_FIGURES = ("turn_radius", "max_climb_angle", "max_descent_angle", "cruise_airspeed")
+
+
+def design_wind_speed(args: object, scenario: Scenario) -> float:
+    """The design wind's speed (m/s) the caller gives (``args.wind``) or the scenario TOML's
+    ``[environment] wind``; 0 without either. What the vehicle setup must hold in when the
+    envelope is stated rather than derived."""
+    text = getattr(args, "wind", None)
+    field = "--wind"
+    if text is None:
+        _, environment, toml, _ = _toml_terms(scenario)
+        if "wind" not in environment:
+            return 0.0
+        text, field = str(environment["wind"]), f"{toml}: environment.wind"
+    try:
+        return float(parse_wind(str(text))[0])
+    except ValueError as exc:
+        raise InputError(str(exc), field=field) from None

@@ -7,6 +7,7 @@ import argparse
 import json
 import sys
 
+from gcs_planner.aircraft.derive import design_wind_speed
 from gcs_planner.cli.common import (
     add_plan_arguments,
     add_scenario_arguments,
@@ -290,6 +291,7 @@ def run(args: argparse.Namespace) -> int:
         set_params=settings,
         vehicle_as_is=args.vehicle_as_is,
         flight_model=model,
+        design_wind=design_wind_speed(argparse.Namespace(wind=design), scenario),
     )
     if track_out is not None and flown:
         try:

@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from gcs_planner.aircraft.derive import design_wind_speed
 from gcs_planner.cli.common import (
     add_plan_arguments,
     add_scenario_arguments,
@@ -122,7 +123,7 @@ def run(args: argparse.Namespace) -> int:
     result = plan_from_args(args, scenario)
     plan_dict = plan_json.plan_to_dict(result)
     firmware = args.firmware or "ardupilot"
-    setup = setup_needs(plan_dict, firmware)
+    setup = setup_needs(plan_dict, firmware, design_wind_speed(args, scenario))
     plan_dict["setup"] = setup_to_dict(setup, firmware)
     text = plan_json.dumps_dict(plan_dict)
     if args.json:

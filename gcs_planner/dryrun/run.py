@@ -324,6 +324,7 @@ def dry_run(
     set_params: dict[str, float] | None = None,
     vehicle_as_is: bool = False,
     flight_model: object | None = None,
+    design_wind: float | None = None,
 ) -> DryRunReport:
     """Fly ``plan``'s chosen route on a mock vehicle whose landmark database is ``landmarks``.
 
@@ -360,7 +361,10 @@ def dry_run(
     ``upload --params`` sets the setup file (``set_params`` wins where both name one). A setup
     no autopilot value can meet refuses the upload, naming it. ``vehicle_as_is``: nothing of the
     setup is set, the vehicle flies at its own parameters, and the report names what falls
-    short of the setup (``setup_shortfalls``), the first cause of a loss.
+    short of the setup (``setup_shortfalls``), the first cause of a loss. ``design_wind``
+    (m/s; default the wind flown): the wind the plan was made for, which the setup's rates and
+    bank hold in when the plan's envelope was stated rather than derived (the setup file
+    ``plan --wind`` writes).
 
     ``flight_model`` (sim/jsbsim_airframe.py ``FlightModel``; default the point mass) flies the
     replay in JSBSim: what the airframe cannot fly (``airframe_limits``) fails the verdict.
@@ -377,6 +381,7 @@ def dry_run(
         request_timeout = min(VEHICLE_REQUEST_TIMEOUT_S, timeout * (retries + 1) / 4)
     route = plan.route
     plan_dict = plan_to_dict(plan)
+    design = (wind or WindSpec()).speed if design_wind is None else design_wind
     mission = build_mission(plan_dict, firmware=flavour, acceptance_radius=acceptance_radius)
     loiter = mission.loiter_param[1] if mission.loiter_param else None
     faults = FaultRates(drop=loss) if loss > 0 else None
@@ -405,7 +410,7 @@ def dry_run(
             # The plan's vehicle setup, as the operator loads it with the mission (upload
             # --params): every parameter of it, the user's own --param values winning; as it
             # is, the vehicle's own values, and what falls short of the setup is reported.
-            setup = [] if vehicle_as_is else setup_needs(plan_dict, flavour)
+            setup = [] if vehicle_as_is else setup_needs(plan_dict, flavour, design)
             impossible = [Shortfall(n, math.nan) for n in setup if n.impossible]
             if impossible:
                 raise LinkError(refusal(impossible, "plan for an aircraft this autopilot flies"))
@@ -447,7 +452,10 @@ def dry_run(
         # vehicle's own replay() knows no wind nor INS navigation yet).
         held = vehicle.parameters
         autopilot = AutopilotParams.from_parameters(flavour, held)
-        short = shortfalls(plan_dict, flavour, lambda name: held.get(name, math.nan))
+        short = shortfalls(
+            plan_dict, flavour, lambda name: held.get(name, math.nan),
+            setup_needs(plan_dict, flavour, design),
+        )  # fmt: skip
         # Before the flight: the plan's legs against its aircraft's envelope in the wind flown,
         # with the flown autopilot's settle distance as the vehicle holds its parameters.
         flown_wind = (wind or WindSpec()).speed

@@ -85,9 +85,11 @@ class ParameterNeed:
         return f"at most {self.most:.4g}"
 
 
-def needs(plan: dict, firmware: str) -> list[ParameterNeed]:
+def needs(plan: dict, firmware: str, wind: float = 0.0) -> list[ParameterNeed]:
     """What ``plan`` (a plan JSON) needs of a ``firmware`` autopilot's parameters (see the
-    module docstring); empty for a plan of straight legs at no stated airspeed."""
+    module docstring); empty for a plan of straight legs at no stated airspeed. ``wind`` (m/s):
+    a wind the setup must also hold in (the design wind of a plan whose envelope was stated, or
+    the wind a dry run flies); the larger of it and the derived envelope's design wind counts."""
     ap = autopilot_for(firmware)
     vehicle = plan.get("vehicle") if isinstance(plan.get("vehicle"), dict) else {}
     env = vehicle.get("envelope") if isinstance(vehicle.get("envelope"), dict) else None
@@ -95,7 +97,7 @@ def needs(plan: dict, firmware: str) -> list[ParameterNeed]:
     eas = _number(env.get("cruise_eas") if env else vehicle.get("cruise_airspeed"))
     if eas is None or eas <= 0:
         return []
-    wind = (_number(env.get("design_wind")) if env else None) or 0.0
+    wind = max((_number(env.get("design_wind")) if env else None) or 0.0, wind)
     tas = _number(env.get("tas")) if env else None
     if tas is None:
         tas = tas_from_eas(eas, _highest_altitude(plan))
