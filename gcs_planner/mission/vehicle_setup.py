@@ -35,7 +35,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from gcs_planner.aircraft.autopilot import autopilot_for
+from gcs_planner.aircraft.autopilot import Autopilot, autopilot_for
 from gcs_planner.aircraft.profile import UNLIMITED_ANGLE_DEG, G, tas_from_eas
 
 # Slack for rates and angles written and read back as float32.
@@ -174,7 +174,7 @@ def needs(plan: dict, firmware: str, wind: float = 0.0) -> list[ParameterNeed]:
     return out
 
 
-def _airspeed_needs(ap, eas: float) -> list[ParameterNeed]:  # noqa: ANN001 (Autopilot)
+def _airspeed_needs(ap: Autopilot, eas: float) -> list[ParameterNeed]:
     why = f"the plan flies {eas:g} m/s EAS"
     cruise = ap.envelope["cruise_airspeed"]
     low_name, high_name = ap.airspeed_range
@@ -202,7 +202,7 @@ def _airspeed_needs(ap, eas: float) -> list[ParameterNeed]:  # noqa: ANN001 (Aut
     return out
 
 
-def _at_least(ap, name: str, least: float, why: str) -> ParameterNeed:  # noqa: ANN001
+def _at_least(ap: Autopilot, name: str, least: float, why: str) -> ParameterNeed:
     """``name`` at least ``least``; the setup writes the larger of the need (rounded up) and the
     shipped default, so it never lowers a limit the autopilot ships with."""
     spec = ap.spec(name)
