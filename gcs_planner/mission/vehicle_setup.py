@@ -171,7 +171,27 @@ def needs(plan: dict, firmware: str, wind: float = 0.0) -> list[ParameterNeed]:
             magnitude=True,
         )
     )
+    if firmware == "px4":
+        out.append(_px4_acceptance(ap, plan, eas, wind))
     return out
+
+
+def _px4_acceptance(ap: Autopilot, plan: dict, eas: float, wind: float) -> ParameterNeed:
+    """PX4 takes a fixed wing's waypoint as reached at the larger of NAV_ACC_RAD and npfg's
+    switch distance (``Navigator::get_acceptance_radius``): the plan's turns and run-outs are
+    laid for the switch distance, so NAV_ACC_RAD must not exceed it where it is shortest, at the
+    slowest ground speed (the lowest point's TAS into the design wind)."""
+    period, damping, mult = (ap.spec(n).default for n in ap.guidance)  # type: ignore[union-attr]
+    slowest = max(tas_from_eas(eas, _lowest_altitude(plan)) - wind, 1.0)
+    switch = period * damping * mult * slowest
+    spec = ap.spec(ap.acceptance_param)
+    default = spec.default if spec is not None else switch
+    return ParameterNeed(
+        ap.acceptance_param, None, min(default, math.floor(switch * 10.0) / 10.0),
+        f"PX4 accepts a waypoint at the larger of it and npfg's switch distance, {switch:.1f} m "
+        f"at the slowest {slowest:.1f} m/s ground speed, which the plan's turns are laid for",
+        most=switch,
+    )  # fmt: skip
 
 
 def _airspeed_needs(ap: Autopilot, eas: float) -> list[ParameterNeed]:
@@ -239,6 +259,16 @@ def _highest_altitude(plan: dict) -> float:
     origin = scenario.get("origin") if isinstance(scenario.get("origin"), dict) else {}
     base = _number(origin.get("alt")) or 0.0
     return max((z for z in zs if z is not None), default=0.0) + base
+
+
+def _lowest_altitude(plan: dict) -> float:
+    """The scenario's lowest point above mean sea level (the TAS is slowest there)."""
+    points = plan.get("points") if isinstance(plan.get("points"), list) else []
+    zs = [_number(p.get("z")) for p in points if isinstance(p, dict)]
+    scenario = plan.get("scenario") if isinstance(plan.get("scenario"), dict) else {}
+    origin = scenario.get("origin") if isinstance(scenario.get("origin"), dict) else {}
+    base = _number(origin.get("alt")) or 0.0
+    return min((z for z in zs if z is not None), default=0.0) + base
 
 
 def _steepest_leg(plan: dict, sign: float) -> float:
