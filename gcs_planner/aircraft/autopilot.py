@@ -268,6 +268,14 @@ PX4 = Autopilot(
 AUTOPILOTS: dict[str, Autopilot] = {"ardupilot": ARDUPLANE, "px4": PX4}
 
 
+def keeps_home_item(firmware: str | None) -> bool:
+    """Whether ``firmware`` keeps its home as mission item 0 (ArduPilot: the .waypoints home
+    row, the read-back's skipped item 0); False for PX4 and for an autopilot without a
+    record."""
+    ap = AUTOPILOTS.get(firmware or "")
+    return ap is not None and ap.home_at_seq0
+
+
 def autopilot_for(firmware: str) -> Autopilot:
     """The record of ``firmware`` ("ardupilot" or "px4"); ValueError otherwise."""
     try:

@@ -7,6 +7,7 @@ import json
 from dataclasses import asdict
 from pathlib import Path
 
+from gcs_planner.aircraft.autopilot import keeps_home_item
 from gcs_planner.cli.upload import add_link_arguments, connect_client
 from gcs_planner.errors import InputError, LinkError
 from gcs_planner.mission.items import GLOBAL_FRAMES, POSITION_COMMANDS, MissionItem
@@ -62,7 +63,7 @@ def _home(items: list[MissionItem], firmware: str) -> tuple[float, float, float]
     """Row 0 of a .waypoints file is home. ArduPilot sends it as item 0 (so item 0 must be a
     place: any other item there would be lost, or a parameter read as a latitude); PX4 has no
     home item, so the first position item's stands in for it (what a reader sees as home)."""
-    if firmware == "ardupilot" and items:
+    if keeps_home_item(firmware) and items:
         home = items[0]
         if home.command not in POSITION_COMMANDS or home.frame not in GLOBAL_FRAMES:
             raise LinkError(

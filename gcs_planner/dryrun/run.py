@@ -40,7 +40,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
-from gcs_planner.aircraft.autopilot import effective
+from gcs_planner.aircraft.autopilot import effective, keeps_home_item
 from gcs_planner.aircraft.envelope_fit import LegShortfall, legs_outside_envelope
 from gcs_planner.core.planner import Plan
 from gcs_planner.core.probability import outcomes
@@ -468,7 +468,7 @@ def dry_run(
             landmarks,
             seed=seed,
             runs=runs,
-            home_at_seq0=flavour == "ardupilot",
+            home_at_seq0=keeps_home_item(flavour),
             capture_radius=capture_radius,
             cruise_speed=vehicle.cruise_speed,
             flavour=flavour,

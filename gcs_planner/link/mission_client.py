@@ -40,6 +40,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from gcs_planner.aircraft.autopilot import keeps_home_item
 from gcs_planner.aircraft.profile import FIRMWARE_OF_AUTOPILOT, FIRMWARES, LOITER_RADIUS_PARAM
 from gcs_planner.errors import InputError, LinkError
 from gcs_planner.link.connection import Link, mavlink
@@ -886,7 +887,7 @@ class MissionClient:
         for seq in sorted(got):
             if seq >= len(sent):
                 out.append(f"item {seq}: read back, but only {len(sent)} items were uploaded")
-            elif not (seq == 0 and self.firmware == "ardupilot"):
+            elif not (seq == 0 and keeps_home_item(self.firmware)):
                 out.extend(f"item {seq}: {d}" for d in item_differences(sent[seq], got[seq], tol))
         return out
 
@@ -1042,7 +1043,7 @@ class MissionClient:
         # ArduPilot serves its own home as item 0 (the read-back skips it likewise); any other
         # firmware is held to the item sent.
         home = (
-            head[HEADER.size :] if self.firmware == "ardupilot" else stored_item_bytes(sent[0], 0)
+            head[HEADER.size :] if keeps_home_item(self.firmware) else stored_item_bytes(sent[0], 0)
         )
         expected = crc32(stored_file(sent, home))
         if vehicle_crc != expected:
@@ -1094,7 +1095,7 @@ class MissionClient:
                 got = self._ftp_read_back(sent, tol, acknowledged=unconfirmed is None)
             else:
                 got = self._read_back(sent, tol, acknowledged=unconfirmed is None)
-            skip_home = self.firmware == "ardupilot"
+            skip_home = keeps_home_item(self.firmware)
             diffs = mission_differences(list(items), got, skip_home=skip_home, tol=tol)
         if diffs:
             more = f"; and {len(diffs) - 5} more" if len(diffs) > 5 else ""

@@ -10,6 +10,7 @@ import json
 from dataclasses import dataclass
 from pathlib import Path
 
+from gcs_planner.aircraft.autopilot import keeps_home_item
 from gcs_planner.errors import InputError
 from gcs_planner.link.validate import item_problem
 from gcs_planner.mission.items import MissionItem
@@ -44,7 +45,7 @@ def _check_items(path: Path, mission: MissionToUpload) -> None:
             if rows is None:
                 rows = _waypoints_rows(path)
             # Row 0 is home: ArduPilot's item 0, before PX4's first item.
-            index = item.seq if mission.firmware == "ardupilot" else item.seq + 1
+            index = item.seq if keeps_home_item(mission.firmware) else item.seq + 1
             if index < len(rows):
                 raise InputError(problem.reason, file=str(path), row=rows[index],
                                  field=problem.field)  # fmt: skip

@@ -64,6 +64,7 @@ from typing import Any
 
 import numpy as np
 
+from gcs_planner.aircraft.autopilot import keeps_home_item
 from gcs_planner.aircraft.profile import (
     DEFAULT_ACCEPTANCE_RADIUS_M,
     DEFAULT_CRUISE_AIRSPEED,
@@ -617,7 +618,7 @@ def build_mission(
         lat, lon, alt = frame.to_geodetic(*p)
         return {"x": _deg_e7(lat), "y": _deg_e7(lon), "z": float(alt) - alt_offset}
 
-    if firmware == "ardupilot":
+    if keeps_home_item(firmware):
         home_at = {"x": _deg_e7(home_lat), "y": _deg_e7(home_lon), "z": float(home_alt)}
         add(MAV_CMD_NAV_WAYPOINT, MAV_FRAME_GLOBAL, "home (A)", **home_at)
     # Airspeed (param1 0), no throttle change (param3 -1).

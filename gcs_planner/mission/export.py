@@ -11,6 +11,7 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
+from gcs_planner.aircraft.autopilot import keeps_home_item
 from gcs_planner.errors import InputError
 from gcs_planner.mission.builder import Mission, build_mission
 from gcs_planner.mission.geo_exports import csv_text, geojson_text, kml_text
@@ -69,7 +70,7 @@ def render_all(plan: dict, **mission_options: Any) -> list[tuple[str, str | byte
         (name, fn(plan, mission))
         for fmt, (name, fn) in FORMATS.items()
         # PX4 missions have no .waypoints (mission.waypoints explains why): .plan is theirs.
-        if fmt != "waypoints" or mission.firmware == "ardupilot"
+        if fmt != "waypoints" or keeps_home_item(mission.firmware)
     ]
 
 

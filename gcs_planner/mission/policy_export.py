@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from gcs_planner.aircraft.autopilot import keeps_home_item
 from gcs_planner.core.contingency import Policy, PolicyValue, evaluate
 from gcs_planner.core.policy_front import (
     EXACT_MAX_POINTS,
@@ -157,7 +158,7 @@ def render_policy_files(result: Plan, plan: dict, exp: PolicyExport) -> list[tup
         files[name] = {"plan": f"{name}.plan"}
         out.append((f"{name}.plan", dumps_plan(mission)))
         # PX4 missions have no .waypoints (mission/waypoints.py says why).
-        if mission.firmware == "ardupilot":
+        if keeps_home_item(mission.firmware):
             files[name]["waypoints"] = f"{name}.waypoints"
             out.append((f"{name}.waypoints", dumps_waypoints(mission)))
     route = result.routes[exp.route_index]

@@ -19,6 +19,7 @@ import os
 from pathlib import Path
 from typing import Any
 
+from gcs_planner.aircraft.autopilot import keeps_home_item
 from gcs_planner.aircraft.profile import AUTOPILOT_IDS
 from gcs_planner.errors import InputError
 from gcs_planner.mission.builder import HOVER_SPEED, Mission
@@ -75,7 +76,7 @@ def _simple_item(item: MissionItem, jump_id: int) -> dict[str, Any]:
 
 def plan_document(mission: Mission) -> dict[str, Any]:
     """The .plan as a JSON-ready dict."""
-    items = mission.items[1:] if mission.firmware == "ardupilot" else mission.items
+    items = mission.items[1:] if keeps_home_item(mission.firmware) else mission.items
     lat, lon, alt = mission.home
     return {
         "fileType": "Plan",
@@ -180,7 +181,7 @@ def loads_plan(text: str, source: str = "") -> MissionFile:
     if not isinstance(raw_items, list):
         raise InputError("'items' must be a list", file=source, field="items")
     items: list[MissionItem] = []
-    if firmware == "ardupilot":
+    if keeps_home_item(firmware):
         items.append(
             MissionItem(
                 seq=0,

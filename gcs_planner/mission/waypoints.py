@@ -26,6 +26,7 @@ from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
 
+from gcs_planner.aircraft.autopilot import keeps_home_item
 from gcs_planner.errors import InputError
 from gcs_planner.mission.builder import FIRMWARES, Mission
 from gcs_planner.mission.items import (
@@ -82,7 +83,7 @@ PX4_REFUSED = (
 
 def dumps_waypoints(mission: Mission) -> str:
     """The mission as a .waypoints text; ArduPilot only (module docstring)."""
-    if mission.firmware != "ardupilot":
+    if not keeps_home_item(mission.firmware):
         raise InputError(PX4_REFUSED, field="--firmware")
     return dumps_items(mission.items, mission.firmware, mission.home)
 
@@ -101,7 +102,7 @@ def dumps_items(
         y=int(round(lon * 1e7)),
         z=alt,
     )
-    rest = items[1:] if firmware == "ardupilot" else items
+    rest = items[1:] if keeps_home_item(firmware) else items
     lines = [HEADER, _row(0, 1, home)]
     lines += [_row(k + 1, item.current, item) for k, item in enumerate(rest)]
     return "\n".join(lines) + "\n"
@@ -178,7 +179,7 @@ def loads_waypoints(text: str, firmware: str = "ardupilot", source: str = "") ->
     home_row = rows[0]
     home = (home_row.lat, home_row.lon, home_row.z)
     # Row 0's CURRENT 1 is Mission Planner's mark of the home row, not a state of the item.
-    kept = [replace(home_row, current=0), *rows[1:]] if firmware == "ardupilot" else rows[1:]
+    kept = [replace(home_row, current=0), *rows[1:]] if keeps_home_item(firmware) else rows[1:]
     items = tuple(item.with_seq(k) for k, item in enumerate(kept))
     return MissionFile(items=items, firmware=firmware, home=home)
 

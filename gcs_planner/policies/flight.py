@@ -26,6 +26,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+from gcs_planner.aircraft.autopilot import keeps_home_item
 from gcs_planner.errors import InputError, LinkError
 from gcs_planner.link.connection import mavlink
 from gcs_planner.link.correction_report import CorrectionReport, parse_report
@@ -288,7 +289,7 @@ class PolicyFlight:
         """After a branch upload failed: make sure the vehicle holds the mission it was flying,
         whole (see the module docstring); the error to raise, saying what it holds."""
         flown = self.policy.missions[self.flown]
-        skip_home = self.client.firmware == "ardupilot"
+        skip_home = keeps_home_item(self.client.firmware)
         try:
             held = self.client.download()
             whole = not mission_differences(list(flown.items), held, skip_home=skip_home)
