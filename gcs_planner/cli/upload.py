@@ -212,20 +212,38 @@ def _check_parameters(client: MissionClient, args: argparse.Namespace, firmware:
                 "set them with --set-params, or plan for this vehicle (plan --vehicle-from CONN)",
             )
         )
-    ap = autopilot_for(firmware)
     for s in short:  # listed before anything is written
         print(
             f"will set {s.need.name} = {s.need.set_to:.4g} (is {s.value:g}): {s.need.why}",
             file=sys.stderr,
         )
-    for s in short:
-        spec = ap.spec(s.need.name)
-        set_parameter(
-            client.link, target, s.need.name, s.need.set_to,
-            *(() if spec is None else (spec.ptype,)),
-            timeout=client.timeout, retries=client.retries,
-        )  # fmt: skip
+    values = {s.need.name: s.need.set_to for s in short}
+    _set_values(client, firmware, values, f"the {len(values)} the plan needs")
     print(f"set {len(short)} parameter(s) for the plan", file=sys.stderr)
+
+
+def _set_values(client: MissionClient, firmware: str, values: dict[str, float], what: str) -> None:
+    """Set each parameter (its MAVLink type from the autopilot's record) and read it back;
+    refuse the upload naming every one the vehicle did not take."""
+    ap = autopilot_for(firmware) if firmware in FIRMWARES else None
+    target = client._target()
+    failed: list[str] = []
+    for name, value in values.items():
+        spec = ap.spec(name) if ap is not None else None
+        try:
+            set_parameter(
+                client.link, target, name, value,
+                *(() if spec is None else (spec.ptype,)),
+                timeout=client.timeout, retries=client.retries,
+            )  # fmt: skip
+        except LinkError as exc:
+            failed.append(f"{name} = {value:g} ({exc})")
+    if failed:
+        raise LinkError(
+            f"the vehicle did not take {len(failed)} of {what}: "
+            + "; ".join(failed)
+            + ". Nothing was uploaded"
+        )
 
 
 def _setup_for(path: Path | str, firmware: str) -> SetupFile:
@@ -243,24 +261,8 @@ def _set_setup(client: MissionClient, path: Path, firmware: str) -> None:
     """``upload --params FILE``: set every parameter of the setup before the mission, read each
     back, and refuse the upload (nothing uploaded) naming those the vehicle did not take."""
     setup = _setup_for(path, firmware)
-    ap = autopilot_for(firmware) if firmware in FIRMWARES else None
-    target = client._target()
-    failed: list[str] = []
-    for name, value in setup.values.items():
-        spec = ap.spec(name) if ap is not None else None
-        try:
-            set_parameter(
-                client.link, target, name, value,
-                *(() if spec is None else (spec.ptype,)),
-                timeout=client.timeout, retries=client.retries,
-            )  # fmt: skip
-        except LinkError as exc:
-            failed.append(f"{name} = {value:g} ({exc})")
-    if failed:
-        raise LinkError(
-            f"the vehicle did not take {len(failed)} of the {len(setup.values)} parameters of "
-            f"{path}: " + "; ".join(failed) + ". Nothing was uploaded"
-        )
+    what = f"the {len(setup.values)} parameters of {path}"
+    _set_values(client, firmware, setup.values, what)
     print(f"set and read back {len(setup.values)} parameter(s) of {path}", file=sys.stderr)
 
 

@@ -382,6 +382,8 @@ def dry_run(
     route = plan.route
     plan_dict = plan_to_dict(plan)
     design = (wind or WindSpec()).speed if design_wind is None else design_wind
+    # The plan's vehicle setup: set with the mission, or (as it is) what the vehicle lacks of it.
+    wanted = setup_needs(plan_dict, flavour, design)
     mission = build_mission(plan_dict, firmware=flavour, acceptance_radius=acceptance_radius)
     loiter = mission.loiter_param[1] if mission.loiter_param else None
     faults = FaultRates(drop=loss) if loss > 0 else None
@@ -410,7 +412,7 @@ def dry_run(
             # The plan's vehicle setup, as the operator loads it with the mission (upload
             # --params): every parameter of it, the user's own --param values winning; as it
             # is, the vehicle's own values, and what falls short of the setup is reported.
-            setup = [] if vehicle_as_is else setup_needs(plan_dict, flavour, design)
+            setup = [] if vehicle_as_is else wanted
             impossible = [Shortfall(n, math.nan) for n in setup if n.impossible]
             if impossible:
                 raise LinkError(refusal(impossible, "plan for an aircraft this autopilot flies"))
@@ -454,7 +456,7 @@ def dry_run(
         autopilot = AutopilotParams.from_parameters(flavour, held)
         short = shortfalls(
             plan_dict, flavour, lambda name: held.get(name, math.nan),
-            setup_needs(plan_dict, flavour, design),
+            wanted,
         )  # fmt: skip
         # Before the flight: the plan's legs against its aircraft's envelope in the wind flown,
         # with the flown autopilot's settle distance as the vehicle holds its parameters.

@@ -35,7 +35,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from gcs_planner.aircraft.autopilot import Autopilot, autopilot_for
+from gcs_planner.aircraft.autopilot import Autopilot, autopilot_for, effective
 from gcs_planner.aircraft.profile import UNLIMITED_ANGLE_DEG, G, tas_from_eas
 
 # Slack for rates and angles written and read back as float32.
@@ -100,7 +100,7 @@ def needs(plan: dict, firmware: str, wind: float = 0.0) -> list[ParameterNeed]:
     wind = max((_number(env.get("design_wind")) if env else None) or 0.0, wind)
     tas = _number(env.get("tas")) if env else None
     if tas is None:
-        tas = tas_from_eas(eas, _highest_altitude(plan))
+        tas = tas_from_eas(eas, _altitudes(plan)[1])
     ground = tas + wind
     out = _airspeed_needs(ap, eas)
     # climb and sink: the derived rates, else the stated angles at the largest ground speed
@@ -181,9 +181,8 @@ def _px4_acceptance(ap: Autopilot, plan: dict, eas: float, wind: float) -> Param
     switch distance (``Navigator::get_acceptance_radius``): the plan's turns and run-outs are
     laid for the switch distance, so NAV_ACC_RAD must not exceed it where it is shortest, at the
     slowest ground speed (the lowest point's TAS into the design wind)."""
-    period, damping, mult = (ap.spec(n).default for n in ap.guidance)  # type: ignore[union-attr]
-    slowest = max(tas_from_eas(eas, _lowest_altitude(plan)) - wind, 1.0)
-    switch = period * damping * mult * slowest
+    slowest = max(tas_from_eas(eas, _altitudes(plan)[0]) - wind, 1.0)
+    switch = effective("px4", {}).switch_distance(slowest)
     spec = ap.spec(ap.acceptance_param)
     default = spec.default if spec is not None else switch
     return ParameterNeed(
@@ -251,34 +250,30 @@ def _number(x: object) -> float | None:
     return float(x)
 
 
-def _highest_altitude(plan: dict) -> float:
-    """The scenario's highest point above mean sea level (the TAS is largest there)."""
+def _altitudes(plan: dict) -> tuple[float, float]:
+    """The scenario's lowest and highest points above mean sea level (the TAS is slowest at the
+    one, fastest at the other)."""
     points = plan.get("points") if isinstance(plan.get("points"), list) else []
-    zs = [_number(p.get("z")) for p in points if isinstance(p, dict)]
+    zs = [z for z in (_number(p.get("z")) for p in points if isinstance(p, dict)) if z is not None]
     scenario = plan.get("scenario") if isinstance(plan.get("scenario"), dict) else {}
     origin = scenario.get("origin") if isinstance(scenario.get("origin"), dict) else {}
     base = _number(origin.get("alt")) or 0.0
-    return max((z for z in zs if z is not None), default=0.0) + base
+    return min(zs, default=0.0) + base, max(zs, default=0.0) + base
 
 
-def _lowest_altitude(plan: dict) -> float:
-    """The scenario's lowest point above mean sea level (the TAS is slowest there)."""
-    points = plan.get("points") if isinstance(plan.get("points"), list) else []
-    zs = [_number(p.get("z")) for p in points if isinstance(p, dict)]
-    scenario = plan.get("scenario") if isinstance(plan.get("scenario"), dict) else {}
-    origin = scenario.get("origin") if isinstance(scenario.get("origin"), dict) else {}
-    base = _number(origin.get("alt")) or 0.0
-    return min((z for z in zs if z is not None), default=0.0) + base
+def _chosen(plan: dict) -> dict:
+    """The chosen route's entry of the plan's front ({} when the plan names none)."""
+    front = plan.get("front") if isinstance(plan.get("front"), list) else []
+    chosen = plan.get("chosen")
+    if not isinstance(chosen, int) or not 0 <= chosen < len(front):
+        return {}
+    return front[chosen] if isinstance(front[chosen], dict) else {}
 
 
 def _steepest_leg(plan: dict, sign: float) -> float:
     """The chosen route's steepest climb (``sign`` 1) or descent (-1) in degrees, 0 if none."""
-    front = plan.get("front") if isinstance(plan.get("front"), list) else []
-    chosen = plan.get("chosen")
-    if not isinstance(chosen, int) or not 0 <= chosen < len(front):
-        return 0.0
     by_id = {p.get("id"): p for p in plan.get("points", []) if isinstance(p, dict)}
-    route = front[chosen].get("route", []) if isinstance(front[chosen], dict) else []
+    route = _chosen(plan).get("route", [])
     steepest = 0.0
     for a, b in zip(route, route[1:]):
         pa, pb = by_id.get(a), by_id.get(b)
@@ -332,15 +327,9 @@ def _px4_leg_rate(plan: dict, sign: float, ground: float) -> tuple[float, str]:
     (``FixedwingPositionControl``: TECS climbs at the rate towards the current item's
     altitude; npfg.cpp ``switchDistance``, at the shipped NPFG_PERIOD, NPFG_DAMPING and
     NPFG_SW_DST_MLT)."""
-    front = plan.get("front") if isinstance(plan.get("front"), list) else []
-    chosen = plan.get("chosen")
-    if not isinstance(chosen, int) or not 0 <= chosen < len(front):
-        return 0.0, ""
-    ap = autopilot_for("px4")
-    period, damping, mult = (ap.spec(n).default for n in ap.guidance)  # type: ignore[union-attr]
-    switch = period * damping * mult * ground
+    switch = effective("px4", {}).switch_distance(ground)
     best, where = 0.0, ""
-    for leg in front[chosen].get("legs", []) if isinstance(front[chosen], dict) else []:
+    for leg in _chosen(plan).get("legs", []):
         geo = leg.get("geometry") if isinstance(leg, dict) else None
         if not isinstance(geo, dict):
             continue
