@@ -83,6 +83,43 @@ class ParamSpec:
 
 
 @dataclass(frozen=True)
+class MissionProtocol:
+    """How an autopilot's mission protocol answers where the MAVLink spec leaves it open.
+
+    ArduPilot: ``GCS_MAVLINK`` (``GCS_Common.cpp``) and ``MissionItemProtocol.cpp``; PX4:
+    ``src/modules/mavlink/mavlink_mission.cpp`` (``MavlinkMissionManager``)."""
+
+    # PX4 answers in the spelling it last heard (MISSION_ITEM or MISSION_ITEM_INT,
+    # ``_int_mode``); ArduPilot always asks for MISSION_ITEM_INT.
+    answers_in_heard_spelling: bool
+    # ArduPilot lets the same system and component ids restart an upload in progress
+    # (``MissionItemProtocol::handle_mission_count``); PX4 only the transfer's owner.
+    restarts_upload_by_ids: bool
+    # PX4 refuses a new MISSION_COUNT while items are still expected (``Mission upload busy``,
+    # MAV_MISSION_ERROR).
+    busy_while_receiving: bool
+    # Which MISSION_ACK cancels an upload: PX4 only MAV_MISSION_OPERATION_CANCELLED; ArduPilot
+    # any result but ACCEPTED.
+    cancelled_only_by_cancel: bool
+    # The answer to the final item sent again after the upload ended (a lost acknowledgement):
+    # PX4 MAV_MISSION_ACCEPTED again; ArduPilot, no longer receiving, MAV_MISSION_ERROR.
+    final_item_again: int
+    # ArduPilot writes each item into the flown mission as it arrives; PX4 receives into the
+    # storage it is not flying (dataman's other slot) and switches when complete.
+    writes_in_place: bool
+    # ArduPilot serves the mission as the file @MISSION/mission.dat over MAVLink FTP
+    # (``AP_Filesystem_Mission``); PX4 sets the FTP bit for its file system only.
+    serves_mission_file: bool
+    # PX4 sets MAV_PROTOCOL_CAPABILITY_MISSION_FLOAT in AUTOPILOT_VERSION.
+    announces_mission_float: bool
+
+
+# MAV_MISSION_RESULT (common.xml)
+MAV_MISSION_ACCEPTED = 0
+MAV_MISSION_ERROR = 1
+
+
+@dataclass(frozen=True)
 class Autopilot:
     """One firmware: its ids, mission rules, mission mode and shipped parameters.
 
@@ -110,6 +147,32 @@ class Autopilot:
     # does with one outside it: ArduPlane ignores it, PX4 constrains it (see the params above).
     airspeed_range: tuple[str, str] = ("", "")
     speed_outside_range: str = "clamped"
+    title: str = ""  # the name a reader knows it by
+    path_follower: str = ""  # "L1" (AP_L1_Control) or "npfg" (PX4's npfg)
+    # ArduPlane counts a waypoint reached within its param2 (else WP_RADIUS); PX4 fixed wing
+    # ignores param2 and uses the vehicle-wide NAV_ACC_RAD or npfg's switch distance.
+    item_acceptance: bool = False
+    # PX4 climbs at once towards its current item's altitude (FixedwingPositionControl's
+    # altitude setpoint is the item's); ArduPlane slopes the altitude along the leg
+    # (Plane::setup_glide_slope).
+    climbs_at_once: bool = False
+    # PX4 switches to the next item npfg's switch distance before it reaches the current one
+    # (Navigator::get_acceptance_radius); ArduPlane at the item (or its finish line).
+    switches_early: bool = False
+    # ArduPlane widens a loiter with the true airspeed (radius * EAS2TAS^2) unless
+    # NAVL1_LIM_BANK holds it (AP_L1_Control::loiter_radius).
+    loiter_widens_with_tas: bool = False
+    # PX4 ends a NAV_LOITER_TO_ALT on the altitude and only on its last turn's exit course
+    # (mission_block.cpp): a helix at the leg's own limit has nothing to spare.
+    helix_exits_on_course: bool = False
+    # ArduPilot reads its radio's RADIO_STATUS and slows mission requests to match
+    # (GCS_MAVLINK::handle_radio_status, stream_slowdown_ms).
+    reads_radio_status: bool = False
+    # A mode change it cannot make: PX4 answers MAV_RESULT_TEMPORARILY_REJECTED always
+    # (Commander::handle_command); ArduPilot DENIED without the custom-mode flag, else FAILED
+    # (GCS_MAVLINK::_set_mode_common).
+    refuses_mode_temporarily: bool = False
+    protocol: MissionProtocol | None = None
 
     def commanded_airspeed(self, speed: float, values: Mapping[str, float]) -> float | None:
         """The airspeed the aircraft flies after a mission's DO_CHANGE_SPEED to ``speed`` (m/s)
@@ -156,7 +219,7 @@ class Autopilot:
             return False
         if not int(base_mode) & MAV_MODE_FLAG_CUSTOM_MODE_ENABLED:
             return False
-        if self.firmware == "ardupilot":
+        if self.auto_custom_mode < 1 << 16:  # ArduPilot: the mode number itself
             return int(custom_main) == self.auto_custom_mode
         main = (self.auto_custom_mode >> 16) & 0xFF
         sub = (self.auto_custom_mode >> 24) & 0xFF
@@ -219,6 +282,21 @@ ARDUPLANE = Autopilot(
     guidance=("NAVL1_PERIOD", "NAVL1_DAMPING"),
     airspeed_range=("AIRSPEED_MIN", "AIRSPEED_MAX"),
     speed_outside_range="ignored",
+    title="ArduPlane",
+    path_follower="L1",
+    item_acceptance=True,
+    loiter_widens_with_tas=True,
+    reads_radio_status=True,
+    protocol=MissionProtocol(
+        answers_in_heard_spelling=False,
+        restarts_upload_by_ids=True,
+        busy_while_receiving=False,
+        cancelled_only_by_cancel=False,
+        final_item_again=MAV_MISSION_ERROR,
+        writes_in_place=True,
+        serves_mission_file=True,
+        announces_mission_float=False,
+    ),
 )
 
 PX4 = Autopilot(
@@ -263,9 +341,28 @@ PX4 = Autopilot(
     guidance=("NPFG_PERIOD", "NPFG_DAMPING", "NPFG_SW_DST_MLT"),
     airspeed_range=("FW_AIRSPD_MIN", "FW_AIRSPD_MAX"),
     speed_outside_range="clamped",
+    title="PX4 fixed wing",
+    path_follower="npfg",
+    climbs_at_once=True,
+    switches_early=True,
+    helix_exits_on_course=True,
+    refuses_mode_temporarily=True,
+    protocol=MissionProtocol(
+        answers_in_heard_spelling=True,
+        restarts_upload_by_ids=False,
+        busy_while_receiving=True,
+        cancelled_only_by_cancel=True,
+        final_item_again=MAV_MISSION_ACCEPTED,
+        writes_in_place=False,
+        serves_mission_file=False,
+        announces_mission_float=True,
+    ),
 )
 
-AUTOPILOTS: dict[str, Autopilot] = {"ardupilot": ARDUPLANE, "px4": PX4}
+AUTOPILOTS: dict[str, Autopilot] = {ap.firmware: ap for ap in (ARDUPLANE, PX4)}
+# The autopilot a command flies for when none is named: ArduPlane, the one most maritime
+# fixed-wing fleets run.
+DEFAULT_AUTOPILOT = ARDUPLANE.firmware
 
 
 def keeps_home_item(firmware: str | None) -> bool:
@@ -348,7 +445,7 @@ class EffectiveParameters:
         the finish line, which the flight model draws itself). PX4 fixed wing
         (``Navigator::get_acceptance_radius``): the larger of NAV_ACC_RAD and the npfg switch
         distance; a waypoint's param2 is not used for a fixed wing."""
-        if self.firmware == "ardupilot":
+        if autopilot_for(self.firmware).item_acceptance:
             return item_radius if item_radius > 0 else self.acceptance_radius
         return max(self.acceptance_radius, self.switch_distance(ground_speed))
 
@@ -377,7 +474,7 @@ def effective(firmware: str, values: Mapping[str, float]) -> EffectiveParameters
         "acceptance_radius": get(ap.acceptance_param),
         "values": dict(table),
     }
-    if firmware == "ardupilot":
+    if ap.path_follower == "L1":
         return EffectiveParameters(
             **common,
             l1_period=get("NAVL1_PERIOD"),
