@@ -39,3 +39,9 @@ class LinkError(GcsPlannerError):
     """A MAVLink transfer failed or the vehicle refused it."""
 
     exit_code = 4
+
+
+class UploadRefused(LinkError):
+    """The vehicle answered an upload with a refusal (a MISSION_ACK other than ACCEPTED, or an
+    FTP mission file it did not store): what it holds is unchanged, unlike an upload the link
+    lost part-way, so a caller may go on with the mission the vehicle still flies."""

@@ -45,7 +45,7 @@ from gcs_planner.aircraft.envelope_fit import LegShortfall, legs_outside_envelop
 from gcs_planner.core.planner import Plan
 from gcs_planner.core.probability import outcomes
 from gcs_planner.core.route import Route
-from gcs_planner.errors import LinkError
+from gcs_planner.errors import LinkError, UploadRefused
 from gcs_planner.link.connection import mavlink, open_link
 from gcs_planner.link.mission_client import MissionClient
 from gcs_planner.link.params import set_parameter
@@ -440,7 +440,7 @@ def dry_run(
                         )
                 except LinkError as exc:
                     errors.append(str(exc))
-                    if str(exc).startswith("upload refused"):
+                    if isinstance(exc, UploadRefused):
                         break  # the vehicle said no: asking again gets the same answer
                 else:
                     verified = True

@@ -42,7 +42,7 @@ from typing import Any
 
 from gcs_planner.aircraft.autopilot import keeps_home_item
 from gcs_planner.aircraft.profile import FIRMWARE_OF_AUTOPILOT, FIRMWARES, LOITER_RADIUS_PARAM
-from gcs_planner.errors import InputError, LinkError
+from gcs_planner.errors import InputError, LinkError, UploadRefused
 from gcs_planner.link.connection import Link, mavlink
 from gcs_planner.link.ftp import (
     FILE_NOT_FOUND,
@@ -492,7 +492,7 @@ class MissionClient:
                         sent_at = last_progress = now
                         continue
                     where = "MISSION_COUNT" if requested is None else f"item {sent_upto}"
-                    raise LinkError(
+                    raise UploadRefused(
                         f"upload refused after {where}: MISSION_ACK {describe_result(msg.type)}"
                     )
                 seq = int(msg.seq)
@@ -978,7 +978,7 @@ class MissionClient:
         if reply is None:
             raise _Unconfirmed(f"no answer came to the close of {MISSION_PATH}")
         if reply.opcode == NAK:
-            raise LinkError(
+            raise UploadRefused(
                 f"upload refused: the vehicle did not store {MISSION_PATH} when it was closed "
                 f"(TerminateSession NAK: {reply.nak_text()}); ArduPilot refuses the whole file "
                 "when its header's count and the items disagree or an item is one it does not "

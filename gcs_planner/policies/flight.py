@@ -27,7 +27,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from gcs_planner.aircraft.autopilot import keeps_home_item
-from gcs_planner.errors import InputError, LinkError
+from gcs_planner.errors import InputError, LinkError, UploadRefused
 from gcs_planner.link.connection import mavlink
 from gcs_planner.link.correction_report import CorrectionReport, parse_report
 from gcs_planner.link.mission_client import MissionClient
@@ -214,7 +214,7 @@ class PolicyFlight:
                 return self.client.upload_verified(items)
             except LinkError as exc:
                 errors.append(str(exc))
-                if str(exc).startswith("upload refused"):
+                if isinstance(exc, UploadRefused):
                     break  # the vehicle said no: asking again gets the same answer
         raise LinkError(f"mission {name!r} could not be uploaded: {errors[-1]}")
 
