@@ -9,6 +9,7 @@ import sys
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
+from gcs_planner.aircraft.autopilot import AUTOPILOTS
 from gcs_planner.aircraft.profile import LEG_MODELS
 from gcs_planner.core.budget import DEFAULT_TIME_LIMIT
 from gcs_planner.core.choose import DEFAULT_MIN_PROBABILITY
@@ -162,6 +163,44 @@ def add_plan_arguments(parser: argparse.ArgumentParser) -> None:
         "lines, one every 10 s; default: only on a terminal)",
     )
     add_quiet_argument(budget)
+
+
+class _DeprecatedAlias(argparse.Action):
+    """A flag kept under its old name: it stores as the new one does and says it is deprecated."""
+
+    def __init__(self, *args: object, new: str = "", **kwargs: object) -> None:
+        self.new = new
+        super().__init__(*args, **kwargs)  # type: ignore[arg-type]
+
+    def __call__(self, parser, namespace, values, option_string=None):  # type: ignore[no-untyped-def]
+        print(
+            f"gcs-planner: note: {option_string} is deprecated, use {self.new} (same values)",
+            file=sys.stderr,
+        )
+        setattr(namespace, self.dest, values)
+
+
+def add_autopilot_argument(
+    parser: argparse.ArgumentParser | argparse._ArgumentGroup,
+    *,
+    help: str,
+    default: str | None = None,
+    old: Sequence[str] = ("--firmware",),
+) -> None:
+    """``--autopilot {ardupilot,px4}`` (stored as ``args.autopilot``), the one word for the
+    autopilot on every command; ``old`` are the names it had before (``--firmware``,
+    ``--flavour``), still taken, with a note that they are deprecated."""
+    names = tuple(AUTOPILOTS)
+    parser.add_argument("--autopilot", choices=names, default=default, help=help)
+    for flag in old:
+        parser.add_argument(
+            flag,
+            dest="autopilot",
+            choices=names,
+            action=_DeprecatedAlias,
+            new="--autopilot",
+            help=argparse.SUPPRESS,
+        )
 
 
 def add_quiet_argument(parser: argparse.ArgumentParser | argparse._ArgumentGroup) -> None:
