@@ -128,8 +128,8 @@ def test_the_mock_vehicle_flies_no_stretch_longer_than_the_derived_reserve_cover
     check of an error stays within the derived reserve, and within the route's own leg-by-leg
     need (its turns, helices and gusts)."""
     from benchmarks.turn_entry import stretches
-    from gcs_planner.aircraft.reserve import altitude_of
     from gcs_planner.mission.plan_json import reserve_of
+    from gcs_planner.scenario.model import altitude_of
 
     result = planned(dataset, firmware, wind, gust)
     reserve = result.scenario.params.reserve

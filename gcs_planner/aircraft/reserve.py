@@ -52,7 +52,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Protocol
 
 from gcs_planner.aircraft.profile import (
     DEFAULT_RESERVE_MAX_SHARE,
@@ -62,10 +62,33 @@ from gcs_planner.aircraft.profile import (
 )
 
 if TYPE_CHECKING:
-    from collections.abc import Callable
+    from collections.abc import Callable, Sequence
 
-    from gcs_planner.core.route import Route
-    from gcs_planner.scenario.model import Scenario
+
+# What the reserve reads of a route (gcs_planner.core.route.Route is one): the aircraft's
+# terms sit below the planner, so they name the shape, not the planner's class.
+class _Kind(Protocol):
+    name: str
+
+
+class _Leg(Protocol):
+    length: float
+    turn_angle: float
+    helix_turns: int
+
+
+class _Stop(Protocol):
+    id: str
+    kind: _Kind
+    leg: _Leg | None
+
+
+class Route(Protocol):
+    """A route as the reserve reads it: its stops, each with the leg that reaches it."""
+
+    @property
+    def stops(self) -> Sequence[_Stop]: ...
+
 
 # The turns a stretch between two resets of one error is planned to hold (see the docstring).
 TURNS_PER_STRETCH = 2
@@ -385,9 +408,3 @@ def _tuned(firmware: str, values: Mapping[str, float] | None) -> str:
     given = [f"{k} {float(values[k]):g}" for k in autopilot_for(firmware).guidance
              if values and k in values]  # fmt: skip
     return f" (the vehicle's {', '.join(given)})" if given else ""
-
-
-def altitude_of(scenario: Scenario) -> Callable[[str], float]:
-    """A point's altitude above sea level (m) by its id, as the envelope's TAS takes it."""
-    base = scenario.origin.alt if scenario.origin else 0.0
-    return lambda point_id: float(scenario.xyz[scenario.index_of(point_id), 2]) + base

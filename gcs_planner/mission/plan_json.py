@@ -11,13 +11,12 @@ from pathlib import Path
 from typing import Any
 
 from gcs_planner.aircraft.profile import TRACKING_ALLOWANCE_M
-from gcs_planner.aircraft.reserve import altitude_of
 from gcs_planner.core.capture import capture_check, capture_warning
 from gcs_planner.core.planner import Plan
 from gcs_planner.core.route import Route
 from gcs_planner.errors import InputError
 from gcs_planner.geometry.trajectory import leg_to_dict, scenario_trajectory
-from gcs_planner.scenario.model import Kind, Scenario
+from gcs_planner.scenario.model import Kind, Scenario, altitude_of
 
 FORMAT = "gcs-planner-plan"
 VERSION = 1

@@ -24,7 +24,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any, TextIO
 
-from gcs_planner.runtime.progress import on_terminal
+from gcs_planner.runtime.terminal import on_terminal
 
 # The kernels a plan compiles at its first use, with their compile time in seconds measured
 # from an empty cache (the package's __pycache__ emptied, 2 shared cores, numba 0.68, numba's

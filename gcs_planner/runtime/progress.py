@@ -16,27 +16,32 @@ from __future__ import annotations
 import math
 import sys
 import time
-from typing import TYPE_CHECKING, TextIO
+from typing import Protocol, TextIO
 
 from tqdm import tqdm
 
-if TYPE_CHECKING:
-    from gcs_planner.core.budget import Progress as SearchReport
+from gcs_planner.runtime.terminal import on_terminal
+
+__all__ = ["SearchProgress", "StatusLine", "on_terminal", "search_text"]
+
+
+class SearchReport(Protocol):
+    """What a search reports of itself (:class:`gcs_planner.core.budget.Progress` is one): the
+    runtime draws it without depending on the planner."""
+
+    labels: int
+    open_routes: int
+    routes_found: int
+    bound: float
+    seconds: float
+    stage: str
+    setup: str
 
 
 class _Bar(tqdm):
     # tqdm's monitor thread only corrects a bar that has not been redrawn for 10 s; every
     # caller here redraws on its own schedule, and a stray thread per process is not worth it.
     monitor_interval = 0
-
-
-def on_terminal(stream: TextIO) -> bool:
-    """Whether ``stream`` is a terminal (a stream without ``isatty`` is not)."""
-    isatty = getattr(stream, "isatty", None)
-    try:
-        return bool(isatty and isatty())
-    except ValueError:  # a closed file
-        return False
 
 
 class StatusLine:

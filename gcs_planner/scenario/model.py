@@ -7,6 +7,7 @@ knows which file format it came from.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from enum import IntEnum
 
@@ -265,3 +266,9 @@ class Scenario:
             "H": int(np.sum(self.kind == Kind.H)),
             "unreliable": int(np.sum(self.unreliable)),
         }
+
+
+def altitude_of(scenario: Scenario) -> Callable[[str], float]:
+    """A point's altitude above sea level (m) by its id, as the envelope's TAS takes it."""
+    base = scenario.origin.alt if scenario.origin else 0.0
+    return lambda point_id: float(scenario.xyz[scenario.index_of(point_id), 2]) + base
