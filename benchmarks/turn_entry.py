@@ -19,7 +19,7 @@ import math
 import sys
 
 from benchmarks.reserve import GUST, flown_at, planned
-from gcs_planner.aircraft.reserve import altitude_of
+from gcs_planner.scenario.model import altitude_of
 
 
 def stretches(

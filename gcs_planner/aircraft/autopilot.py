@@ -112,6 +112,11 @@ class MissionProtocol:
     serves_mission_file: bool
     # PX4 sets MAV_PROTOCOL_CAPABILITY_MISSION_FLOAT in AUTOPILOT_VERSION.
     announces_mission_float: bool
+    # PX4 takes a command only in the frame ``MavlinkMissionManager::parse_mavlink_mission_item``
+    # maps it for (``mavlink_mission.cpp``: NAV items in a global frame, DO/CONDITION items in
+    # frame MISSION) and refuses any other MAV_MISSION_UNSUPPORTED; ArduPilot stores a command
+    # it knows whatever the frame (``AP_Mission::mavlink_int_to_mission_cmd``).
+    commands_by_frame: bool = False
 
 
 # MAV_MISSION_RESULT (common.xml)
@@ -148,6 +153,7 @@ class Autopilot:
     airspeed_range: tuple[str, str] = ("", "")
     speed_outside_range: str = "clamped"
     title: str = ""  # the name a reader knows it by
+    code_name: str = ""  # the short name its code goes by ("ArduPlane's L1", "PX4's npfg")
     path_follower: str = ""  # "L1" (AP_L1_Control) or "npfg" (PX4's npfg)
     # ArduPlane counts a waypoint reached within its param2 (else WP_RADIUS); PX4 fixed wing
     # ignores param2 and uses the vehicle-wide NAV_ACC_RAD or npfg's switch distance.
@@ -165,6 +171,10 @@ class Autopilot:
     # PX4 ends a NAV_LOITER_TO_ALT on the altitude and only on its last turn's exit course
     # (mission_block.cpp): a helix at the leg's own limit has nothing to spare.
     helix_exits_on_course: bool = False
+    # PX4 counts a waypoint reached only within NAV_FW_ALT_RAD of its altitude and circles it
+    # until then (mission_block.cpp, MissionBlock::is_mission_item_reached_or_completed);
+    # ArduPlane passes a waypoint at any altitude (commands_logic.cpp, Plane::verify_nav_wp).
+    circles_for_altitude: bool = False
     # ArduPilot reads its radio's RADIO_STATUS and slows mission requests to match
     # (GCS_MAVLINK::handle_radio_status, stream_slowdown_ms).
     reads_radio_status: bool = False
@@ -283,6 +293,7 @@ ARDUPLANE = Autopilot(
     airspeed_range=("AIRSPEED_MIN", "AIRSPEED_MAX"),
     speed_outside_range="ignored",
     title="ArduPlane",
+    code_name="ArduPlane",
     path_follower="L1",
     item_acceptance=True,
     loiter_widens_with_tas=True,
@@ -296,6 +307,7 @@ ARDUPLANE = Autopilot(
         writes_in_place=True,
         serves_mission_file=True,
         announces_mission_float=False,
+        commands_by_frame=False,
     ),
 )
 
@@ -342,10 +354,12 @@ PX4 = Autopilot(
     airspeed_range=("FW_AIRSPD_MIN", "FW_AIRSPD_MAX"),
     speed_outside_range="clamped",
     title="PX4 fixed wing",
+    code_name="PX4",
     path_follower="npfg",
     climbs_at_once=True,
     switches_early=True,
     helix_exits_on_course=True,
+    circles_for_altitude=True,
     refuses_mode_temporarily=True,
     protocol=MissionProtocol(
         answers_in_heard_spelling=True,
@@ -356,6 +370,7 @@ PX4 = Autopilot(
         writes_in_place=False,
         serves_mission_file=False,
         announces_mission_float=True,
+        commands_by_frame=True,
     ),
 )
 
@@ -409,6 +424,14 @@ class EffectiveParameters:
     npfg_period: float | None = None
     npfg_damping: float | None = None
     npfg_switch_multiplier: float | None = None
+
+    def guidance_loop(self) -> tuple[float, float]:
+        """(period s, damping) of the path follower's lateral loop: NAVL1_PERIOD / NAVL1_DAMPING
+        or NPFG_PERIOD / NPFG_DAMPING."""
+        if self.l1_period is not None and self.l1_damping is not None:
+            return self.l1_period, self.l1_damping
+        assert self.npfg_period is not None and self.npfg_damping is not None
+        return self.npfg_period, self.npfg_damping
 
     def switch_distance(self, ground_speed: float) -> float:
         """PX4: the npfg switch distance at ``ground_speed`` (m/s), NPFG_PERIOD * NPFG_DAMPING

@@ -17,7 +17,7 @@ import sys
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 
-from gcs_planner.aircraft.autopilot import autopilot_for, effective
+from gcs_planner.aircraft.autopilot import EffectiveParameters, autopilot_for, effective
 from gcs_planner.aircraft.profile import DerivedEnvelope, bank_angle_for, parse_wind
 from gcs_planner.aircraft.reserve import MAX_SHARE, DerivedReserve, gust_wander, late_entry
 from gcs_planner.errors import InputError
@@ -71,16 +71,9 @@ def derive_envelope(
     Bad values are InputError naming the flag."""
     terms, environment, toml, stated = _toml_terms(scenario)
     stated |= {k for k in _AIRCRAFT_FIGURES if getattr(args, k, None) is not None}
-    if "error_unit" in environment or "capture_radius" in environment:
-        scenario = scenario.with_vehicle(
-            error_unit=float(environment.get("error_unit", scenario.error_unit)),  # type: ignore[arg-type]
-            capture_radius=float(
-                environment.get("capture_radius", scenario.capture_radius)  # type: ignore[arg-type]
-            ),
-        )
-    if wind_text is None:
-        if "wind" in environment:
-            wind_text, wind_field = str(environment["wind"]), f"{toml}: environment.wind"
+    scenario = _with_environment_units(scenario, environment)
+    if wind_text is None and "wind" in environment:
+        wind_text, wind_field = str(environment["wind"]), f"{toml}: environment.wind"
     wind, wind_from = 0.0, None
     if wind_text is not None:
         try:
@@ -102,7 +95,6 @@ def derive_envelope(
     if sink is None and "max_sink_rate" in terms:
         sink = float(terms["max_sink_rate"])  # type: ignore[arg-type]
         file_terms.append("max_sink_rate")
-    flag_bank = getattr(args, "max_bank_angle", None)
     file_bank = (
         bank_angle_for(scenario.cruise_airspeed, scenario.params.turn_radius)
         if scenario.radius_source == "airspeed and bank"
@@ -123,77 +115,26 @@ def derive_envelope(
         and scenario.params.turn_radius > 0
     ):
         return scenario
-    origin = getattr(args, "vehicle_source", None) or "flag"
-    sources: list[tuple[str, str]] = []
     tuned_for, tuning = getattr(args, "vehicle_values", None) or (None, {})
     own = dict(tuning) if firmware is not None and firmware == tuned_for else {}
-    shipped = effective(firmware, own) if firmware is not None else None
-
-    def pick(name: str, given: float | None, default: float | None) -> float | None:
-        if given is not None:
-            sources.append((name, toml if name in file_terms else origin))
-            return float(given)
-        if default is not None:
-            sources.append((name, f"{firmware}'s shipped default"))
-            return float(default)
-        return None
-
-    base = scenario.origin.alt if scenario.origin else 0.0
-    altitude = float(scenario.xyz[:, 2].max()) + base
-    low_altitude = float(scenario.xyz[:, 2].min()) + base
-    eas_flag = getattr(args, "cruise_airspeed", None)
-    if eas_flag is None and (shipped is None or "cruise_airspeed" in stated):
-        eas = scenario.cruise_airspeed
-        sources.append(("cruise_airspeed", "scenario"))
-    else:
-        eas = pick("cruise_airspeed", eas_flag, shipped.cruise_airspeed if shipped else None)
-    if flag_bank is None and file_bank is not None:
-        bank: float | None = file_bank
-        sources.append(("max_bank_angle", "scenario"))
-    else:
-        bank = pick("max_bank_angle", flag_bank, shipped.bank_limit if shipped else None)
-    climb = pick("max_climb_rate", climb, shipped.climb_rate if shipped else None)
-    sink = pick("max_sink_rate", sink, shipped.sink_rate if shipped else None)
-    for name, value in (("--max-climb-rate", climb), ("--max-sink-rate", sink)):
-        if value is not None and not (math.isfinite(value) and value > 0):
-            raise InputError(f"must be a rate > 0 m/s (got {value:g})", field=name)
-    if bank is not None and not (math.isfinite(bank) and 0 < bank < 90):
-        raise InputError(f"must lie in (0, 90) degrees (got {bank:g})", field="--max-bank-angle")
-    assert eas is not None
-    given_radius = "turn_radius" in stated
-    r_stated = scenario.params.turn_radius
-    if bank is None and r_stated > 0:
-        # No bank given: the stated radius is the still-air radius at cruise; its bank at TAS
-        # turns the same way, and the wind widens the ground-track radius as (V + W)^2.
-        tas = DerivedEnvelope(eas, 45.0, 1.0, 1.0, 0.0, None, altitude, firmware).tas
-        bank = bank_angle_for(tas, r_stated)
-        sources.append(("max_bank_angle", f"implied by the turning radius {r_stated:g} m at TAS"))
-    env = DerivedEnvelope(
-        eas=float(eas),
-        bank_deg=float(bank) if bank is not None else 0.0,
-        climb_rate=math.inf if climb is None else climb,
-        sink_rate=math.inf if sink is None else sink,
-        wind=wind,
-        wind_from=wind_from,
-        altitude=altitude,
-        autopilot=firmware,
-        sources=tuple(sources),
-        low_altitude=low_altitude,
+    picked = _Picker(
+        firmware,
+        effective(firmware, own) if firmware is not None else None,
+        origin=getattr(args, "vehicle_source", None) or "flag",
+        toml=toml,
+        file_terms=file_terms,
     )
-    flier = shipped if shipped is not None or flown_by is None else effective(flown_by, {})
+    env = _envelope(args, scenario, picked, stated, climb, sink, file_bank, wind, wind_from)
+    flier = picked.shipped
+    if flier is None and flown_by is not None:
+        flier = effective(flown_by, {})
     env = _with_runs(env, args, scenario, flier)
     for name, why in env.refusals():
-        if name == "max_bank_angle" and bank is None:
+        if name == "max_bank_angle" and env.bank_deg <= 0:
             continue  # straight legs: no bank to derive a radius from
         flag = {"wind": wind_field}.get(name, "--" + name.replace("_", "-"))
         raise InputError(why, field=flag)
-    changes: dict[str, float] = {}
-    if bank is not None and not given_radius:
-        changes["turn_radius"] = env.turn_radius
-    if climb is not None and "max_climb_angle" not in stated:
-        changes["max_climb_angle"] = env.climb_angle
-    if sink is not None and "max_descent_angle" not in stated:
-        changes["max_descent_angle"] = env.descent_angle
+    changes = _changes(env, stated)
     runs = env.runs_source.startswith("derived")
     if runs and changes:
         changes["approach"], changes["departure"] = env.approach, env.departure
@@ -211,30 +152,150 @@ def derive_envelope(
             file=sys.stderr,
         )
         return scenario
-    # Each leg on the envelope of its own highest point, asked for only (--per-leg-envelope): at
-    # the legs' own limits the mock's flights overran what the derived reserve covers (tight
-    # turns low down entered late, more per stretch than the reserve's two; PX4 an extra lap on
-    # a helix in 10 m/s). The radius always; the angles under ArduPlane only: PX4 ends a helix's
-    # NAV_LOITER_TO_ALT on the altitude, and only on its last turn's exit course, and a helix at
-    # the leg's own limit reaches it there with nothing to spare (the dry run of dataset 1 in
-    # still air lost 30 of 200 flights, each a lap of 245 m more).
-    varies = []
-    if getattr(args, "per_leg_envelope", False):
-        varies = ["turn_radius"]
-        if (env.autopilot or flown_by) == "ardupilot":
-            varies += ["max_climb_angle", "max_descent_angle"]
-    # A stated direction: each leg's angles along its own track, where both come from the rates.
-    along = (
-        wind_from is not None and wind > 0
-        and "max_climb_angle" in changes and "max_descent_angle" in changes
-    )  # fmt: skip
-    env = replace(env, per_leg=tuple(k for k in varies if k in changes), along_track=along)
+    env = _with_leg_variation(env, args, changes, env.autopilot or flown_by)
     out = scenario.with_params(**changes)
     out = out.with_vehicle(
-        cruise_airspeed=float(eas),
+        cruise_airspeed=float(env.eas),
         envelope=env,
         radius_source="derived" if "turn_radius" in changes else out.radius_source,
     )
+    gust = _design_gust(args, gust, environment, toml)
+    return with_derived_reserve(out, env, gust, env.autopilot or flown_by, own)
+
+
+def _with_environment_units(scenario: Scenario, environment: Mapping[str, object]) -> Scenario:
+    """The scenario with the [environment] table's error unit and capture radius, if given."""
+    if "error_unit" not in environment and "capture_radius" not in environment:
+        return scenario
+    return scenario.with_vehicle(
+        error_unit=float(environment.get("error_unit", scenario.error_unit)),  # type: ignore[arg-type]
+        capture_radius=float(
+            environment.get("capture_radius", scenario.capture_radius)  # type: ignore[arg-type]
+        ),
+    )
+
+
+@dataclass
+class _Picker:
+    """Each figure of the envelope from what was given, else the autopilot's shipped default,
+    with where it came from (``sources``, the plan's account of its envelope)."""
+
+    firmware: str | None
+    shipped: EffectiveParameters | None
+    origin: str
+    toml: str
+    file_terms: list[str]
+    sources: list[tuple[str, str]] = field(default_factory=list)
+
+    def __call__(self, name: str, given: float | None, default: float | None) -> float | None:
+        if given is not None:
+            self.sources.append((name, self.toml if name in self.file_terms else self.origin))
+            return float(given)
+        if default is not None:
+            self.sources.append((name, f"{self.firmware}'s shipped default"))
+            return float(default)
+        return None
+
+
+def _envelope(
+    args: object,
+    scenario: Scenario,
+    pick: _Picker,
+    stated: set[str],
+    climb: float | None,
+    sink: float | None,
+    file_bank: float | None,
+    wind: float,
+    wind_from: float | None,
+) -> DerivedEnvelope:
+    """The envelope of the figures given (flags, the scenario's [vehicle]) or shipped, checked."""
+    shipped = pick.shipped
+    base = scenario.origin.alt if scenario.origin else 0.0
+    altitude = float(scenario.xyz[:, 2].max()) + base
+    low_altitude = float(scenario.xyz[:, 2].min()) + base
+    eas_flag = getattr(args, "cruise_airspeed", None)
+    if eas_flag is None and (shipped is None or "cruise_airspeed" in stated):
+        eas: float | None = scenario.cruise_airspeed
+        pick.sources.append(("cruise_airspeed", "scenario"))
+    else:
+        eas = pick("cruise_airspeed", eas_flag, shipped.cruise_airspeed if shipped else None)
+    flag_bank = getattr(args, "max_bank_angle", None)
+    if flag_bank is None and file_bank is not None:
+        bank: float | None = file_bank
+        pick.sources.append(("max_bank_angle", "scenario"))
+    else:
+        bank = pick("max_bank_angle", flag_bank, shipped.bank_limit if shipped else None)
+    climb = pick("max_climb_rate", climb, shipped.climb_rate if shipped else None)
+    sink = pick("max_sink_rate", sink, shipped.sink_rate if shipped else None)
+    for name, value in (("--max-climb-rate", climb), ("--max-sink-rate", sink)):
+        if value is not None and not (math.isfinite(value) and value > 0):
+            raise InputError(f"must be a rate > 0 m/s (got {value:g})", field=name)
+    if bank is not None and not (math.isfinite(bank) and 0 < bank < 90):
+        raise InputError(f"must lie in (0, 90) degrees (got {bank:g})", field="--max-bank-angle")
+    assert eas is not None
+    r_stated = scenario.params.turn_radius
+    if bank is None and r_stated > 0:
+        # No bank given: the stated radius is the still-air radius at cruise; its bank at TAS
+        # turns the same way, and the wind widens the ground-track radius as (V + W)^2.
+        tas = DerivedEnvelope(eas, 45.0, 1.0, 1.0, 0.0, None, altitude, pick.firmware).tas
+        bank = bank_angle_for(tas, r_stated)
+        pick.sources.append(
+            ("max_bank_angle", f"implied by the turning radius {r_stated:g} m at TAS")
+        )
+    return DerivedEnvelope(
+        eas=float(eas),
+        bank_deg=float(bank) if bank is not None else 0.0,
+        climb_rate=math.inf if climb is None else climb,
+        sink_rate=math.inf if sink is None else sink,
+        wind=wind,
+        wind_from=wind_from,
+        altitude=altitude,
+        autopilot=pick.firmware,
+        sources=tuple(pick.sources),
+        low_altitude=low_altitude,
+    )
+
+
+def _changes(env: DerivedEnvelope, stated: set[str]) -> dict[str, float]:
+    """The scenario's figures the envelope derives: those nobody stated directly."""
+    changes: dict[str, float] = {}
+    if env.bank_deg > 0 and "turn_radius" not in stated:
+        changes["turn_radius"] = env.turn_radius
+    if math.isfinite(env.climb_rate) and "max_climb_angle" not in stated:
+        changes["max_climb_angle"] = env.climb_angle
+    if math.isfinite(env.sink_rate) and "max_descent_angle" not in stated:
+        changes["max_descent_angle"] = env.descent_angle
+    return changes
+
+
+def _with_leg_variation(
+    env: DerivedEnvelope, args: object, changes: Mapping[str, float], flier: str | None
+) -> DerivedEnvelope:
+    """The envelope with what varies leg by leg: the figures each leg takes at its own highest
+    point (asked for only, --per-leg-envelope) and the angles along each leg's own track."""
+    # Each leg on the envelope of its own highest point, asked for only: at the legs' own
+    # limits the mock's flights overran what the derived reserve covers (tight turns low down
+    # entered late, more per stretch than the reserve's two). The radius always; the angles
+    # only where a helix has something to spare: PX4 ends a helix's NAV_LOITER_TO_ALT on the
+    # altitude, and only on its last turn's exit course (helix_exits_on_course), and a helix
+    # at the leg's own limit reaches it there with nothing to spare (docs/measurements.md).
+    varies = []
+    if getattr(args, "per_leg_envelope", False):
+        varies = ["turn_radius"]
+        if flier is not None and not autopilot_for(flier).helix_exits_on_course:
+            varies += ["max_climb_angle", "max_descent_angle"]
+    # A stated direction: each leg's angles along its own track, where both come from the rates.
+    along = (
+        env.wind_from is not None and env.wind > 0
+        and "max_climb_angle" in changes and "max_descent_angle" in changes
+    )  # fmt: skip
+    return replace(env, per_leg=tuple(k for k in varies if k in changes), along_track=along)
+
+
+def _design_gust(
+    args: object, gust: float | None, environment: Mapping[str, object], toml: str
+) -> float:
+    """The design gust (m/s per axis): the caller's, else --gust, else [environment] gust."""
     if gust is None:
         gust = getattr(args, "gust", None)
     gust_field = "--gust"
@@ -243,7 +304,7 @@ def derive_envelope(
     gust = 0.0 if gust is None else float(gust)
     if not (math.isfinite(gust) and 0.0 <= gust <= 50.0):
         raise InputError(f"must be a speed in [0, 50] m/s (got {gust:g})", field=gust_field)
-    return with_derived_reserve(out, env, gust, env.autopilot or flown_by, own)
+    return gust
 
 
 def with_derived_reserve(
@@ -292,7 +353,7 @@ def with_derived_reserve(
 
 
 def _with_runs(
-    env: DerivedEnvelope, args: object, scenario: Scenario, shipped: object
+    env: DerivedEnvelope, args: object, scenario: Scenario, shipped: EffectiveParameters | None
 ) -> DerivedEnvelope:
     """The envelope with its straight run-in and run-out at every landmark: as stated (flags or
     the scenario), else the autopilot's settle distance at the largest ground speed (docs/
@@ -308,15 +369,16 @@ def _with_runs(
         return replace(env, approach=p.approach, departure=p.departure, runs_source="stated")
     if shipped is None or env.bank_deg <= 0:
         return env
-    d = shipped.settle_distance(env.ground_speed_max)  # type: ignore[attr-defined]
-    firmware = shipped.firmware  # type: ignore[attr-defined]
+    d = shipped.settle_distance(env.ground_speed_max)
+    firmware = shipped.firmware
+    ap = autopilot_for(firmware)
     why = f"derived: {firmware}'s settle distance at {env.ground_speed_max:.1f} m/s ground " + (
         "speed, the L1 distance NAVL1_PERIOD * NAVL1_DAMPING * V / pi"
-        if firmware == "ardupilot"
+        if ap.path_follower == "L1"
         else "speed, npfg's track error bound NPFG_PERIOD * NPFG_DAMPING * V"
     )
-    values = shipped.values  # type: ignore[attr-defined]
-    names = autopilot_for(firmware).guidance[:2]
+    values = shipped.values
+    names = ap.guidance[:2]
     why += " (" + ", ".join(f"{n} {values[n]:g}" for n in names) + ")"
     return replace(env, approach=d, departure=d, runs_source=why)
 

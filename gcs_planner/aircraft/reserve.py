@@ -54,6 +54,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Protocol
 
+from gcs_planner.aircraft.autopilot import AUTOPILOTS, autopilot_for, effective
 from gcs_planner.aircraft.profile import (
     DEFAULT_RESERVE_MAX_SHARE,
     DRYDEN_SCALE_LENGTH_M,
@@ -316,28 +317,32 @@ def late_entry(
     values: Mapping[str, float] | None = None,
 ) -> tuple[float, str]:
     """(d, its rule): how late ``autopilot`` enters a turn of ``turn_radius`` metres flown at
-    ``ground_speed`` m/s (see the module docstring); None: the larger of both autopilots'.
+    ``ground_speed`` m/s (see the module docstring); None: the larger of every autopilot's.
     ``values``: the vehicle's own parameters (``--vehicle-from``; its NAVL1_PERIOD and
     NAVL1_DAMPING), else the shipped defaults."""
     # ArduPlane's L1 trails the arc; both autopilots' aircraft roll in over ROLL_RESPONSE_S,
     # which npfg's R/2 already holds (it turns within a few metres of the arc).
-    from gcs_planner.aircraft.autopilot import effective
+    found = {}
+    for name, ap in AUTOPILOTS.items():
+        if ap.path_follower == "L1":
+            own = dict(values or {}) if autopilot == name else {}
+            l1 = effective(name, own).settle_distance(ground_speed)
+            found[name] = (
+                l1 / 2.0 + ROLL_RESPONSE_S * ground_speed,
+                f"{ap.code_name}'s L1 = {l1:.0f} m{_tuned(name, own)}, d = L1/2 + "
+                f"{ROLL_RESPONSE_S:g} s of roll-in x {ground_speed:.1f} m/s",
+            )
+        else:
+            found[name] = (turn_radius / 2.0, f"{ap.code_name}'s npfg, d = R/2")
+    if autopilot in found:
+        return found[autopilot]
+    d, rule = max(found.values())
+    return d, f"the autopilot not named: the larger of {_every_code_name()}, {rule}"
 
-    own = dict(values or {}) if autopilot == "ardupilot" else {}
-    l1 = effective("ardupilot", own).settle_distance(ground_speed)
-    roll_in = ROLL_RESPONSE_S * ground_speed
-    ardupilot = (
-        l1 / 2.0 + roll_in,
-        f"ArduPlane's L1 = {l1:.0f} m{_tuned('ardupilot', own)}, d = L1/2 + "
-        f"{ROLL_RESPONSE_S:g} s of roll-in x {ground_speed:.1f} m/s",
-    )
-    px4 = (turn_radius / 2.0, "PX4's npfg, d = R/2")
-    if autopilot == "ardupilot":
-        return ardupilot
-    if autopilot == "px4":
-        return px4
-    d, rule = max(ardupilot, px4)
-    return d, f"the autopilot not named: the larger of ArduPlane's and PX4's, {rule}"
+
+def _every_code_name() -> str:
+    names = [f"{ap.code_name}'s" for ap in AUTOPILOTS.values()]
+    return ", ".join(names[:-1]) + " and " + names[-1]
 
 
 def track_wander(
@@ -373,25 +378,18 @@ def gust_wander(
 ) -> tuple[float, str]:
     """(the factor on (sigma / Vg)^2 / 2, its rule) for ``autopilot``'s path follower at
     ``tas`` (the fastest TAS: the gust's correlation time L / TAS is then shortest and the
-    loop passes most of it); None: the larger of both autopilots'. ``values``: the vehicle's
+    loop passes most of it); None: the larger of every autopilot's. ``values``: the vehicle's
     own parameters (its NAVL1_PERIOD / NAVL1_DAMPING or NPFG_PERIOD / NPFG_DAMPING), else the
     shipped defaults."""
-    from gcs_planner.aircraft.autopilot import effective
-
     tau = DRYDEN_SCALE_LENGTH_M / max(tas, 1.0)
-    ap = effective("ardupilot", dict(values or {}) if autopilot == "ardupilot" else {})
-    px = effective("px4", dict(values or {}) if autopilot == "px4" else {})
-    assert ap.l1_period and ap.l1_damping and px.npfg_period and px.npfg_damping
-    found = {
-        "ardupilot": (
-            track_wander(ap.l1_period, ap.l1_damping, tau),
-            "ArduPlane's L1" + _tuned("ardupilot", values if autopilot == "ardupilot" else None),
-        ),
-        "px4": (
-            track_wander(px.npfg_period, px.npfg_damping, tau),
-            "PX4's npfg" + _tuned("px4", values if autopilot == "px4" else None),
-        ),
-    }
+    found = {}
+    for name, ap in AUTOPILOTS.items():
+        own = values if autopilot == name else None
+        period, damping = effective(name, dict(own or {})).guidance_loop()
+        found[name] = (
+            track_wander(period, damping, tau),
+            f"{ap.code_name}'s {ap.path_follower}" + _tuned(name, own),
+        )
     if autopilot in found:
         f, who = found[autopilot]
     else:
@@ -403,8 +401,6 @@ def gust_wander(
 def _tuned(firmware: str, values: Mapping[str, float] | None) -> str:
     """The text ``" (the vehicle's NAVL1_PERIOD 20, ...)"`` for the guidance parameters
     ``values`` gives, ``""`` when it gives none (the shipped defaults)."""
-    from gcs_planner.aircraft.autopilot import autopilot_for
-
     given = [f"{k} {float(values[k]):g}" for k in autopilot_for(firmware).guidance
              if values and k in values]  # fmt: skip
     return f" (the vehicle's {', '.join(given)})" if given else ""
