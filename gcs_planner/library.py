@@ -45,8 +45,8 @@ def load_scenario(
     planning problem ``gcs-planner plan`` builds from it: a TOML's ``[vehicle]`` autopilot
     terms and ``[environment]`` derive the envelope and the reserve, and an aircraft with climb
     limits and turns keeps straight at every landmark for as long as ``autopilot``'s path
-    follower needs (``--firmware``; ArduPilot when None). ``autopilot`` given also fills what
-    the scenario leaves unstated with that autopilot's shipped defaults, as ``--firmware``.
+    follower needs (``--autopilot``; ArduPilot when None). ``autopilot`` given also fills what
+    the scenario leaves unstated with that autopilot's shipped defaults, as ``--autopilot``.
 
     Keyword overrides win over the file, as flags do on the command line: the model's parameters
     (``alpha1`` ... ``delta``, ``turn_radius``, ``p_success``, ``fail_residual``), the aircraft
@@ -73,11 +73,12 @@ def load_scenario(
                 f"must be an Origin or (lat, lon[, alt]), got {origin!r}", field="origin"
             ) from None
     scenario = read(path, overrides)
+    from gcs_planner.aircraft.autopilot import DEFAULT_AUTOPILOT
     from gcs_planner.aircraft.derive import AircraftTerms, derive_envelope
 
     stated = {k: overrides[k] for k in _AIRCRAFT_OVERRIDES if overrides.get(k) is not None}
-    terms = AircraftTerms(firmware=autopilot, **stated)
-    return derive_envelope(terms, scenario, flown_by=autopilot or "ardupilot")
+    terms = AircraftTerms(autopilot=autopilot, **stated)
+    return derive_envelope(terms, scenario, flown_by=autopilot or DEFAULT_AUTOPILOT)
 
 
 # The overrides that state the aircraft (the flags of the same names on the command line).

@@ -105,7 +105,7 @@ def test_the_derived_reserve_keeps_the_default_cap() -> None:
     terms = SHIPPED["ardupilot"]
     loaded = load_scenario(DATA / "dataset1.xlsx", {**TABLE2[1], **tight, "turn_radius": 50.0})
     assert loaded.reserve_source == "default"
-    s = derive_envelope(SimpleNamespace(firmware="ardupilot", **terms), loaded, wind_text="10",
+    s = derive_envelope(SimpleNamespace(autopilot="ardupilot", **terms), loaded, wind_text="10",
                         gust=5.0)  # fmt: skip
     b = s.reserve_basis
     assert s.reserve_source == "derived" and b.capped and b.needed > s.params.reserve

@@ -33,7 +33,7 @@ class AircraftTerms:
     max_bank_angle: float | None = None
     max_climb_rate: float | None = None
     max_sink_rate: float | None = None
-    firmware: str | None = None
+    autopilot: str | None = None
     turn_radius: float | None = None
     max_climb_angle: float | None = None
     max_descent_angle: float | None = None
@@ -52,19 +52,19 @@ def derive_envelope(
     *,
     wind_text: str | None = None,
     wind_field: str = "--wind",
-    firmware: str | None = None,
-    firmware_defaults: bool = True,
+    autopilot: str | None = None,
+    autopilot_defaults: bool = True,
     flown_by: str | None = None,
     gust: float | None = None,
 ) -> Scenario:
     """The scenario with its envelope derived from the autopilot's terms, when any is given
-    (rates, bank, firmware or a design wind); else ``scenario`` unchanged (today's envelope).
+    (rates, bank, autopilot or a design wind); else ``scenario`` unchanged (today's envelope).
 
     Direct statements on the command line (``--turn-radius``, ``--max-climb-angle``,
     ``--max-descent-angle``) win; a figure that nothing derives keeps the scenario's value.
-    ``firmware_defaults`` False: no autopilot's shipped defaults fill what flags leave open (the
-    dry run, whose --firmware names the flown autopilot and must not change its plan).
-    ``flown_by``: the autopilot that will fly the plan when no firmware fills the envelope (the
+    ``autopilot_defaults`` False: no autopilot's shipped defaults fill what flags leave open (the
+    dry run, whose --autopilot names the flown autopilot and must not change its plan).
+    ``flown_by``: the autopilot that will fly the plan when no autopilot fills the envelope (the
     dry run's): its settle distance gives the straight run-in and run-out at every landmark.
     ``gust``: the design gust (m/s per axis; None: ``--gust``, else the scenario's
     [environment] gust, else 0), which the derived flight reserve covers.
@@ -80,12 +80,12 @@ def derive_envelope(
             wind, wind_from = parse_wind(wind_text)
         except ValueError as exc:
             raise InputError(str(exc), field=wind_field) from None
-    if firmware_defaults:
-        firmware = firmware if firmware is not None else getattr(args, "firmware", None)
-    else:
-        firmware = None
-    if firmware is None and firmware_defaults and "firmware" in terms:
-        firmware = str(terms["firmware"])
+    chosen = None
+    if autopilot_defaults:
+        chosen = autopilot if autopilot is not None else getattr(args, "autopilot", None)
+        named = terms.get("autopilot", terms.get("firmware"))  # the key's former name
+        if chosen is None and named is not None:
+            chosen = str(named)
     climb = getattr(args, "max_climb_rate", None)
     sink = getattr(args, "max_sink_rate", None)
     file_terms = []
@@ -104,9 +104,9 @@ def derive_envelope(
     # autopilot that flies it, keeps straight at every landmark for as long as its path
     # follower needs to settle (docs/model.md, "Straight at every landmark"); the contest's
     # model (unlimited climbs) is no aircraft's and is planned as the paper states it.
-    target = firmware or flown_by
+    target = chosen or flown_by
     runs_only = (
-        climb is None and sink is None and firmware is None and wind == 0 and file_bank is None
+        climb is None and sink is None and chosen is None and wind == 0 and file_bank is None
     )
     if runs_only and not (
         target is not None
@@ -116,10 +116,10 @@ def derive_envelope(
     ):
         return scenario
     tuned_for, tuning = getattr(args, "vehicle_values", None) or (None, {})
-    own = dict(tuning) if firmware is not None and firmware == tuned_for else {}
+    own = dict(tuning) if chosen is not None and chosen == tuned_for else {}
     picked = _Picker(
-        firmware,
-        effective(firmware, own) if firmware is not None else None,
+        chosen,
+        effective(chosen, own) if chosen is not None else None,
         origin=getattr(args, "vehicle_source", None) or "flag",
         toml=toml,
         file_terms=file_terms,
@@ -180,7 +180,7 @@ class _Picker:
     """Each figure of the envelope from what was given, else the autopilot's shipped default,
     with where it came from (``sources``, the plan's account of its envelope)."""
 
-    firmware: str | None
+    autopilot: str | None
     shipped: EffectiveParameters | None
     origin: str
     toml: str
@@ -192,7 +192,7 @@ class _Picker:
             self.sources.append((name, self.toml if name in self.file_terms else self.origin))
             return float(given)
         if default is not None:
-            self.sources.append((name, f"{self.firmware}'s shipped default"))
+            self.sources.append((name, f"{self.autopilot}'s shipped default"))
             return float(default)
         return None
 
@@ -237,7 +237,7 @@ def _envelope(
     if bank is None and r_stated > 0:
         # No bank given: the stated radius is the still-air radius at cruise; its bank at TAS
         # turns the same way, and the wind widens the ground-track radius as (V + W)^2.
-        tas = DerivedEnvelope(eas, 45.0, 1.0, 1.0, 0.0, None, altitude, pick.firmware).tas
+        tas = DerivedEnvelope(eas, 45.0, 1.0, 1.0, 0.0, None, altitude, pick.autopilot).tas
         bank = bank_angle_for(tas, r_stated)
         pick.sources.append(
             ("max_bank_angle", f"implied by the turning radius {r_stated:g} m at TAS")
@@ -250,7 +250,7 @@ def _envelope(
         wind=wind,
         wind_from=wind_from,
         altitude=altitude,
-        autopilot=pick.firmware,
+        autopilot=pick.autopilot,
         sources=tuple(pick.sources),
         low_altitude=low_altitude,
     )
@@ -370,9 +370,9 @@ def _with_runs(
     if shipped is None or env.bank_deg <= 0:
         return env
     d = shipped.settle_distance(env.ground_speed_max)
-    firmware = shipped.firmware
-    ap = autopilot_for(firmware)
-    why = f"derived: {firmware}'s settle distance at {env.ground_speed_max:.1f} m/s ground " + (
+    name = shipped.firmware
+    ap = autopilot_for(name)
+    why = f"derived: {name}'s settle distance at {env.ground_speed_max:.1f} m/s ground " + (
         "speed, the L1 distance NAVL1_PERIOD * NAVL1_DAMPING * V / pi"
         if ap.path_follower == "L1"
         else "speed, npfg's track error bound NPFG_PERIOD * NPFG_DAMPING * V"

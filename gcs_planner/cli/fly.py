@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from gcs_planner.aircraft.autopilot import AUTOPILOTS
 from gcs_planner.cli.upload import add_link_arguments, connect_client
 from gcs_planner.errors import InputError, LinkError
 from gcs_planner.mission.policy_missions import PolicyMissions
@@ -47,7 +48,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         vehicle = client.vehicle
         assert vehicle is not None
-        if vehicle.firmware in ("ardupilot", "px4") and vehicle.firmware != firmware:
+        if vehicle.firmware in AUTOPILOTS and vehicle.firmware != firmware:
             raise InputError(
                 f"the policy's missions are for {firmware} but the vehicle runs "
                 f"{vehicle.firmware}: export them again for it",

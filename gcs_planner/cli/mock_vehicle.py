@@ -6,7 +6,7 @@ With ``--radio sik[:AIR_RATE]`` the ground station reaches it through an emulate
 (:mod:`sim.radio`): CONN is then the ground radio's side, and the vehicle sits behind the air
 radio on a free port of 127.0.0.1.
 
-The ArduPilot flavour serves MAVLink FTP (:mod:`sim.ftp_server`, ``@MISSION/mission.dat``) and
+The ArduPilot mock serves MAVLink FTP (:mod:`sim.ftp_server`, ``@MISSION/mission.dat``) and
 advertises it in AUTOPILOT_VERSION; ``--no-ftp`` is an ArduPilot built without it."""
 
 from __future__ import annotations
@@ -16,7 +16,12 @@ import signal
 import sys
 from collections.abc import Callable
 
-from gcs_planner.cli.common import add_scenario_arguments, load_scenario_from_args
+from gcs_planner.aircraft.autopilot import DEFAULT_AUTOPILOT
+from gcs_planner.cli.common import (
+    add_autopilot_argument,
+    add_scenario_arguments,
+    load_scenario_from_args,
+)
 from gcs_planner.cli.upload import id_in
 from gcs_planner.errors import InputError
 from gcs_planner.link.connection import check_connection
@@ -24,7 +29,7 @@ from gcs_planner.link.signing import key_from_passphrase
 from sim.faults import FaultRates
 from sim.radio import RadioConfig, SikRadio, parse_radio
 from sim.replay import DEFAULT_CAPTURE_RADIUS_M
-from sim.vehicle import FLAVOURS, MockVehicle, free_udp_port
+from sim.vehicle import MockVehicle, free_udp_port
 
 
 def _rate(text: str) -> float:
@@ -114,7 +119,7 @@ def run(args: argparse.Namespace) -> int:
     vehicle = MockVehicle(
         vehicle_connect,
         scenario=scenario,
-        flavour=args.flavour,
+        flavour=args.autopilot,
         system_id=args.system_id,
         component_id=args.component_id,
         capacity=args.capacity,
@@ -150,7 +155,7 @@ def run(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
     print(
-        f"mock vehicle ({args.flavour}, system {args.system_id}) on {args.connect} with "
+        f"mock vehicle ({args.autopilot}, system {args.system_id}) on {args.connect} with "
         f"{scenario.n} landmarks from {scenario.source}; Ctrl-C to stop",
         file=sys.stderr,
     )
@@ -185,7 +190,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--connect", required=True, metavar="CONN", help="e.g. udpin:0.0.0.0:14550")
     p.add_argument("--scenario", required=True, help="scenario file: .toml, .csv or .xlsx")
     add_scenario_arguments(p, positional=False)
-    p.add_argument("--flavour", choices=FLAVOURS, default="ardupilot")
+    add_autopilot_argument(
+        p,
+        help="the autopilot the mock vehicle is (default ardupilot): its mission protocol, "
+        "parameters and navigation",
+        default=DEFAULT_AUTOPILOT,
+        old=("--flavour", "--firmware"),
+    )
     p.add_argument(
         "--system-id", "--source-system", dest="system_id", type=id_in(1, 255), default=1
     )

@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from gcs_planner.aircraft.autopilot import DEFAULT_AUTOPILOT
 from gcs_planner.aircraft.derive import design_wind_speed
 from gcs_planner.cli.common import (
     add_plan_arguments,
@@ -111,26 +112,24 @@ def run(args: argparse.Namespace) -> int:
         check_output_dir(args.out, replaceable=names)  # before the search, not after it
     apply_vehicle_from(args)
     scenario = load_scenario_from_args(args)
-    # The autopilot the plan is for (ArduPilot unless --firmware): its path follower sets the
+    # The autopilot the plan is for (ArduPilot unless --autopilot): its path follower sets the
     # straight runs at the landmarks, and the vehicle setup names its parameters.
-    scenario = derive_envelope(
-        args, scenario, wind_text=args.wind, flown_by=args.firmware or "ardupilot"
-    )
+    autopilot = args.autopilot or DEFAULT_AUTOPILOT
+    scenario = derive_envelope(args, scenario, wind_text=args.wind, flown_by=autopilot)
     scenario = apply_from_state(args, scenario)
     room = None
     if args.policy:
         scenario, room = _switch_room(scenario, switch_seconds)
     result = plan_from_args(args, scenario)
     plan_dict = plan_json.plan_to_dict(result)
-    firmware = args.firmware or "ardupilot"
-    setup = setup_needs(plan_dict, firmware, design_wind_speed(args, scenario))
-    plan_dict["setup"] = setup_to_dict(setup, firmware)
+    setup = setup_needs(plan_dict, autopilot, design_wind_speed(args, scenario))
+    plan_dict["setup"] = setup_to_dict(setup, autopilot)
     text = plan_json.dumps_dict(plan_dict)
     if args.json:
         sys.stdout.write(text)
     else:
         print(render(result))
-        print("\n" + "\n".join(setup_lines(setup, firmware)))
+        print("\n" + "\n".join(setup_lines(setup, autopilot)))
     if not args.out:
         return 0
     policy = None
@@ -170,7 +169,7 @@ def run(args: argparse.Namespace) -> int:
     unflyable = [f"{n.name}: {n.impossible}" for n in setup if n.impossible]
     if unflyable:
         # No value of the autopilot's parameters flies it: not handed out unasked.
-        cannot = f"no {firmware} setup flies this plan ({'; '.join(unflyable)})"
+        cannot = f"no {autopilot} setup flies this plan ({'; '.join(unflyable)})"
         if not args.allow_risky:
             from gcs_planner.core.choose import RiskyRouteError
 
@@ -179,12 +178,12 @@ def run(args: argparse.Namespace) -> int:
                 "max_descent_angle) so the plan keeps to what it flies, or pass --allow-risky"
             )
         warning = f"{warning}; {cannot}" if warning else cannot
-    extra: list[tuple[str, str | bytes]] = render_setup(setup, firmware, str(args.scenario))
+    extra: list[tuple[str, str | bytes]] = render_setup(setup, autopilot, str(args.scenario))
     if policy is not None:
         from gcs_planner.mission.policy_export import render_policy_files
 
         extra += render_policy_files(result, plan_dict, policy)
-    written = write_outputs(result, plan_dict, text, args.out, extra, firmware)
+    written = write_outputs(result, plan_dict, text, args.out, extra, autopilot)
     if not args.json:
         print(f"\nwrote {', '.join(str(p) for p in written)}")
     if warning:
@@ -202,14 +201,15 @@ def write_outputs(
     text: str,
     out: Path,
     extra: list | None = None,
-    firmware: str = "ardupilot",
+    autopilot: str = DEFAULT_AUTOPILOT,
 ) -> list[Path]:
     """plan.json and the vehicle setup beside the mission files of the chosen route for
-    ``firmware`` (default mission options; the `export` command takes the others), written as
+    ``autopilot`` (default mission options; the `export` command takes the others), written as
     one folder: all of it or none (a Ctrl-C part-way leaves the previous folder, or none)."""
     from gcs_planner.mission.export import write_all
 
-    return write_all(plan_dict, out, extra=(("plan.json", text), *(extra or ())), firmware=firmware)
+    files = (("plan.json", text), *(extra or ()))
+    return write_all(plan_dict, out, extra=files, firmware=autopilot)
 
 
 COLUMNS = (

@@ -16,6 +16,7 @@ import sys
 from gcs_planner.aircraft.autopilot import autopilot_for, effective
 from gcs_planner.aircraft.derive import derive_envelope, with_derived_reserve
 from gcs_planner.aircraft.profile import FIRMWARES
+from gcs_planner.cli.common import add_autopilot_argument
 
 __all__ = [
     "add_envelope_arguments",
@@ -36,10 +37,10 @@ def add_vehicle_from_argument(p: argparse.ArgumentParser) -> None:
 
 
 def add_envelope_arguments(
-    p: argparse.ArgumentParser, *, wind: bool = True, firmware: bool = True
+    p: argparse.ArgumentParser, *, wind: bool = True, autopilot: bool = True
 ) -> None:
     """The autopilot's terms the envelope is derived from (plan; dry-run has its own --wind and
-    --firmware, which it passes in)."""
+    --autopilot, which it passes in)."""
     g = p.add_argument_group("the aircraft in its autopilot's terms (derive the envelope)")
     g.add_argument(
         "--max-climb-rate", type=float, metavar="M/S", help="climb rate a mission climbs at"
@@ -54,12 +55,11 @@ def add_envelope_arguments(
         "the TAS at its own highest point, not the scenario's highest: shorter routes that the "
         "derived flight reserve does not yet cover everywhere (docs/model.md); dry-run them",
     )
-    if firmware:
-        g.add_argument(
-            "--firmware",
-            choices=FIRMWARES,
-            help="the autopilot that flies the plan: its shipped defaults fill the cruise "
-            "airspeed, bank limit and climb/sink rates not given otherwise",
+    if autopilot:
+        add_autopilot_argument(
+            g,
+            help="the autopilot that flies the plan (default: ardupilot): its shipped defaults "
+            "fill the cruise airspeed, bank limit and climb/sink rates not given otherwise",
         )
     if wind:
         g.add_argument(
@@ -149,8 +149,8 @@ def apply_vehicle_from(args: argparse.Namespace) -> None:
         if getattr(args, key, None) is None:
             setattr(args, key, value)
             used.append(f"{key} {value:.4g}")
-    if getattr(args, "firmware", None) is None:
-        args.firmware = firmware
+    if getattr(args, "autopilot", None) is None:
+        args.autopilot = firmware
     args.vehicle_source = f"the {firmware} vehicle"
     # Its path follower's tuning: the runs and the reserve are derived from it, not from the
     # shipped defaults, when the plan is for this autopilot.
