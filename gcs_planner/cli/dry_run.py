@@ -62,7 +62,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     )
     add_scenario_arguments(p)
     add_plan_arguments(p)
-    add_envelope_arguments(p, wind=False, firmware=False)
+    add_envelope_arguments(p, wind=False, autopilot=False)
     g = p.add_argument_group("dry run")
     g.add_argument("--firmware", choices=FIRMWARES, default="ardupilot", help="vehicle flavour")
     g.add_argument(
@@ -266,7 +266,7 @@ def run(args: argparse.Namespace) -> int:
         wind_field="--design-wind" if args.design_wind is not None else "--wind",
         # The flown autopilot's defaults fill only what a rate or bank flag leaves open: a dry
         # run with none plans with the stated (or assumed) envelope, as before.
-        firmware_defaults=False,
+        autopilot_defaults=False,
         # ... but the legs run straight over each landmark as far as the flown autopilot needs.
         flown_by=args.firmware,
         # The gusts flown are the plan's design gusts: the derived reserve covers them.
