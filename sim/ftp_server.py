@@ -65,7 +65,8 @@ from gcs_planner.link.mission_ftp import (
 )
 from gcs_planner.link.pacing import RadioFlow
 from gcs_planner.mission.items import MissionItem
-from sim.mission_server import MissionServer, check_item
+from sim.mission_items import check_item, mission_protocol
+from sim.mission_server import MissionServer
 
 MISSION_FILE = "@MISSION/mission.dat"
 STAT_SIZE = 1024 * 1024  # AP_Filesystem_Mission::stat's fixed size
@@ -129,6 +130,8 @@ class FtpServer:
         self.send = send
         self.missions = missions
         self.flavour = flavour
+        # ArduPilot serves its mission as @MISSION/mission.dat; PX4 has no such file.
+        self.serves_mission_file = mission_protocol(flavour).serves_mission_file
         self.radio = radio or RadioFlow()
         # GCS_FTP BurstReadFile: burst_delay_ms = 3000 * pkt_size / bw on a port without flow
         # control (bw = baud / 10 bytes per second).
@@ -225,7 +228,7 @@ class FtpServer:
         elif op in (ftp.OPEN_FILE_RO, ftp.CREATE_FILE, ftp.OPEN_FILE_WO):
             if s.mode:
                 self._nak(peer, p, 1, session=s.sid)  # one file per session
-            elif self.flavour != "ardupilot" or name != MISSION_FILE:
+            elif not self.serves_mission_file or name != MISSION_FILE:
                 self._nak(peer, p, ftp.FILE_NOT_FOUND, session=s.sid)
             elif op == ftp.OPEN_FILE_RO:
                 s.mode, s.content = "read", self._file()
@@ -257,7 +260,7 @@ class FtpServer:
         elif op == ftp.CALC_FILE_CRC32:
             # GCS_FTP::Session::handle_request, CalcFileCRC32: no file need be open; the
             # reply carries the session the worker gave the request.
-            if self.flavour != "ardupilot" or name != MISSION_FILE:
+            if not self.serves_mission_file or name != MISSION_FILE:
                 self._nak(peer, p, ftp.FILE_NOT_FOUND, session=s.sid)
                 return
             self.crcs_served += 1

@@ -45,6 +45,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
+from gcs_planner.aircraft.autopilot import autopilot_for
 from gcs_planner.aircraft.profile import VehicleProfile
 from gcs_planner.mission.items import MissionItem
 from gcs_planner.scenario.model import Kind, Scenario
@@ -100,7 +101,7 @@ class LiveFlight:
         self.scenario = scenario
         self.params = scenario.params.flown()  # the aircraft is held to the true limits
         self.flavour = flavour
-        self.home_at_seq0 = flavour == "ardupilot"
+        self.home_at_seq0 = autopilot_for(flavour).home_at_seq0
         self.capture_radius = capture_radius
         self.frame = scenario_frame(scenario)
         a = scenario.xyz[scenario.start]

@@ -159,6 +159,31 @@ def report_text(c: InsCorrection, delta: float) -> tuple[str, int]:
     return format_report(c.kind.name, c.id, outcome, detail), severity
 
 
+def _announce(
+    vehicle: Any, happened: Any, delta: float, now: float, met: list[str], repeats: list[list]
+) -> None:
+    """Tell the ground station what the flight did since the last tick: the items reached, the
+    corrections drawn and the landmarks missed, each report then sent again REPORT_COPIES - 1
+    times (``repeats``: [(text, severity), when next, copies left]); ``met`` gathers the
+    correction landmarks."""
+    for e in happened.reached:
+        vehicle._send(vehicle.mav.mission_item_reached_encode(e.seq))
+    for c in happened.corrections:
+        met.append(c.id)
+        text = report_text(c, delta)
+        vehicle._statustext(*text)
+        repeats.append([text, now + REPORT_REPEAT_S, REPORT_COPIES - 1])
+    for m in happened.missed:
+        text = (format_report(m.kind, m.id, "MISSED", f"by {m.miss:.1f}m"),
+                mavlink.MAV_SEVERITY_WARNING)  # fmt: skip
+        vehicle._statustext(*text)
+        repeats.append([text, now + REPORT_REPEAT_S, REPORT_COPIES - 1])
+    for r in repeats:
+        if r[2] > 0 and now >= r[1]:
+            vehicle._send_statustext_copy(*r[0])
+            r[1], r[2] = now + REPORT_REPEAT_S, r[2] - 1
+
+
 def fly_live(vehicle: Any, *, seed: int = 0, time_scale: float | None = None) -> LiveReport:
     """Fly ``vehicle``'s stored mission (a sim.vehicle.MockVehicle with a scenario), taking the
     uploads and set-current commands that arrive meanwhile."""
@@ -185,7 +210,7 @@ def fly_live(vehicle: Any, *, seed: int = 0, time_scale: float | None = None) ->
     server.listener = changes.put
     server.in_flight = True
     # ArduPilot writes uploaded items in place (see sim/live_flight.py); PX4 switches storage.
-    server.in_place = vehicle.flavour == "ardupilot"
+    server.in_place = server.protocol.writes_in_place
     vehicle.flying = True
     vehicle._heartbeat()
     boot = last = time.monotonic()
@@ -208,22 +233,7 @@ def fly_live(vehicle: Any, *, seed: int = 0, time_scale: float | None = None) ->
                 window = None
             if opened and (window is None or window.settling()):
                 window = _Window(sim_t)  # a new failure: the ground station may act again
-            for e in happened.reached:
-                vehicle._send(vehicle.mav.mission_item_reached_encode(e.seq))
-            for c in happened.corrections:
-                met.append(c.id)
-                text = report_text(c, delta)
-                vehicle._statustext(*text)
-                repeats.append([text, now + REPORT_REPEAT_S, REPORT_COPIES - 1])
-            for m in happened.missed:
-                text = (format_report(m.kind, m.id, "MISSED", f"by {m.miss:.1f}m"),
-                        mavlink.MAV_SEVERITY_WARNING)  # fmt: skip
-                vehicle._statustext(*text)
-                repeats.append([text, now + REPORT_REPEAT_S, REPORT_COPIES - 1])
-            for r in repeats:
-                if r[2] > 0 and now >= r[1]:
-                    vehicle._send_statustext_copy(*r[0])
-                    r[1], r[2] = now + REPORT_REPEAT_S, r[2] - 1
+            _announce(vehicle, happened, delta, now, met, repeats)
             while True:
                 try:
                     what, value = changes.get_nowait()

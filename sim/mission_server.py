@@ -49,48 +49,20 @@ from typing import Any
 
 from gcs_planner.aircraft.autopilot import autopilot_for
 from gcs_planner.link.connection import mavlink
-from gcs_planner.link.protocol import GLOBAL_FLOAT_FRAMES, GLOBAL_INT_FRAMES, item_to_message
-from gcs_planner.mission.items import (
-    MAV_MISSION_TYPE_MISSION,
-    MISSION_FRAMES,
-    POSITION_COMMANDS,
-    MissionItem,
+from gcs_planner.link.protocol import item_to_message
+from gcs_planner.mission.items import MAV_MISSION_TYPE_MISSION, MissionItem
+from sim.mission_items import (
+    Peer,
+    check_item,
+    item_from_wire,
+    legacy_item_message,
+    mission_protocol,
 )
-
-MAV_FRAME_MISSION = 2
-# ArduPilot: the commands this mock's ArduPlane stores, in any supported frame.
-SUPPORTED_COMMANDS = frozenset(
-    {16, 17, 18, 19, 20, 21, 22, 31, 112, 113, 114, 115, 176, 177, 178, 179, 183, 184, 189, 201}
-)
-# PX4 (mavlink_mission.cpp, parse_mavlink_mission_item), by frame. A global frame (0, 3, 5, 6):
-# WAYPOINT 16, LOITER_UNLIM 17, LOITER_TIME 19, LAND 21, TAKEOFF 22, LOITER_TO_ALT 31, ROI 80,
-# VTOL_TAKEOFF 84, VTOL_LAND 85, DO_SET_ROI_LOCATION 195, DO_SET_ROI 201, AUTOTUNE 212,
-# ARM_DISARM 400, CONDITION_GATE 4501, the fence vertices/circles 5001-5004, FENCE_RETURN 5000,
-# RALLY_POINT 5100. No LOITER_TURNS (18): PX4 answers it MAV_MISSION_UNSUPPORTED.
-PX4_GLOBAL_COMMANDS = frozenset(
-    {16, 17, 19, 21, 22, 31, 80, 84, 85, 195, 201, 212, 400, 4501, 5000, 5001, 5002, 5003, 5004,
-     5100}
-)  # fmt: skip
-# Frame MISSION (2): DO_JUMP 177, ROI 80 / DO_SET_ROI 201, WINCH 42600, GRIPPER 211,
-# CHANGE_SPEED 178, SET_HOME 179, LAND_START 189, TRIGGER_CONTROL 2003, DIGICAM 203,
-# MOUNT 204/205, GIMBAL 1000/1001, camera 530/531/534, IMAGE 2000/2001, VIDEO 2500/2501,
-# CONTROL_VIDEO 200, CAM_TRIGG_DIST 206, OBLIQUE_SURVEY 260, CAM_TRIGG_INTERVAL 214,
-# VTOL_TRANSITION 3000, NAV_DELAY 93, RTL 20, ROI_WPNEXT_OFFSET 196, ROI_NONE 197,
-# CONDITION_DELAY 112, CONDITION_DISTANCE 114, SET_ACTUATOR 187, AUTOTUNE 212, ARM_DISARM 400.
-PX4_MISSION_FRAME_COMMANDS = frozenset(
-    {20, 80, 93, 112, 114, 177, 178, 179, 187, 189, 196, 197, 200, 201, 203, 204, 205, 206, 211,
-     212, 214, 260, 400, 530, 531, 534, 1000, 1001, 2000, 2001, 2003, 2500, 2501, 3000, 42600}
-)  # fmt: skip
-ALT_RANGE_M = (-1000.0, 100_000.0)
-INT32 = (-(2**31), 2**31 - 1)
-FLOAT32_MAX = 3.4028234663852886e38
 
 MAV_MISSION_TYPE_FENCE = 1
 MAV_MISSION_TYPE_RALLY = 2
 MAV_MISSION_TYPE_ALL = 255
 KNOWN_TYPES = frozenset({MAV_MISSION_TYPE_MISSION, MAV_MISSION_TYPE_FENCE, MAV_MISSION_TYPE_RALLY})
-
-Peer = tuple[int, int]
 
 
 @dataclass
@@ -107,90 +79,6 @@ class Upload:
     @property
     def expected(self) -> int:
         return len(self.items)
-
-
-def _fits_int32(value: int) -> bool:
-    return INT32[0] <= value <= INT32[1]
-
-
-def supports(item: MissionItem, flavour: str = "ardupilot") -> bool:
-    """Whether ``flavour`` has a mission item for ``item``'s command in its frame."""
-    if flavour == "px4":
-        if item.frame == MAV_FRAME_MISSION:
-            return item.command in PX4_MISSION_FRAME_COMMANDS
-        return item.command in PX4_GLOBAL_COMMANDS
-    return item.command in SUPPORTED_COMMANDS
-
-
-def check_item(item: MissionItem, flavour: str = "ardupilot") -> int:
-    """The MAV_MISSION_RESULT ``flavour`` gives ``item``: ACCEPTED, or why not."""
-    if item.frame not in MISSION_FRAMES:
-        return mavlink.MAV_MISSION_UNSUPPORTED_FRAME
-    if not supports(item, flavour):
-        return mavlink.MAV_MISSION_UNSUPPORTED
-    if not 0 <= item.autocontinue <= 1:
-        return mavlink.MAV_MISSION_INVALID
-    if not _fits_int32(item.x):
-        return mavlink.MAV_MISSION_INVALID_PARAM5_X
-    if not _fits_int32(item.y):
-        return mavlink.MAV_MISSION_INVALID_PARAM6_Y
-    if math.isfinite(item.z) and abs(item.z) > FLOAT32_MAX:
-        return mavlink.MAV_MISSION_INVALID_PARAM7
-    for name, result in (
-        ("param1", mavlink.MAV_MISSION_INVALID_PARAM1),
-        ("param2", mavlink.MAV_MISSION_INVALID_PARAM2),
-        ("param3", mavlink.MAV_MISSION_INVALID_PARAM3),
-        ("param4", mavlink.MAV_MISSION_INVALID_PARAM4),
-    ):
-        value = getattr(item, name)
-        if math.isfinite(value) and abs(value) > FLOAT32_MAX:
-            return result
-    if item.command in POSITION_COMMANDS and item.frame != 2:
-        if not -900_000_000 <= item.x <= 900_000_000:
-            return mavlink.MAV_MISSION_INVALID_PARAM5_X
-        if not -1_800_000_000 <= item.y <= 1_800_000_000:
-            return mavlink.MAV_MISSION_INVALID_PARAM6_Y
-        if not (math.isfinite(item.z) and ALT_RANGE_M[0] <= item.z <= ALT_RANGE_M[1]):
-            return mavlink.MAV_MISSION_INVALID_PARAM7
-    return mavlink.MAV_MISSION_ACCEPTED
-
-
-def item_from_wire(msg: Any) -> MissionItem | int:
-    """The item a MISSION_ITEM_INT or legacy MISSION_ITEM carries, or the MAV_MISSION_RESULT
-    that refuses it (a legacy float that does not fit the integer the vehicle stores)."""
-    x, y = float(msg.x), float(msg.y)
-    if msg.get_type() == "MISSION_ITEM":
-        scale = 1e7 if msg.frame in GLOBAL_FLOAT_FRAMES or msg.frame in GLOBAL_INT_FRAMES else 1e4
-        x, y = x * scale, y * scale
-        if not (math.isfinite(x) and _fits_int32(round(x))):
-            return mavlink.MAV_MISSION_INVALID_PARAM5_X
-        if not (math.isfinite(y) and _fits_int32(round(y))):
-            return mavlink.MAV_MISSION_INVALID_PARAM6_Y
-    return MissionItem.from_wire(msg, round(x), round(y))
-
-
-def legacy_item_message(mav: Any, item: MissionItem, target: Peer) -> Any:
-    """MISSION_ITEM (float latitude/longitude in degrees), what autopilots answer a legacy
-    MISSION_REQUEST with."""
-    global_frame = item.frame in GLOBAL_FLOAT_FRAMES or item.frame in GLOBAL_INT_FRAMES
-    scale = 1e7 if global_frame else 1e4
-    return mav.mission_item_encode(
-        target[0],
-        target[1],
-        item.seq,
-        item.frame,
-        item.command,
-        item.current,
-        item.autocontinue,
-        item.param1,
-        item.param2,
-        item.param3,
-        item.param4,
-        item.x / scale,
-        item.y / scale,
-        item.z,
-        item.mission_type,
-    )
 
 
 def seq_from_param(value: float, count: int) -> int | None:
@@ -238,6 +126,7 @@ class MissionServer:
         self.statustext = statustext
         self.flavour = flavour
         self.home_at_seq0 = autopilot_for(flavour).home_at_seq0
+        self.protocol = mission_protocol(flavour)
         self.capacity = capacity
         self.home = home
         self.request_timeout = request_timeout
@@ -251,7 +140,9 @@ class MissionServer:
         self.completed: tuple[Peer, int] | None = None
         self.acks_sent: list[int] = []  # MAV_MISSION_RESULT of every MISSION_ACK sent
         self.conflicts = 0  # uploads aborted because two senders with the same ids interleaved
-        self.int_mode = flavour != "ardupilot"  # PX4 answers in the spelling it last heard
+        # PX4 answers in the spelling it last heard, MISSION_ITEM_INT until it hears the legacy
+        # one; ArduPilot always asks with the legacy MISSION_REQUEST.
+        self.int_mode = self.protocol.answers_in_heard_spelling
         self.request_slowdown = 0.0  # ArduPilot's stream slowdown from its radio's reports
         # While a live flight flies the mission (sim/live_vehicle.py): ``listener`` hears every
         # change of the stored mission ("stored", items) and every item set current by the
@@ -339,9 +230,10 @@ class MissionServer:
     # Handlers ---------------------------------------------------------------------------------
     def handle(self, msg: Any, peer: Peer, address: Any = None) -> None:
         kind = msg.get_type()
-        if self.flavour == "px4" and kind in ("MISSION_ITEM", "MISSION_REQUEST"):
+        heard_spelling = self.protocol.answers_in_heard_spelling
+        if heard_spelling and kind in ("MISSION_ITEM", "MISSION_REQUEST"):
             self.int_mode = False
-        elif self.flavour == "px4" and kind in ("MISSION_ITEM_INT", "MISSION_REQUEST_INT"):
+        elif heard_spelling and kind in ("MISSION_ITEM_INT", "MISSION_REQUEST_INT"):
             self.int_mode = True
         if kind in ("MISSION_ITEM_INT", "MISSION_ITEM"):
             self.on_item(msg, peer, address)
@@ -355,7 +247,7 @@ class MissionServer:
             up = self.upload
             cancels = (
                 msg.type == mavlink.MAV_MISSION_OPERATION_CANCELLED
-                if self.flavour == "px4"
+                if self.protocol.cancelled_only_by_cancel
                 else msg.type != mavlink.MAV_MISSION_ACCEPTED
             )
             if up is not None and peer == up.peer and cancels:
@@ -379,11 +271,11 @@ class MissionServer:
             return
         up = self.upload
         if up is not None:
-            restart_by_ids = self.flavour == "ardupilot" and up.peer == peer
+            restart_by_ids = self.protocol.restarts_upload_by_ids and up.peer == peer
             if not (restart_by_ids or self._transfer_owner(peer, address)):
                 self.ack(peer, mavlink.MAV_MISSION_DENIED, mtype)
                 return
-            if self.flavour == "px4" and up.expected > 0:
+            if self.protocol.busy_while_receiving and up.expected > 0:
                 self.statustext("Mission upload busy", mavlink.MAV_SEVERITY_CRITICAL)
                 self.ack(peer, mavlink.MAV_MISSION_ERROR, mtype)
                 return
@@ -413,12 +305,7 @@ class MissionServer:
                 # again (handle_mission_item_both, idle with _transfer_seq == seq + 1);
                 # ArduPilot, no longer receiving, answers any item with MAV_MISSION_ERROR
                 # (GCS_MAVLINK::handle_mission_item in GCS_Common.cpp).
-                result = (
-                    mavlink.MAV_MISSION_ERROR
-                    if self.flavour == "ardupilot"
-                    else mavlink.MAV_MISSION_ACCEPTED
-                )
-                self.ack(peer, result)
+                self.ack(peer, self.protocol.final_item_again)
             return  # otherwise a late copy of an item from a finished transfer
         if not self._transfer_owner(peer, address):
             self.ack(peer, mavlink.MAV_MISSION_DENIED)

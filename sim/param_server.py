@@ -23,7 +23,12 @@ import threading
 from collections.abc import Callable
 from typing import Any
 
-from gcs_planner.aircraft.autopilot import EffectiveParameters, autopilot_for, effective
+from gcs_planner.aircraft.autopilot import (
+    DEFAULT_AUTOPILOT,
+    EffectiveParameters,
+    autopilot_for,
+    effective,
+)
 from gcs_planner.aircraft.profile import VehicleProfile
 from gcs_planner.link.connection import mavlink
 
@@ -100,7 +105,7 @@ class ParamServer:
         table: dict[str, tuple[float, int]],
         lock: threading.Lock,
         *,
-        flavour: str = "ardupilot",
+        flavour: str = DEFAULT_AUTOPILOT,
         statustext: Callable[..., None] | None = None,
     ) -> None:
         self.mav = mav

@@ -34,8 +34,12 @@ import time
 from collections.abc import Iterable
 from typing import Any
 
-from gcs_planner.aircraft.autopilot import EffectiveParameters, autopilot_for
-from gcs_planner.aircraft.profile import FIRMWARES
+from gcs_planner.aircraft.autopilot import (
+    AUTOPILOTS,
+    DEFAULT_AUTOPILOT,
+    EffectiveParameters,
+    autopilot_for,
+)
 from gcs_planner.link.connection import Link, mavlink
 from gcs_planner.link.pacing import RadioFlow
 from gcs_planner.mission.items import MissionItem
@@ -45,10 +49,11 @@ from sim import telemetry
 from sim.faults import FaultInjector, FaultRates
 from sim.ftp_server import FtpServer
 from sim.guidance import AutopilotParams
+from sim.mission_items import mission_protocol
 from sim.mission_server import MissionServer, seq_from_param
 from sim.param_server import ParamServer, parameter_table
 
-FLAVOURS = FIRMWARES
+FLAVOURS = tuple(AUTOPILOTS)  # the autopilots it can be (imported by the CLI and the dry run)
 # Copies of one frame by a radio or a router arrive within milliseconds; a ground station
 # resending on a timeout does so after its timeout (the link's: 1 s) with a new sequence number.
 # Half a second tells the two apart on a busy machine.
@@ -79,7 +84,7 @@ class MockVehicle:
         connection: str,
         *,
         scenario: Scenario | None = None,
-        flavour: str = "ardupilot",
+        flavour: str = DEFAULT_AUTOPILOT,
         system_id: int = 1,
         component_id: int = 1,
         capacity: int = 5000,
@@ -137,36 +142,10 @@ class MockVehicle:
         self.mav = self.link.mav
         self._lock = threading.Lock()  # guards mission, params, current
         self._fault_lock = threading.Lock()
-        self.faults_out: FaultInjector[bytes] | None = None
-        self.faults_in: FaultInjector[Any] | None = None
-        if faults_out is not None and faults_out.any:
-            self.faults_out = FaultInjector(faults_out, fault_seed)
-            self.mav.file = _FaultyWriter(self.link.conn, self.faults_out, self._fault_lock)
-        if faults_in is not None and faults_in.any:
-            self.faults_in = FaultInjector(faults_in, fault_seed + 1)
+        self._inject_faults(faults_out, faults_in, fault_seed)
         self._home = self._home_position()
-        self.missions = MissionServer(
-            self.mav,
-            self._send,
-            self._statustext,
-            flavour=flavour,
-            capacity=capacity,
-            home=self._home,
-            request_timeout=request_timeout,
-            upload_timeout=upload_timeout,
-            lock=self._lock,
-        )
-        profile = scenario.vehicle if scenario is not None else None
-        table = parameter_table(flavour, profile)
         self.autopilot = autopilot_for(flavour)
-        self.params = ParamServer(
-            self.mav, self._send, table, self._lock, flavour=flavour, statustext=self._statustext
-        )
-        self.radio = RadioFlow()  # its telemetry radio's RADIO_STATUS, as ArduPilot reads it
-        # MAVLink FTP (sim/ftp_server.py): ArduPilot serves its mission as @MISSION/mission.dat.
-        self.ftp = FtpServer(
-            self.mav, self._send, self.missions, flavour=flavour, baud=baud, radio=self.radio
-        )
+        self._serve(flavour, capacity, request_timeout, upload_timeout, baud)
         self.handler_errors = 0  # messages whose handling failed; the vehicle went on
         self.flight_errors = 0  # flights that raised; the vehicle said so and went on
         # (address, frame bytes) -> when it last arrived, for the duplicate window.
@@ -187,6 +166,49 @@ class MockVehicle:
         # MAVFTP served and advertised (MAV_PROTOCOL_CAPABILITY_FTP); off, it is an ArduPilot
         # built without AP_MAVLINK_FTP_ENABLED, which ignores FILE_TRANSFER_PROTOCOL.
         self.ftp_enabled = True
+
+    def _inject_faults(
+        self, faults_out: FaultRates | None, faults_in: FaultRates | None, seed: int
+    ) -> None:
+        """Put the fault injectors on what it sends (under the packing writer) and receives."""
+        self.faults_out: FaultInjector[bytes] | None = None
+        self.faults_in: FaultInjector[Any] | None = None
+        if faults_out is not None and faults_out.any:
+            self.faults_out = FaultInjector(faults_out, seed)
+            self.mav.file = _FaultyWriter(self.link.conn, self.faults_out, self._fault_lock)
+        if faults_in is not None and faults_in.any:
+            self.faults_in = FaultInjector(faults_in, seed + 1)
+
+    def _serve(
+        self,
+        flavour: str,
+        capacity: int,
+        request_timeout: float,
+        upload_timeout: float,
+        baud: int,
+    ) -> None:
+        """The parts that serve its messages: missions, parameters, MAVLink FTP."""
+        self.missions = MissionServer(
+            self.mav,
+            self._send,
+            self._statustext,
+            flavour=flavour,
+            capacity=capacity,
+            home=self._home,
+            request_timeout=request_timeout,
+            upload_timeout=upload_timeout,
+            lock=self._lock,
+        )
+        profile = self.scenario.vehicle if self.scenario is not None else None
+        table = parameter_table(flavour, profile)
+        self.params = ParamServer(
+            self.mav, self._send, table, self._lock, flavour=flavour, statustext=self._statustext
+        )
+        self.radio = RadioFlow()  # its telemetry radio's RADIO_STATUS, as ArduPilot reads it
+        # MAVLink FTP (sim/ftp_server.py): ArduPilot serves its mission as @MISSION/mission.dat.
+        self.ftp = FtpServer(
+            self.mav, self._send, self.missions, flavour=flavour, baud=baud, radio=self.radio
+        )
 
     # Lifecycle --------------------------------------------------------------------------------
     def start(self) -> MockVehicle:
@@ -364,7 +386,7 @@ class MockVehicle:
                 self._on_command_long(msg, peer)
             elif kind == "FILE_TRANSFER_PROTOCOL" and self.ftp_enabled:
                 self.ftp.handle(msg, peer)
-            elif kind == "RADIO_STATUS" and self.flavour == "ardupilot":
+            elif kind == "RADIO_STATUS" and self.autopilot.reads_radio_status:
                 # ArduPilot reads its own radio's reports (GCS_MAVLINK::handle_radio_status)
                 # and waits that much longer before asking again for a mission item
                 # (MissionItemProtocol::update: 1 s plus stream_slowdown_ms).
@@ -424,7 +446,7 @@ class MockVehicle:
             | mavlink.MAV_PROTOCOL_CAPABILITY_MISSION_RALLY
             | mavlink.MAV_PROTOCOL_CAPABILITY_FTP
         )
-        if self.flavour == "px4":
+        if mission_protocol(self.flavour).announces_mission_float:
             cap |= mavlink.MAV_PROTOCOL_CAPABILITY_MISSION_FLOAT
         if not self.ftp_enabled:
             cap &= ~mavlink.MAV_PROTOCOL_CAPABILITY_FTP
@@ -441,7 +463,7 @@ class MockVehicle:
         if self.autopilot.is_auto_mode(base, main, sub):
             return self._start_flight()
         self._statustext("Mode change refused: only the mission mode is modelled")
-        if self.flavour == "px4":
+        if self.autopilot.refuses_mode_temporarily:
             return mavlink.MAV_RESULT_TEMPORARILY_REJECTED
         custom = math.isfinite(base) and int(base) & mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
         # ArduPilot: no custom-mode flag is an invalid command (DENIED); a custom mode it cannot

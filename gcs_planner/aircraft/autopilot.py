@@ -89,8 +89,9 @@ class MissionProtocol:
     ArduPilot: ``GCS_MAVLINK`` (``GCS_Common.cpp``) and ``MissionItemProtocol.cpp``; PX4:
     ``src/modules/mavlink/mavlink_mission.cpp`` (``MavlinkMissionManager``)."""
 
-    # PX4 answers in the spelling it last heard (MISSION_ITEM or MISSION_ITEM_INT,
-    # ``_int_mode``); ArduPilot always asks for MISSION_ITEM_INT.
+    # PX4 asks and answers in the spelling it last heard (MISSION_ITEM or MISSION_ITEM_INT,
+    # ``_int_mode``); ArduPilot asks with the one request it always sends
+    # (``MissionItemProtocol::queued_request_send``, MISSION_REQUEST) and takes either item.
     answers_in_heard_spelling: bool
     # ArduPilot lets the same system and component ids restart an upload in progress
     # (``MissionItemProtocol::handle_mission_count``); PX4 only the transfer's owner.
