@@ -122,8 +122,23 @@ def test_upload_refuses_a_mission_for_the_other_firmware(tmp_path, capsys):
         plan = _plan_file(tmp_path, "ardupilot")
         code = main(["upload", str(plan), "--connect", f"udpout:127.0.0.1:{port}", "--quiet"])
         assert code == 4
-        assert "export it again with --firmware px4" in capsys.readouterr().err
+        assert "export it again with --autopilot px4" in capsys.readouterr().err
         assert vehicle.mission == []
+
+
+@pytest.mark.parametrize("command", [["upload", "m.plan"], ["download", "--out", "m.json"]])
+def test_upload_and_download_name_the_autopilot_with_autopilot(command, capsys):
+    """--autopilot names the vehicle's autopilot; --firmware, its old name, still works and
+    says it is deprecated."""
+    from gcs_planner.cli import build_parser
+
+    link = ["--connect", "udpout:127.0.0.1:14550"]
+    new = build_parser([command[0]]).parse_args([*command, *link, "--autopilot", "px4"])
+    assert new.autopilot == "px4" and "deprecated" not in capsys.readouterr().err
+    old = build_parser([command[0]]).parse_args([*command, *link, "--firmware", "px4"])
+    assert old.autopilot == "px4" and "--firmware is deprecated" in capsys.readouterr().err
+    unset = build_parser([command[0]]).parse_args([*command, *link])
+    assert unset.autopilot is None  # from the vehicle's heartbeat
 
 
 def test_upload_without_vehicle_and_bad_files_exit_cleanly(tmp_path, capsys):

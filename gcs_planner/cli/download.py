@@ -7,7 +7,7 @@ import json
 from dataclasses import asdict
 from pathlib import Path
 
-from gcs_planner.aircraft.autopilot import keeps_home_item
+from gcs_planner.aircraft.autopilot import AUTOPILOTS, keeps_home_item
 from gcs_planner.cli.upload import add_link_arguments, connect_client
 from gcs_planner.errors import InputError, LinkError
 from gcs_planner.mission.items import GLOBAL_FRAMES, POSITION_COMMANDS, MissionItem
@@ -40,8 +40,9 @@ def run(args: argparse.Namespace) -> int:
         client.link.close()
     if suffix == ".json":
         write_atomic(out, _items_json(items, firmware))
-    elif firmware == "px4":
-        # The export's rule, for the same reason: readers disagree on a PX4 file's row 0.
+    elif firmware in AUTOPILOTS and not AUTOPILOTS[firmware].home_at_seq0:
+        # The export's rule, for the same reason: readers disagree on a .waypoints row 0 of an
+        # autopilot that keeps no home item (PX4).
         raise InputError(
             PX4_REFUSED.replace("use --format plan (QGroundControl .plan)", "use --out FILE.json")
             + f"; nothing was written to {out}",

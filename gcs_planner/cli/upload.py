@@ -7,14 +7,15 @@ import sys
 from collections.abc import Callable
 from pathlib import Path
 
-from gcs_planner.aircraft.autopilot import autopilot_for
-from gcs_planner.cli.common import add_quiet_argument
+from gcs_planner.aircraft.autopilot import AUTOPILOTS
+from gcs_planner.cli.common import add_autopilot_argument, add_quiet_argument, check_link_flags
 from gcs_planner.errors import LinkError
 from gcs_planner.link.connection import open_link
-from gcs_planner.link.mission_client import FIRMWARES, TRANSFERS, VERIFIES, MissionClient
+from gcs_planner.link.mission_client import MissionClient
 from gcs_planner.link.mission_file import load_mission_file
 from gcs_planner.link.params import set_parameter
 from gcs_planner.link.progress import Progress
+from gcs_planner.link.session import TRANSFERS, VERIFIES
 from gcs_planner.link.signing import key_from_passphrase
 from gcs_planner.link.vehicle_check import ParameterNeed, refusal, vehicle_shortfalls
 from gcs_planner.mission import param_files
@@ -52,9 +53,7 @@ def add_link_arguments(p: argparse.ArgumentParser) -> None:
         default=190,
         help="our component id (default 190, MAV_COMP_ID_MISSIONPLANNER)",
     )
-    g.add_argument(
-        "--firmware", choices=FIRMWARES, help="autopilot firmware (default: from its heartbeat)"
-    )
+    add_autopilot_argument(g, help="the vehicle's autopilot (default: from its heartbeat)")
     g.add_argument(
         "--transfer",
         choices=TRANSFERS,
@@ -87,8 +86,6 @@ def id_in(low: int, high: int) -> Callable[[str], int]:
 
 def connect_client(args: argparse.Namespace) -> MissionClient:
     """Open the link, wait for the vehicle, return a client (the caller closes ``client.link``)."""
-    from gcs_planner.cli.common import check_link_flags
-
     check_link_flags(args)  # bad input, exit 2: before the link is opened
     key = key_from_passphrase(args.signing_key) if args.signing_key else None
     link = open_link(
@@ -108,7 +105,8 @@ def connect_client(args: argparse.Namespace) -> MissionClient:
         link,
         target_system=args.target_system,
         target_component=args.target_component,
-        firmware=args.firmware,
+        # A caller's own namespace (plan --vehicle-from) may name no autopilot.
+        firmware=getattr(args, "autopilot", None),
         timeout=args.timeout,
         retries=args.retries,
         progress=progress,
@@ -131,15 +129,15 @@ def connect_client(args: argparse.Namespace) -> MissionClient:
 
 
 def run(args: argparse.Namespace) -> int:
-    mission = load_mission_file(args.file, firmware=args.firmware, route_index=args.route_index)
+    mission = load_mission_file(args.file, firmware=args.autopilot, route_index=args.route_index)
     client = connect_client(args)
     try:
         vehicle = client.vehicle
         assert vehicle is not None
         if (
             Path(args.file).suffix.lower() in (".waypoints", ".json")
-            and args.firmware is None
-            and vehicle.firmware in FIRMWARES
+            and args.autopilot is None
+            and vehicle.firmware in AUTOPILOTS
         ):
             # A .waypoints file does not say which firmware it was written for (its row 0 is
             # home either way), and a plan JSON is built into a mission here: both follow the
@@ -149,12 +147,12 @@ def run(args: argparse.Namespace) -> int:
             )
         if (
             mission.firmware is not None
-            and vehicle.firmware in FIRMWARES
+            and vehicle.firmware in AUTOPILOTS
             and mission.firmware != vehicle.firmware
         ):
             raise LinkError(
                 f"{args.file} is a {mission.firmware} mission but the vehicle runs "
-                f"{vehicle.firmware}: export it again with --firmware {vehicle.firmware}"
+                f"{vehicle.firmware}: export it again with --autopilot {vehicle.firmware}"
             )
         if args.params is not None:
             _set_setup(client, args.params, vehicle.firmware)
@@ -196,7 +194,7 @@ def _check_parameters(client: MissionClient, args: argparse.Namespace, firmware:
     # The plan JSON's reader imports the planner: loaded only for a plan JSON.
     from gcs_planner.mission.plan_json import load_plan
 
-    if firmware not in FIRMWARES:
+    if firmware not in AUTOPILOTS:
         return
     plan = load_plan(args.file)
     target = client._target()
@@ -225,7 +223,7 @@ def _check_parameters(client: MissionClient, args: argparse.Namespace, firmware:
 def _set_values(client: MissionClient, firmware: str, values: dict[str, float], what: str) -> None:
     """Set each parameter (its MAVLink type from the autopilot's record) and read it back;
     refuse the upload naming every one the vehicle did not take."""
-    ap = autopilot_for(firmware) if firmware in FIRMWARES else None
+    ap = AUTOPILOTS.get(firmware)
     target = client._target()
     failed: list[str] = []
     for name, value in values.items():
@@ -249,10 +247,10 @@ def _set_values(client: MissionClient, firmware: str, values: dict[str, float], 
 def _setup_for(path: Path | str, firmware: str) -> SetupFile:
     """The setup file, refused when it is for another autopilot than the vehicle's."""
     setup = param_files.read(path)
-    if setup.autopilot and firmware in FIRMWARES and setup.autopilot != firmware:
+    if setup.autopilot and firmware in AUTOPILOTS and setup.autopilot != firmware:
         raise LinkError(
             f"{path} is a vehicle setup for {setup.autopilot} but the vehicle runs {firmware}: "
-            f"plan again with --firmware {firmware}. Nothing was uploaded"
+            f"plan again with --autopilot {firmware}. Nothing was uploaded"
         )
     return setup
 
@@ -271,7 +269,7 @@ def _check_setup_beside(client: MissionClient, mission: str, firmware: str) -> N
     parameters against the plan's needs (plan.json beside it too), else against the file's
     values; refused naming each shortfall."""
     path = param_files.find_beside(mission)
-    if path is None or firmware not in FIRMWARES:
+    if path is None or firmware not in AUTOPILOTS:
         return
     setup = _setup_for(path, firmware)
     plan_path = Path(mission).parent / "plan.json"

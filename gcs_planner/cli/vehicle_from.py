@@ -99,7 +99,7 @@ def apply_vehicle_from(args: argparse.Namespace) -> None:
         source_component=190,
         target_system=None,
         target_component=None,
-        firmware=None,
+        autopilot=None,
         timeout=1.5,
         retries=5,
         wait=15.0,

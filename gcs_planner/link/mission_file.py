@@ -10,7 +10,7 @@ import json
 from dataclasses import dataclass
 from pathlib import Path
 
-from gcs_planner.aircraft.autopilot import keeps_home_item
+from gcs_planner.aircraft.autopilot import DEFAULT_AUTOPILOT, keeps_home_item
 from gcs_planner.errors import InputError
 from gcs_planner.link.validate import item_problem
 from gcs_planner.mission.items import MissionItem
@@ -27,7 +27,7 @@ def load_mission_file(
     path: str | Path, *, firmware: str | None = None, route_index: int | None = None
 ) -> MissionToUpload:
     """Read ``path`` by its suffix. ``firmware`` numbers a .waypoints file and builds a plan
-    JSON's mission (default ardupilot); a .plan says its own."""
+    JSON's mission (default: the default autopilot, ArduPlane); a .plan says its own."""
     mission = _load(Path(path), firmware, route_index)
     _check_items(Path(path), mission)
     return mission
@@ -74,7 +74,7 @@ def _load(path: Path, firmware: str | None, route_index: int | None) -> MissionT
     if suffix == ".waypoints":
         from gcs_planner.mission.waypoints import read_waypoints
 
-        mf = read_waypoints(path, firmware or "ardupilot")
+        mf = read_waypoints(path, firmware or DEFAULT_AUTOPILOT)
         return MissionToUpload(tuple(mf.items), mf.firmware, None)
     if suffix == ".json":
         from gcs_planner.mission.builder import build_mission
@@ -86,7 +86,7 @@ def _load(path: Path, firmware: str | None, route_index: int | None) -> MissionT
         except json.JSONDecodeError as exc:
             raise InputError(f"not JSON: {exc.msg}", file=str(path), row=exc.lineno) from exc
         mission = build_mission(
-            plan, route_index=route_index, firmware=firmware or "ardupilot", source=str(path)
+            plan, route_index=route_index, firmware=firmware or DEFAULT_AUTOPILOT, source=str(path)
         )
         radius = mission.loiter_param[1] if mission.loiter_param else None
         return MissionToUpload(tuple(mission.items), mission.firmware, radius)

@@ -9,13 +9,11 @@ from __future__ import annotations
 import math
 import time
 
-from gcs_planner.aircraft.profile import LOITER_RADIUS_PARAM
+from gcs_planner.aircraft.autopilot import AUTOPILOTS
 from gcs_planner.errors import LinkError
 from gcs_planner.link.connection import Link, mavlink
 from gcs_planner.link.protocol import DEFAULT_RETRIES, DEFAULT_TIMEOUT_S
 
-# name and MAV_PARAM_TYPE of the loiter radius, per firmware.
-LOITER_RADIUS = LOITER_RADIUS_PARAM
 _INT_TYPES = {
     mavlink.MAV_PARAM_TYPE_INT8: (-(2**7), 2**7 - 1),
     mavlink.MAV_PARAM_TYPE_INT16: (-(2**15) + 1, 2**15 - 1),
@@ -115,9 +113,11 @@ def set_loiter_radius(
     timeout: float = DEFAULT_TIMEOUT_S,
     retries: int = DEFAULT_RETRIES,
 ) -> float:
-    """Set the firmware's loiter radius parameter to ``radius_m`` (metres), confirmed."""
-    try:
-        name, ptype = LOITER_RADIUS[firmware]
-    except KeyError:
-        raise LinkError(f"unknown firmware {firmware!r}: expected ardupilot or px4") from None
+    """Set the firmware's loiter radius parameter (its name and MAV_PARAM_TYPE from the
+    autopilot's record) to ``radius_m`` (metres), confirmed."""
+    ap = AUTOPILOTS.get(firmware)
+    if ap is None:
+        known = " or ".join(AUTOPILOTS)
+        raise LinkError(f"unknown firmware {firmware!r}: expected {known}")
+    name, ptype = ap.loiter_radius_param, ap.loiter_radius_type
     return set_parameter(link, target, name, radius_m, ptype, timeout=timeout, retries=retries)
