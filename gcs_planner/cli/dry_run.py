@@ -27,7 +27,7 @@ from gcs_planner.dryrun.run import (
 )
 from gcs_planner.dryrun.track import write_track
 from gcs_planner.errors import InputError, LinkError
-from gcs_planner.link.mission_client import FIRMWARES
+from gcs_planner.aircraft.profile import FIRMWARES
 from gcs_planner.link.protocol import DEFAULT_TIMEOUT_S
 from gcs_planner.mission.geo_exports import trajectory_local
 from gcs_planner.mission.plan_json import plan_to_dict
