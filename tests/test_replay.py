@@ -9,6 +9,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from gcs_planner.aircraft.autopilot import autopilot_for
 from gcs_planner.core.probability import success_probability
 from gcs_planner.core.route import Leg, evaluate_route
 from gcs_planner.geometry.dubins import cs_leg
@@ -18,7 +19,7 @@ from gcs_planner.scenario.generate import DATASET1, random_scenario
 from gcs_planner.scenario.georef import LocalFrame
 from gcs_planner.scenario.model import Kind, Origin, Scenario
 from sim.guidance import AutopilotParams
-from sim.replay import CHORD_SHORTFALL, QUANTISATION_M
+from sim.replay import CHORD_SHORTFALL, QUANTISATION_M, flavour_for
 from sim.replay import replay as fly_and_replay
 
 # The flown length may differ from the planned one: the aircraft overshoots a little after each
@@ -29,8 +30,7 @@ FLIGHT_TOLERANCE = 1e-4  # of the planned length
 def replay(items, sc, **kw):
     """The replay with the exporter's small acceptance radius (1 m, also PX4's NAV_ACC_RAD as
     the dry run sets it), so that both autopilots overfly each point."""
-    home = kw.get("home_at_seq0", False)
-    flavour = "ardupilot" if home else "px4"
+    flavour = flavour_for(kw.get("home_at_seq0", False))
     kw.setdefault(
         "autopilot",
         AutopilotParams(flavour, acceptance_radius=1.0, loiter_radius=sc.params.turn_radius),
@@ -39,6 +39,11 @@ def replay(items, sc, **kw):
 
 
 ORIGIN = Origin(30.5, 123.5, 0.0)
+
+
+@pytest.mark.parametrize("home", [True, False])
+def test_the_autopilot_flown_by_default_is_the_one_that_keeps_home_as_the_mission_says(home):
+    assert autopilot_for(flavour_for(home)).home_at_seq0 == home
 
 
 def line_scenario(kinds: str, unreliable: str = "", spacing: float = 12_000.0) -> Scenario:
