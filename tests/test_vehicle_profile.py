@@ -49,8 +49,12 @@ def test_isa_and_tas_against_hand_computation():
     # 5000 m: T = 288.15 - 32.5 = 255.65 K; sigma = (255.65 / 288.15)^4.2559 = 0.6009
     assert isa_density_ratio(5000.0) == pytest.approx(0.6009, abs=2e-4)
     assert tas_from_eas(20.0, 5000.0) == pytest.approx(20.0 / math.sqrt(0.6009), rel=2e-4)
-    # above the tropopause the ratio stays at 11 km's (the cap)
-    assert isa_density_ratio(12_000.0) == isa_density_ratio(11_000.0)
+    # above the tropopause the temperature holds (216.65 K) and the density falls as
+    # exp(-g dh / (R T11)): 1 km higher, 0.8541 of 11 km's; below sea level, sea level's
+    assert isa_density_ratio(12_000.0) == pytest.approx(
+        isa_density_ratio(11_000.0) * math.exp(-9.80665 * 1000 / (287.05287 * 216.65)), rel=1e-12
+    )
+    assert isa_density_ratio(-50.0) == 1.0
 
 
 def test_angles_and_radius_against_hand_computation():

@@ -12,10 +12,8 @@ Troposphere: T = T0 - L h, rho / rho0 = (T / T0) ** (g / (R L) - 1), valid to 11
 the tropopause's temperature holds (isothermal layer) and the density falls exponentially.
 R is ICAO's specific gas constant of dry air, 287.05287 J/(kg K).
 
-One atmosphere for the planner and the mock vehicle. Two readings of it are in use:
-:func:`density_ratio` (the full model, sea level below 0 m: what the mock flies) and
-:func:`troposphere_density_ratio` (the troposphere's law continued below sea level and held at
-its tropopause value above 11 km: what the planner has planned with).
+One atmosphere for the planner and the mock vehicle: what the planner plans with is what the
+mock flies. Below sea level it is taken at sea level.
 
 This module imports nothing of the planner, the link or the simulator, so every room can import
 it.
@@ -50,14 +48,9 @@ def eas2tas(altitude_m: float) -> float:
     return 1.0 / math.sqrt(density_ratio(altitude_m))
 
 
-def troposphere_density_ratio(altitude_m: float) -> float:
-    """sigma = rho / rho0 by the troposphere's law at ``altitude_m`` metres (AMSL), held at the
-    tropopause's value above 11 km and continued below sea level."""
-    h = min(float(altitude_m), TROPOPAUSE_M)
-    return (1.0 - LAPSE_K_PER_M * h / T0_K) ** DENSITY_EXPONENT
-
-
-def troposphere_density_ratios(altitude_m: np.ndarray) -> np.ndarray:
-    """:func:`troposphere_density_ratio` at each of the altitudes ``altitude_m`` (metres AMSL)."""
-    h = np.minimum(np.asarray(altitude_m, dtype=float), TROPOPAUSE_M)
-    return (1.0 - LAPSE_K_PER_M * h / T0_K) ** DENSITY_EXPONENT
+def density_ratios(altitude_m: np.ndarray) -> np.ndarray:
+    """:func:`density_ratio` at each of the altitudes ``altitude_m`` (metres AMSL)."""
+    h = np.maximum(np.asarray(altitude_m, dtype=float), 0.0)
+    low = (1.0 - LAPSE_K_PER_M * np.minimum(h, TROPOPAUSE_M) / T0_K) ** DENSITY_EXPONENT
+    high = SIGMA11 * np.exp(-G0 * (h - TROPOPAUSE_M) / (R_AIR * T11_K))
+    return np.where(h <= TROPOPAUSE_M, low, high)

@@ -16,6 +16,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from gcs_planner.aircraft.atmosphere import density_ratio
 from gcs_planner.aircraft.autopilot import AUTOPILOTS
 
 # MAV_PARAM_TYPE: INT16 = 4, REAL32 = 9 (re-exported: the link and the mock name them from here).
@@ -227,19 +228,11 @@ def _rate(airspeed: float, angle_deg: float) -> float:
 # ---------------------------------------------------------------------------------------------
 # The envelope derived from the autopilot's terms (issue 32; docs/model.md)
 
-# ISA troposphere (ICAO Doc 7488): sea-level temperature 288.15 K, lapse 0.0065 K/m, and the
-# density exponent g / (R L) - 1 = 4.2559 (R = 287.053 J/(kg K)).
-ISA_T0_K = 288.15
-ISA_LAPSE_K_PER_M = 0.0065
-ISA_DENSITY_EXPONENT = G / (287.053 * ISA_LAPSE_K_PER_M) - 1.0
-ISA_TROPOPAUSE_M = 11_000.0
-
 
 def isa_density_ratio(altitude_m: float) -> float:
-    """sigma = rho / rho0 in the ISA troposphere at ``altitude_m`` metres (AMSL), capped at the
-    tropopause (11 km); below sea level the formula continues."""
-    h = min(float(altitude_m), ISA_TROPOPAUSE_M)
-    return (1.0 - ISA_LAPSE_K_PER_M * h / ISA_T0_K) ** ISA_DENSITY_EXPONENT
+    """sigma = rho / rho0 of the standard atmosphere at ``altitude_m`` metres (AMSL): the one
+    the mock flies (:mod:`gcs_planner.aircraft.atmosphere`)."""
+    return density_ratio(altitude_m)
 
 
 def tas_from_eas(eas: float, altitude_m: float) -> float:
