@@ -35,12 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gcs_planner.aircraft.profile import (
-    ISA_DENSITY_EXPONENT,
-    ISA_LAPSE_K_PER_M,
-    ISA_T0_K,
-    ISA_TROPOPAUSE_M,
-)
+from gcs_planner.aircraft.atmosphere import density_ratios
 from gcs_planner.aircraft.profile import G as G_MSS
 from gcs_planner.geometry.dubins import COINCIDENT_M, TWO_PI, _core
 
@@ -102,8 +97,7 @@ class LegEnvelope:
 
     def tas(self, z: np.ndarray) -> np.ndarray:
         """True airspeed at each altitude ``z`` (scenario metres; ISA)."""
-        h = np.minimum(np.asarray(z, dtype=float) + self.base_altitude, ISA_TROPOPAUSE_M)
-        sigma = (1.0 - ISA_LAPSE_K_PER_M * h / ISA_T0_K) ** ISA_DENSITY_EXPONENT
+        sigma = density_ratios(np.asarray(z, dtype=float) + self.base_altitude)
         return self.eas / np.sqrt(sigma)
 
     def airspeed_at(self, z: np.ndarray) -> np.ndarray:
