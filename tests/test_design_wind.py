@@ -71,8 +71,7 @@ DS2 = ["--alpha1", "20", "--alpha2", "10", "--beta1", "15", "--beta2", "20", "--
 
 def shipped(firmware: str) -> list[str]:
     """The autopilot's shipped envelope (gcs_planner/aircraft/autopilot.py), stated as a user
-    planning
-    for it would: dry-run's --firmware names the flown autopilot only."""
+    planning for it would: dry-run's --autopilot names the flown autopilot only."""
     e = effective(firmware, {})
     return ["--cruise-airspeed", f"{e.cruise_airspeed:g}", "--max-bank-angle",
             f"{e.bank_limit:g}", "--max-climb-rate", f"{e.climb_rate:g}", "--max-sink-rate",
@@ -91,7 +90,7 @@ def test_the_plan_for_a_10_ms_wind_is_never_lost_by_the_flight(
     vehicle set up for the plan, no run is lost by the flight (docs/measurements.md,
     benchmarks.wind_flight, 200 runs)."""
     rc = main(["dry-run", str(dataset_paths[workbook]), *limits, *shipped(firmware),
-               "--firmware", firmware, "--wind", "10", "--runs", "20", "--json", "--quiet",
+               "--autopilot", firmware, "--wind", "10", "--runs", "20", "--json", "--quiet",
                "--allow-risky"])  # fmt: skip
     d = json.loads(capsys.readouterr().out)
     assert d["verified"] and d["runs"] == 20 and d["flavour"] == firmware

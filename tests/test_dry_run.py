@@ -141,7 +141,7 @@ def flight_tolerance(d: dict) -> float:
 
 @pytest.mark.parametrize("firmware", ["ardupilot", "px4"])
 def test_cli_dry_run_json_both_flavours(capsys, line_csv, firmware):
-    rc, out, _ = run_cli(capsys, str(line_csv), *LINE_FLAGS, "--firmware", firmware, "--json")
+    rc, out, _ = run_cli(capsys, str(line_csv), *LINE_FLAGS, "--autopilot", firmware, "--json")
     d = json.loads(out)
     assert d["flavour"] == firmware
     assert d["route"] == [p[0] for p in LINE]
@@ -227,7 +227,7 @@ def test_loss_still_verifies_and_replays_the_same_mission(capsys, line_plan, lin
     assert lossy.verified and lossy.messages_dropped > 0
     assert lossy.rows == clean.rows and lossy.arrived == clean.arrived
     rc, out, _ = run_cli(
-        capsys, str(line_csv), *LINE_FLAGS, "--firmware", "px4", "--loss", "0.1",
+        capsys, str(line_csv), *LINE_FLAGS, "--autopilot", "px4", "--loss", "0.1",
         "--seed", "4", "--timeout", "0.3", "--json",
     )  # fmt: skip
     d = json.loads(out)
@@ -299,7 +299,7 @@ def test_contest_workbook_planned_for_unlimited_climb_is_lost_by_the_flight(
     flight, not chance, and says what the plan assumed. (Until issue 26 the mock climbed at
     whatever the plan asked and these verified and arrived.)"""
     rc, out, err = run_cli(
-        capsys, str(dataset_paths[dataset]), *flags, *FAST, "--firmware", firmware,
+        capsys, str(dataset_paths[dataset]), *flags, *FAST, "--autopilot", firmware,
         "--runs", "20", "--json", "--vehicle-as-is", "--allow-risky",
     )  # fmt: skip
     d = json.loads(out)

@@ -209,7 +209,7 @@ def test_px4_overflies_b_of_a_plan_without_run_outs(capsys):
     from pathlib import Path
 
     scenario = Path(__file__).resolve().parents[1] / "missions" / "jsbsim" / "scenario.toml"
-    rc = main(["dry-run", str(scenario), "--firmware", "px4", "--json", "--quiet"])
+    rc = main(["dry-run", str(scenario), "--autopilot", "px4", "--json", "--quiet"])
     d = json.loads(capsys.readouterr().out)
     assert rc == 0 and d["verified"] and d["arrived"] and d["ok"], (d["route"], d["why"])
     assert d["corrections_as_planned"] and d["flown_to_b"] is not None

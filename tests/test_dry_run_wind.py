@@ -29,7 +29,7 @@ def test_still_air_plan_of_dataset1_in_a_5_ms_wind(capsys, dataset_paths, firmwa
     dry run exits non-zero saying so and naming what it was not set up for; set up with the
     plan's vehicle setup (the default), the reserve covers the wind and no run is lost by it.
     Either way the report states the still-air assumption."""
-    argv = ["dry-run", str(dataset_paths[1]), *DS1, "--firmware", firmware, "--wind", "5",
+    argv = ["dry-run", str(dataset_paths[1]), *DS1, "--autopilot", firmware, "--wind", "5",
             "--runs", "6", "--json", "--quiet"]  # fmt: skip
     rc = main([*argv, "--vehicle-as-is"])
     out, err = capsys.readouterr()

@@ -29,10 +29,10 @@ DS2 = ["--alpha1", "20", "--alpha2", "10", "--beta1", "15", "--beta2", "20", "--
 
 def planned(path, design: str):
     """Dataset 2 planned as the dry run plans it for ArduPlane in the ``design`` wind."""
-    argv = ["dry-run", str(path), *DS2, "--firmware", "ardupilot"]
+    argv = ["dry-run", str(path), *DS2, "--autopilot", "ardupilot"]
     args = build_parser(argv).parse_args(argv)
     scenario = derive_envelope(args, load_scenario_from_args(args), wind_text=design,
-                               wind_field="--design-wind", firmware_defaults=False,
+                               wind_field="--design-wind", autopilot_defaults=False,
                                flown_by="ardupilot")  # fmt: skip
     return scenario, plan_from_args(args, scenario)
 

@@ -26,7 +26,7 @@ SCENARIO = ROOT / "missions" / "jsbsim" / "scenario.toml"
 
 @pytest.mark.parametrize("firmware", ["ardupilot", "px4"])
 def test_bundled_scenario_flies_on_jsbsim_through_upload_and_read_back(capsys, firmware):
-    rc = main(["dry-run", str(SCENARIO), "--flight-model", "jsbsim", "--firmware", firmware,
+    rc = main(["dry-run", str(SCENARIO), "--flight-model", "jsbsim", "--autopilot", firmware,
                "--json"])  # fmt: skip
     out, err = capsys.readouterr()
     d = json.loads(out)
@@ -136,7 +136,7 @@ def test_the_checked_point_mass_flies_as_the_point_mass(capsys):
     mass's, compiled as without the check (the same track to the centimetre)."""
     flights = []
     for extra in ([], ["--aircraft", "c172r"]):
-        rc = main(["dry-run", str(SCENARIO), "--firmware", "ardupilot", "--wind", "5@270",
+        rc = main(["dry-run", str(SCENARIO), "--autopilot", "ardupilot", "--wind", "5@270",
                    "--set-params", "--json", *extra])  # fmt: skip
         d = json.loads(capsys.readouterr().out)
         assert rc == 0 and d["arrived"] and d["airframe_limits"] == []

@@ -30,7 +30,7 @@ def coast_plans(tmp_path_factory) -> dict[str, Path]:
     out = {}
     for firmware in ("ardupilot", "px4"):
         folder = tmp_path_factory.mktemp(firmware) / "coast"
-        extra = [] if firmware == "ardupilot" else ["--firmware", "px4"]
+        extra = [] if firmware == "ardupilot" else ["--autopilot", "px4"]
         assert main(["plan", COAST, "--out", str(folder), "--quiet", *extra]) == 0
         out[firmware] = folder
     return out
@@ -151,7 +151,7 @@ def test_upload_refuses_a_setup_for_the_other_autopilot(coast_plans, capsys):
 @pytest.mark.parametrize("scenario", [COAST, EXAMPLE])
 def test_bundled_examples_fly_on_both_autopilots(scenario, firmware, capsys):
     """Every bundled example, default flags: verified, no run lost by the flight."""
-    rc = main(["dry-run", scenario, "--firmware", firmware, "--runs", "12", "--json", "--quiet"])
+    rc = main(["dry-run", scenario, "--autopilot", firmware, "--runs", "12", "--json", "--quiet"])
     report = json.loads(capsys.readouterr().out)
     assert report["verified"] and report["flight_losses"] == 0, report["lost_runs"][:3]
     assert report["setup_shortfalls"] == [] and report["setup"]

@@ -21,6 +21,7 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from gcs_planner.aircraft.autopilot import autopilot_for
 from gcs_planner.dryrun.confidence import wilson_interval
 from gcs_planner.errors import InputError, LinkError
 from gcs_planner.link.connection import open_link
@@ -35,8 +36,9 @@ from sim.live_vehicle import DEFAULT_TIME_SCALE
 from sim.replay import DEFAULT_CAPTURE_RADIUS_M, scenario_frame
 from sim.vehicle import MockVehicle, free_udp_port
 
-# PX4 ignores param2 on a fixed wing: the dry run's 1 m acceptance is its parameter.
-PX4_ACCEPTANCE = ("NAV_ACC_RAD", 1.0)
+# The dry run's waypoint acceptance radius (m): where the autopilot ignores a waypoint's own
+# (PX4 fixed wing ignores param2), it is set as the vehicle-wide parameter.
+DRY_RUN_ACCEPTANCE_M = 1.0
 
 
 @dataclass(frozen=True)
@@ -268,8 +270,9 @@ def _one_run(
         client = MissionClient(link, timeout=timeout, retries=retries, transfer="mission")
         try:
             client.connect(timeout=10.0)
-            if flavour == "px4":
-                settings = {PX4_ACCEPTANCE[0]: PX4_ACCEPTANCE[1], **settings}
+            ap = autopilot_for(flavour)
+            if not ap.item_acceptance:
+                settings = {ap.acceptance_param: DRY_RUN_ACCEPTANCE_M, **settings}
             for name, value in settings.items():
                 set_parameter(link, client._target(), name, value, timeout=timeout,
                               retries=retries)  # fmt: skip

@@ -26,7 +26,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from gcs_planner.aircraft.autopilot import keeps_home_item
+from gcs_planner.aircraft.autopilot import AUTOPILOTS, keeps_home_item
 from gcs_planner.errors import InputError, LinkError, UploadRefused
 from gcs_planner.link.connection import mavlink
 from gcs_planner.link.correction_report import CorrectionReport, parse_report
@@ -300,7 +300,7 @@ class PolicyFlight:
                 f"{why}; the vehicle still holds mission {self.flown!r}, whole "
                 "(read back), and flies it"
             )
-        if self.client.firmware == "px4":
+        if not writes_in_place(self.client.firmware):
             # PX4 receives into the storage it is not flying: it still flies the mission it had.
             return LinkError(f"{why}; the vehicle (PX4) keeps mission {self.flown!r} until an "
                             "upload completes, and flies it (not read back)")  # fmt: skip
@@ -400,3 +400,12 @@ def _resume_item(resume: int, current: int | None, old: Any, new: Any) -> int:
     if current <= shared and current < len(new):
         return current
     return max(resume, min(shared, len(new) - 1))
+
+
+def writes_in_place(firmware: str | None) -> bool:
+    """Whether ``firmware`` writes each uploaded item into the mission it flies (ArduPilot), so
+    that a failed upload leaves it holding part of the new mission; False for an autopilot that
+    receives into storage it is not flying (PX4). An autopilot without a record is taken to
+    write in place: the ground station then checks what it holds."""
+    ap = AUTOPILOTS.get(firmware or "")
+    return ap is None or ap.protocol is None or ap.protocol.writes_in_place

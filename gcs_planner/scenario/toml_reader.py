@@ -14,6 +14,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field, fields
 from pathlib import Path
 
+from gcs_planner.aircraft.autopilot import AUTOPILOTS
 from gcs_planner.errors import InputError
 from gcs_planner.scenario.model import Origin, Parameters
 
@@ -31,6 +32,9 @@ TOP_KEYS = (
     "origin",
     "vehicle",
     "environment",
+    # The dry run's seldom-changed settings (gcs_planner/dryrun/settings.py reads and checks
+    # them); a scenario is read the same with or without them.
+    "dry_run",
 )
 # [vehicle] in the autopilot's terms: the envelope is derived from these (cli/vehicle_from.py,
 # issue 32), so they are kept apart from the keys the scenario reader turns into parameters.
@@ -315,15 +319,16 @@ def read_scenario_toml(path: Path) -> ScenarioSpec:
 def _term(value: object, key: str, table: str, file: str, text: str) -> tuple[object, int | None]:
     """A [vehicle] autopilot term or an [environment] value, checked for its type and range:
     (value, line). Rates, the error unit and the capture radius are numbers > 0; the wind a
-    number >= 0 or "SPEED[@FROM_DEG]"; the firmware "ardupilot" or "px4"."""
+    number >= 0 or "SPEED[@FROM_DEG]"; the firmware one of ``AUTOPILOTS``."""
     line = key_line(text, table, key)
 
     def fail(why: str) -> InputError:
         return InputError(why, file=file, row=line, field=f"{table}.{key}")
 
     if key == "firmware":
-        if value not in ("ardupilot", "px4"):
-            raise fail(f'must be "ardupilot" or "px4" (got {value!r})')
+        if not isinstance(value, str) or value not in AUTOPILOTS:
+            names = " or ".join(f'"{name}"' for name in AUTOPILOTS)
+            raise fail(f"must be {names} (got {value!r})")
         return value, line
     if key == "wind":
         text_value = str(value) if _is_number(value) or isinstance(value, str) else None
