@@ -83,7 +83,7 @@ def test_pymavlink_reads_the_stated_home_as_row_0_and_the_items_after_it(tmp_pat
 
 def test_a_px4_waypoints_file_is_refused_with_the_reason(plan_file, tmp_path, capsys):
     out = tmp_path / "m.waypoints"
-    args = ["export", str(plan_file), "--format", "waypoints", "--firmware", "px4"]
+    args = ["export", str(plan_file), "--format", "waypoints", "--autopilot", "px4"]
     assert main([*args, "--out", str(out)]) == 2
     err = capsys.readouterr().err.strip()
     assert "QGroundControl" in err and "pymavlink" in err and "--format plan" in err

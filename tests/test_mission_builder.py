@@ -33,6 +33,8 @@ from gcs_planner.mission.builder import (
 from gcs_planner.mission.items import (
     MAV_CMD_DO_CHANGE_SPEED,
     MAV_CMD_NAV_LAND,
+    MAV_CMD_NAV_LOITER_TO_ALT,
+    MAV_CMD_NAV_LOITER_TURNS,
     MAV_CMD_NAV_LOITER_UNLIM,
     MAV_CMD_NAV_RETURN_TO_LAUNCH,
     MAV_CMD_NAV_WAYPOINT,
@@ -60,6 +62,8 @@ XYZ = np.array(
         [100_000.0, 59_000.0, 5_000.0],  # B
     ]
 )
+# The loiters a helix is written as (ArduPlane, PX4).
+HELICES = (MAV_CMD_NAV_LOITER_TURNS, MAV_CMD_NAV_LOITER_TO_ALT)
 KINDS = [Kind.A, Kind.V, Kind.H, Kind.V, Kind.H, Kind.V, Kind.B]
 ROUTES = ([0, 1, 2, 3, 4, 6], [0, 2, 4, 6], [0, 6])
 
@@ -441,12 +445,13 @@ def test_helices_become_loiters_at_the_turning_radius_where_the_plan_climbs(firm
     entry = plan["front"][0]
     helix_legs = [leg for leg in entry["legs"] if leg["helix_turns"] > 0]
     assert helix_legs, "the steep scenario must need helices"
-    loiters = [it for it in m.items if it.command in (18, 31)]
+    loiters = [it for it in m.items if it.command in HELICES]
     assert len(loiters) == len(helix_legs)
     frame = LocalFrame(ORIGIN)
     for leg, item in zip(helix_legs, loiters):
         geo = leg["geometry"]
-        assert item.command == (18 if firmware == "ardupilot" else 31)
+        want = MAV_CMD_NAV_LOITER_TURNS if firmware == "ardupilot" else MAV_CMD_NAV_LOITER_TO_ALT
+        assert item.command == want
         radius_param = item.param3 if firmware == "ardupilot" else item.param2
         assert abs(radius_param) == pytest.approx(200.0)
         # positive = clockwise (MAVLink): the opposite of our counter-clockwise sense
@@ -468,7 +473,8 @@ def test_helices_become_loiters_at_the_turning_radius_where_the_plan_climbs(firm
             assert z == pytest.approx(geo["tangent_point"][2], abs=0.01)
             # the loiter flies the arc too: the next item is the target's waypoint
             target = m.items[item.seq + 1]
-            assert target.command == 16 and target.note.startswith(("correction", "B"))
+            assert target.command == MAV_CMD_NAV_WAYPOINT
+            assert target.note.startswith(("correction", "B"))
     # every leg of the route is within the climb limits
     assert all(-5.0 - 1e-9 <= leg["path_angle_deg"] <= 4.0 + 1e-9 for leg in entry["legs"])
     # the correction points are still waypoints exactly on the landmarks
@@ -486,10 +492,10 @@ def test_loiter_turns_leave_on_the_tangent_in_the_exported_files():
     plan = make_plan(steep_scenario(), routes=([0, 1, 2, 3, 4, 6],), probability=False)
     m = build_mission(plan, firmware="ardupilot")
     back = loads_waypoints(dumps_waypoints(m)).items
-    turns = [it for it in back if it.command == 18]
+    turns = [it for it in back if it.command == MAV_CMD_NAV_LOITER_TURNS]
     assert turns and all(it.param2 == 1 for it in turns)
     doc = plan_document(m)
-    items = [i for i in doc["mission"]["items"] if i.get("command") == 18]
+    items = [i for i in doc["mission"]["items"] if i.get("command") == MAV_CMD_NAV_LOITER_TURNS]
     assert items and all(i["params"][1] == 1 for i in items)
 
 

@@ -294,7 +294,7 @@ def test_export_command_writes_each_format(plan_file, tmp_path, fmt, capsys):
 def test_export_command_options(plan_file, tmp_path):
     out = tmp_path / "m.plan"
     args = ["export", str(plan_file), "--format", "plan", "--out", str(out),
-            "--firmware", "px4", "--altitude-frame", "relative", "--capture-radius", "30",
+            "--autopilot", "px4", "--altitude-frame", "relative", "--capture-radius", "30",
             "--cruise-speed", "31", "--at-end", "rtl", "--route-index", "1",
             "--origin", "10,20,5", "--home", "10.01,20.01,2"]  # fmt: skip
     assert main(args) == 0

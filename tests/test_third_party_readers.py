@@ -29,6 +29,8 @@ AUTOPILOT = {
     "ardupilot": mavlink2.MAV_AUTOPILOT_ARDUPILOTMEGA,
     "px4": mavlink2.MAV_AUTOPILOT_PX4,
 }
+# The loiters a helix is written as (ArduPlane, PX4).
+LOITERS = (mavlink2.MAV_CMD_NAV_LOITER_TURNS, mavlink2.MAV_CMD_NAV_LOITER_TO_ALT)
 OPTIONS = [
     {
         "firmware": fw,
@@ -90,7 +92,7 @@ def assert_same(theirs, ours) -> None:
 @pytest.mark.parametrize("opts", OPTIONS, ids=option_id)
 def test_mavsdk_imports_every_plan(tmp_path, mission_raw, opts, plan):
     m = build_mission(PLANS[plan](), **opts)
-    assert any(it.command in (18, 31) for it in m.items) == (plan == "helices")
+    assert any(it.command in LOITERS for it in m.items) == (plan == "helices")
     path = write_plan(m, tmp_path / "mission.plan")
     data = mission_raw[m.firmware].import_qgroundcontrol_mission(str(path))
     items = data.mission_items
@@ -113,7 +115,7 @@ def test_mavsdk_imports_every_plan(tmp_path, mission_raw, opts, plan):
 @pytest.mark.parametrize("opts", WAYPOINTS_OPTIONS, ids=option_id)
 def test_mavsdk_imports_every_waypoints_file(tmp_path, mission_raw, opts, plan):
     m = build_mission(PLANS[plan](), **opts)
-    assert any(it.command in (18, 31) for it in m.items) == (plan == "helices")
+    assert any(it.command in LOITERS for it in m.items) == (plan == "helices")
     path = write_waypoints(m, tmp_path / "mission.waypoints")
     items = mission_raw[m.firmware].import_mission_planner_mission(str(path)).mission_items
     rows = len(path.read_text().splitlines()) - 1
@@ -128,7 +130,7 @@ def test_mavsdk_imports_every_waypoints_file(tmp_path, mission_raw, opts, plan):
 @pytest.mark.parametrize("opts", WAYPOINTS_OPTIONS, ids=option_id)
 def test_pymavlink_loads_every_waypoints_file(tmp_path, opts, plan):
     m = build_mission(PLANS[plan](), **opts)
-    assert any(it.command in (18, 31) for it in m.items) == (plan == "helices")
+    assert any(it.command in LOITERS for it in m.items) == (plan == "helices")
     path = write_waypoints(m, tmp_path / "mission.waypoints")
     loader = mavwp.MAVWPLoader()
     count = loader.load(str(path))

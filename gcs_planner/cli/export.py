@@ -6,6 +6,8 @@ import argparse
 import sys
 from pathlib import Path
 
+from gcs_planner.aircraft.autopilot import AUTOPILOTS, DEFAULT_AUTOPILOT
+from gcs_planner.cli.common import add_autopilot_argument
 from gcs_planner.core.choose import DEFAULT_MIN_PROBABILITY
 from gcs_planner.errors import InputError
 from gcs_planner.mission.builder import (
@@ -13,7 +15,6 @@ from gcs_planner.mission.builder import (
     DEFAULT_ACCEPTANCE_RADIUS,
     DEFAULT_CRUISE_SPEED,
     END_ACTIONS,
-    FIRMWARES,
 )
 from gcs_planner.mission.export import FORMATS, export
 from gcs_planner.mission.param_files import SETUP_FILES, render_setup
@@ -26,11 +27,11 @@ def add_mission_arguments(p: argparse.ArgumentParser) -> None:
     """The mission options, shared with any command that builds a mission from a plan."""
     g = p.add_argument_group("mission")
     g.add_argument("--route-index", type=int, help="route of the front (default: the chosen one)")
-    g.add_argument(
-        "--firmware",
-        choices=FIRMWARES,
+    # --firmware is its old name, kept as a deprecated alias.
+    add_autopilot_argument(
+        g,
         help="the autopilot the mission is for (default: the one the plan was made for, "
-        "plan.json's setup.autopilot; else ardupilot)",
+        f"plan.json's setup.autopilot; else {DEFAULT_AUTOPILOT})",
     )
     g.add_argument(
         "--altitude-frame",
@@ -71,7 +72,7 @@ def add_mission_arguments(p: argparse.ArgumentParser) -> None:
 def mission_options(args: argparse.Namespace, source: str = "") -> dict:
     return {
         "route_index": args.route_index,
-        "firmware": args.firmware,
+        "firmware": args.autopilot,
         "altitude_frame": args.altitude_frame,
         "acceptance_radius": args.acceptance_radius,
         "cruise_speed": args.cruise_speed,
@@ -173,7 +174,7 @@ def plan_autopilot(plan: dict) -> str:
     """The autopilot ``plan`` (a plan JSON) was made for: its setup's, else ArduPilot."""
     setup = plan.get("setup")
     name = setup.get("autopilot") if isinstance(setup, dict) else None
-    return name if name in FIRMWARES else "ardupilot"
+    return name if name in AUTOPILOTS else DEFAULT_AUTOPILOT
 
 
 def run(args: argparse.Namespace) -> int:
@@ -183,14 +184,14 @@ def run(args: argparse.Namespace) -> int:
     check_out_suffix(args.fmt, args.out)
     check_output_file(args.out)
     plan = load_plan(args.plan)
-    args.firmware = args.firmware or plan_autopilot(plan)
+    args.autopilot = args.autopilot or plan_autopilot(plan)
     warning = risk_check(args, plan)
-    setup = setup_needs(plan, args.firmware) if args.fmt in MISSION_FORMATS else []
+    setup = setup_needs(plan, args.autopilot) if args.fmt in MISSION_FORMATS else []
     unflyable = [f"{n.name}: {n.impossible}" for n in setup if n.impossible]
     if unflyable:
         from gcs_planner.core.choose import RiskyRouteError
 
-        cannot = f"no {args.firmware} setup flies this plan ({'; '.join(unflyable)})"
+        cannot = f"no {args.autopilot} setup flies this plan ({'; '.join(unflyable)})"
         if not args.allow_risky:
             raise RiskyRouteError(f"{cannot}; not exported: pass --allow-risky to export it")
         warning = f"{warning}; {cannot}" if warning else cannot
@@ -198,9 +199,9 @@ def run(args: argparse.Namespace) -> int:
     print(f"wrote {path} (route {mission.route_index}, {len(mission.items)} mission items)")
     if setup:
         # The vehicle setup the mission relies on, beside it (as plan --out writes it).
-        for name, text in render_setup(setup, args.firmware, str(args.plan)):
+        for name, text in render_setup(setup, args.autopilot, str(args.plan)):
             write_atomic(path.parent / name, text)
-        print(f"wrote the vehicle setup for {args.firmware} beside it: {', '.join(SETUP_FILES)}")
+        print(f"wrote the vehicle setup for {args.autopilot} beside it: {', '.join(SETUP_FILES)}")
     if warning:
         print(f"gcs-planner: warning: {warning}", file=sys.stderr)
     if mission.origin_is_default:

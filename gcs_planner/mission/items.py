@@ -1,7 +1,8 @@
 """Mission items as plain data, with MAVLink common.xml semantics (MISSION_ITEM_INT).
 
 The files (.plan, .waypoints), the link and the mock vehicle all speak in these; none of them
-knows how the route was planned.
+knows how the route was planned. The MAV_CMD, MAV_FRAME and MAV_MISSION_TYPE numbers are
+pymavlink's (its MAVLink 2 common dialect), named here once for the project.
 """
 
 from __future__ import annotations
@@ -9,12 +10,14 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 from typing import Any
 
+from pymavlink.dialects.v20 import common
+
 # MAV_FRAME
-MAV_FRAME_GLOBAL = 0
-MAV_FRAME_MISSION = 2
-MAV_FRAME_GLOBAL_RELATIVE_ALT = 3
-MAV_FRAME_GLOBAL_INT = 5
-MAV_FRAME_GLOBAL_RELATIVE_ALT_INT = 6
+MAV_FRAME_GLOBAL = common.MAV_FRAME_GLOBAL
+MAV_FRAME_MISSION = common.MAV_FRAME_MISSION
+MAV_FRAME_GLOBAL_RELATIVE_ALT = common.MAV_FRAME_GLOBAL_RELATIVE_ALT
+MAV_FRAME_GLOBAL_INT = common.MAV_FRAME_GLOBAL_INT
+MAV_FRAME_GLOBAL_RELATIVE_ALT_INT = common.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT
 # Altitude above mean sea level / above home; both spellings (float degrees, _INT degE7).
 GLOBAL_AMSL_FRAMES = frozenset({MAV_FRAME_GLOBAL, MAV_FRAME_GLOBAL_INT})
 GLOBAL_RELATIVE_FRAMES = frozenset(
@@ -28,15 +31,15 @@ GLOBAL_FRAMES = GLOBAL_AMSL_FRAMES | GLOBAL_RELATIVE_FRAMES
 MISSION_FRAMES = GLOBAL_FRAMES | {MAV_FRAME_MISSION}
 
 # MAV_CMD
-MAV_CMD_NAV_WAYPOINT = 16
-MAV_CMD_NAV_LOITER_UNLIM = 17
-MAV_CMD_NAV_LOITER_TURNS = 18
-MAV_CMD_NAV_LOITER_TO_ALT = 31
-MAV_CMD_NAV_RETURN_TO_LAUNCH = 20
-MAV_CMD_NAV_LAND = 21
-MAV_CMD_DO_CHANGE_SPEED = 178
-MAV_CMD_NAV_LOITER_TIME = 19
-MAV_CMD_NAV_TAKEOFF = 22
+MAV_CMD_NAV_WAYPOINT = common.MAV_CMD_NAV_WAYPOINT
+MAV_CMD_NAV_LOITER_UNLIM = common.MAV_CMD_NAV_LOITER_UNLIM
+MAV_CMD_NAV_LOITER_TURNS = common.MAV_CMD_NAV_LOITER_TURNS
+MAV_CMD_NAV_LOITER_TO_ALT = common.MAV_CMD_NAV_LOITER_TO_ALT
+MAV_CMD_NAV_RETURN_TO_LAUNCH = common.MAV_CMD_NAV_RETURN_TO_LAUNCH
+MAV_CMD_NAV_LAND = common.MAV_CMD_NAV_LAND
+MAV_CMD_DO_CHANGE_SPEED = common.MAV_CMD_DO_CHANGE_SPEED
+MAV_CMD_NAV_LOITER_TIME = common.MAV_CMD_NAV_LOITER_TIME
+MAV_CMD_NAV_TAKEOFF = common.MAV_CMD_NAV_TAKEOFF
 # The MAV_CMD_NAV_* commands whose x/y/z are a position the vehicle flies to (waypoint, the
 # loiters, land, takeoff): what the files, the link's checks and the mock vehicle treat as places.
 POSITION_COMMANDS = frozenset(
@@ -54,7 +57,7 @@ POSITION_COMMANDS = frozenset(
 HELIX_COMMANDS = frozenset({MAV_CMD_NAV_LOITER_TURNS, MAV_CMD_NAV_LOITER_TO_ALT})
 
 # MAV_MISSION_TYPE
-MAV_MISSION_TYPE_MISSION = 0
+MAV_MISSION_TYPE_MISSION = common.MAV_MISSION_TYPE_MISSION
 
 
 @dataclass(frozen=True)

@@ -43,9 +43,8 @@ class SetupFile:
 
 def _header(firmware: str, source: str) -> list[str]:
     ap = autopilot_for(firmware)
-    name = {"ardupilot": "ArduPlane", "px4": "PX4 fixed wing"}.get(firmware, firmware)
     return [
-        f"# Vehicle setup for {name}: the parameters the mission relies on (gcs-planner).",
+        f"# Vehicle setup for {ap.title}: the parameters the mission relies on (gcs-planner).",
         f"# autopilot: {ap.firmware}",
         f"# plan: {source}" if source else "# plan: (unnamed)",
         "# Load it with the mission: gcs-planner upload --params FILE MISSION, or your ground",

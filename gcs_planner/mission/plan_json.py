@@ -197,9 +197,9 @@ def load_plan(path: str | Path) -> dict[str, Any]:
     if not isinstance(front, list) or not front:
         raise InputError("the plan has no routes", file=str(path), field="front")
     # What every reader needs (docs/plan-json.md): the georeference, the parameters, each
-    # route's points and legs. The mission builder owns the checks, so an upload of a plan
-    # JSON (which reads it without this function) refuses the same damage.
-    from gcs_planner.mission.builder import check_plan
+    # route's points and legs. The mission builder's plan reading owns the checks, so an upload
+    # of a plan JSON (which reads it without this function) refuses the same damage.
+    from gcs_planner.mission.plan_reading import check_plan
 
     check_plan(data, str(path))
     return data

@@ -13,22 +13,21 @@ Labels are placed as in mission/pictures.py (``LabelPlacer``): none overprints a
 from __future__ import annotations
 
 import numpy as np
+from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from gcs_planner.mission.geo_exports import trajectory_local
-from gcs_planner.mission.pictures import (
+from gcs_planner.mission.map_view import MapView
+from gcs_planner.mission.picture_axes import (
     COLOURS,
     DPI,
     KM,
     UNRELIABLE,
-    Label,
-    LabelPlacer,
-    MapView,
-    _marker_radius,
-    _png,
-    _points,
+    plan_points,
     plt,
+    to_png,
 )
+from gcs_planner.mission.picture_labels import Label, LabelPlacer, marker_radius
 from gcs_planner.mission.policy_build import MissionPath, PathSwitch
 
 BRANCH_COLOURS = ("#9467bd", "#17becf", "#e377c2", "#8c564b", "#bcbd22", "#7f7f7f", "#ff7f0e")
@@ -54,7 +53,7 @@ def tree_figure(
     ``missions``: each mission's path and one-route plan, primary first. The map is cropped to
     the points and tracks; labels are placed so that none overprints another (A and B first,
     then the failed fixes and the missions they switch to, then the missions' points)."""
-    xyz, kind, unreliable = _points(plan)
+    xyz, kind, unreliable = plan_points(plan)
     xyz = xyz / KM
     ids = [str(p.get("id")) for p in plan.get("points") or []]
     tracks = {p.name: trajectory_local(d, 0) / KM for p, d in missions}
@@ -94,6 +93,47 @@ def tree_figure(
             alpha=0.6,
             label="unreliable point",
         )
+    _draw_missions(ax, missions, tracks, xyz, ids)
+    by_point: dict[int, list[str]] = {}
+    for s in switches:  # one label per point, a line per context it fails in
+        by_point.setdefault(s.failed, []).append(f"{s.mission} \u2192 {s.to}")
+    for j in by_point:
+        ax.scatter(
+            [xyz[j, 0]], [xyz[j, 1]], s=FAIL_SIZE, marker="X", c=UNRELIABLE, ec="k", zorder=5
+        )
+    start = missions[0][0].points
+    ends = (
+        (start[0], "*", COLOURS["A"], END_SIZES[0]),
+        (start[-1], "s", COLOURS["B"], END_SIZES[1]),
+    )
+    for j, marker, colour, size in ends:
+        ax.scatter([xyz[j, 0]], [xyz[j, 1]], s=size, marker=marker, c=colour, ec="k", zorder=6)
+    ax.scatter([], [], s=120, marker="X", c=UNRELIABLE, ec="k", label="failed fix: switch mission")
+    view.apply(ax, title)
+    ax.title.set_fontsize(12)
+    if beside:
+        fig.legend(loc="outside right upper", ncol=1, fontsize=9, frameon=False)
+    else:
+        fig.legend(loc="outside lower center", ncol=1, fontsize=9, frameon=False)
+
+    labels, markers = _tree_labels(missions, xyz, ids, ends, by_point)
+    placer = LabelPlacer(fig)
+    dropped = placer.place(ax, labels, markers, [t[:, :2] for t in tracks.values()])
+    if dropped:
+        plural = "" if dropped == 1 else "s"
+        ax.set_title(f"{ax.get_title()}\n({dropped} label{plural} left out: no room)", fontsize=12)
+    return fig
+
+
+def _draw_missions(
+    ax: Axes,
+    missions: list[tuple[MissionPath, dict]],
+    tracks: dict[str, np.ndarray],
+    xyz: np.ndarray,
+    ids: list[str],
+) -> None:
+    """Each mission's track (km) and the points it adds: the primary's whole, each branch's
+    from where it leaves its parent, dashed in its own colour."""
     for n, (path, _) in enumerate(missions):
         track = tracks[path.name]
         if path.parent is None:
@@ -119,34 +159,23 @@ def tree_figure(
         on = [j for j in path.points if j not in parent]
         if on:
             ax.scatter(xyz[on, 0], xyz[on, 1], s=POINT_SIZE, c=colour, ec="k", zorder=4)
-    by_point: dict[int, list[str]] = {}
-    for s in switches:  # one label per point, a line per context it fails in
-        by_point.setdefault(s.failed, []).append(f"{s.mission} \u2192 {s.to}")
-    for j in by_point:
-        ax.scatter(
-            [xyz[j, 0]], [xyz[j, 1]], s=FAIL_SIZE, marker="X", c=UNRELIABLE, ec="k", zorder=5
-        )
-    start = missions[0][0].points
-    ends = (
-        (start[0], "*", COLOURS["A"], END_SIZES[0]),
-        (start[-1], "s", COLOURS["B"], END_SIZES[1]),
-    )
-    for j, marker, colour, size in ends:
-        ax.scatter([xyz[j, 0]], [xyz[j, 1]], s=size, marker=marker, c=colour, ec="k", zorder=6)
-    ax.scatter([], [], s=120, marker="X", c=UNRELIABLE, ec="k", label="failed fix: switch mission")
-    view.apply(ax, title)
-    ax.title.set_fontsize(12)
-    if beside:
-        fig.legend(loc="outside right upper", ncol=1, fontsize=9, frameon=False)
-    else:
-        fig.legend(loc="outside lower center", ncol=1, fontsize=9, frameon=False)
 
-    # Labels: A and B, the failed fixes with the switches they make, the missions' points.
+
+def _tree_labels(
+    missions: list[tuple[MissionPath, dict]],
+    xyz: np.ndarray,
+    ids: list[str],
+    ends: tuple[tuple[int, str, str, float], ...],
+    by_point: dict[int, list[str]],
+) -> tuple[list[Label], list[tuple[np.ndarray, float]]]:
+    """The labels (A and B, the failed fixes with the switches they make, the missions'
+    points) and the markers they keep clear of."""
+    start = missions[0][0].points
     labels = [
-        Label(ids[j], tuple(xyz[j, :2]), 0, 12, "bold", "black", _marker_radius(size))
+        Label(ids[j], tuple(xyz[j, :2]), 0, 12, "bold", "black", marker_radius(size))
         for j, _, _, size in ends
     ]
-    fail_r = _marker_radius(FAIL_SIZE)
+    fail_r = marker_radius(FAIL_SIZE)
     labels += [
         Label(
             f"{ids[j]} fails: " + "\n".join(lines),
@@ -162,19 +191,14 @@ def tree_figure(
     named = {start[0], start[-1], *by_point}
     points = sorted({j for p, _ in missions for j in p.points[1:-1]} - named)
     labels += [
-        Label(ids[j], tuple(xyz[j, :2]), 2 + n % 2, clearance=_marker_radius(POINT_SIZE))
+        Label(ids[j], tuple(xyz[j, :2]), 2 + n % 2, clearance=marker_radius(POINT_SIZE))
         for n, j in enumerate(points)
     ]
     marked = sorted({j for p, _ in missions for j in p.points})
-    markers = [(xyz[marked, :2], _marker_radius(POINT_SIZE))]
+    markers = [(xyz[marked, :2], marker_radius(POINT_SIZE))]
     markers += [(xyz[list(by_point), :2], fail_r)] if by_point else []
-    markers += [(xyz[[j], :2], _marker_radius(size)) for j, _, _, size in ends]
-    placer = LabelPlacer(fig)
-    dropped = placer.place(ax, labels, markers, [t[:, :2] for t in tracks.values()])
-    if dropped:
-        plural = "" if dropped == 1 else "s"
-        ax.set_title(f"{ax.get_title()}\n({dropped} label{plural} left out: no room)", fontsize=12)
-    return fig
+    markers += [(xyz[[j], :2], marker_radius(size)) for j, _, _, size in ends]
+    return labels, markers
 
 
 def tree_png(
@@ -184,7 +208,7 @@ def tree_png(
     title: str,
 ) -> bytes:
     """``tree_figure`` as PNG bytes."""
-    return _png(tree_figure(plan, missions, switches, title))
+    return to_png(tree_figure(plan, missions, switches, title))
 
 
 # Marker areas (points²): the missions' points, the failed fixes, A and B.
@@ -250,12 +274,12 @@ def policy_front_figure(
     ax.set_title(title, fontsize=12)
     placer = LabelPlacer(fig)
     labels = [
-        Label(f"route {k}", (L, p), size=8, colour="0.3", clearance=_marker_radius(60))
+        Label(f"route {k}", (L, p), size=8, colour="0.3", clearance=marker_radius(60))
         for (k, *_), (L, p, _, _) in zip(rows, r, strict=True)
     ]
-    markers = [(r[:, :2], _marker_radius(60)), (r[:, 2:], _marker_radius(80))]
+    markers = [(r[:, :2], marker_radius(60)), (r[:, 2:], marker_radius(80))]
     if c:
-        markers.append((np.vstack([r[c[0], :2], r[c[0], 2:]]), _marker_radius(320)))
+        markers.append((np.vstack([r[c[0], :2], r[c[0], 2:]]), marker_radius(320)))
     dropped = placer.place(ax, labels, markers, arrows)
     if dropped:
         plural = "" if dropped == 1 else "s"
@@ -267,4 +291,4 @@ def policy_front_png(
     rows: list[tuple[int, float, float, float, float]], chosen: int, title: str
 ) -> bytes:
     """``policy_front_figure`` as PNG bytes."""
-    return _png(policy_front_figure(rows, chosen, title))
+    return to_png(policy_front_figure(rows, chosen, title))

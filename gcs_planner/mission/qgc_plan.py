@@ -19,6 +19,8 @@ import os
 from pathlib import Path
 from typing import Any
 
+from pymavlink.dialects.v20 import common
+
 from gcs_planner.aircraft.autopilot import keeps_home_item
 from gcs_planner.aircraft.profile import AUTOPILOT_IDS
 from gcs_planner.errors import InputError
@@ -35,7 +37,7 @@ from gcs_planner.mission.items import (
 from gcs_planner.runtime.atomic import write_atomic
 
 MAV_AUTOPILOT = AUTOPILOT_IDS
-MAV_TYPE_FIXED_WING = 1
+MAV_TYPE_FIXED_WING = common.MAV_TYPE_FIXED_WING
 # QGroundControl's AltMode enum (QGroundControlQmlGlobal.h).
 QGC_ALT_MODE_RELATIVE = 1
 QGC_ALT_MODE_ABSOLUTE = 2

@@ -120,8 +120,8 @@ def needs(plan: dict, firmware: str, wind: float = 0.0) -> list[ParameterNeed]:
                 continue
             rate = ground * math.tan(math.radians(min(angle, 89.9)))
             why = f"the plan {verb} at up to {rate:.3g} m/s: {source} at {ground:.1f} m/s"
-        if firmware == "px4":
-            leg_rate, leg = _px4_leg_rate(plan, sign, ground)
+        if ap.climbs_at_once:
+            leg_rate, leg = _px4_leg_rate(ap, plan, sign, ground)
             if leg_rate > rate:
                 rate = leg_rate
                 why = (
@@ -148,7 +148,7 @@ def needs(plan: dict, firmware: str, wind: float = 0.0) -> list[ParameterNeed]:
             f"a {radius:.1f} m turn at {ground:.1f} m/s over the ground banks {bank:.3g} deg",
         )
     )
-    if firmware == "ardupilot":
+    if ap.loiter_widens_with_tas:
         # the least bank for which loiter_radius keeps R at the highest point's TAS
         least = math.degrees(math.atan(tas * tas / (G * radius)))
         out.append(
@@ -171,7 +171,7 @@ def needs(plan: dict, firmware: str, wind: float = 0.0) -> list[ParameterNeed]:
             magnitude=True,
         )
     )
-    if firmware == "px4":
+    if ap.switches_early:
         out.append(_px4_acceptance(ap, plan, eas, wind))
     return out
 
@@ -182,7 +182,7 @@ def _px4_acceptance(ap: Autopilot, plan: dict, eas: float, wind: float) -> Param
     laid for the switch distance, so NAV_ACC_RAD must not exceed it where it is shortest, at the
     slowest ground speed (the lowest point's TAS into the design wind)."""
     slowest = max(tas_from_eas(eas, _altitudes(plan)[0]) - wind, 1.0)
-    switch = effective("px4", {}).switch_distance(slowest)
+    switch = effective(ap.firmware, {}).switch_distance(slowest)
     spec = ap.spec(ap.acceptance_param)
     default = spec.default if spec is not None else switch
     return ParameterNeed(
@@ -319,7 +319,7 @@ def setup_lines(needs_: list[ParameterNeed], firmware: str) -> list[str]:
     return out
 
 
-def _px4_leg_rate(plan: dict, sign: float, ground: float) -> tuple[float, str]:
+def _px4_leg_rate(ap: Autopilot, plan: dict, sign: float, ground: float) -> tuple[float, str]:
     """The climb (``sign`` 1) or sink (-1) rate PX4 needs on the chosen route's most demanding
     leg, and that leg ("FROM-TO"): the mission's run-out is level at the landmark (builder), and
     the aircraft takes up the next item npfg's switch distance early, so a leg's height change
@@ -327,7 +327,7 @@ def _px4_leg_rate(plan: dict, sign: float, ground: float) -> tuple[float, str]:
     (``FixedwingPositionControl``: TECS climbs at the rate towards the current item's
     altitude; npfg.cpp ``switchDistance``, at the shipped NPFG_PERIOD, NPFG_DAMPING and
     NPFG_SW_DST_MLT)."""
-    switch = effective("px4", {}).switch_distance(ground)
+    switch = effective(ap.firmware, {}).switch_distance(ground)
     best, where = 0.0, ""
     for leg in _chosen(plan).get("legs", []):
         geo = leg.get("geometry") if isinstance(leg, dict) else None

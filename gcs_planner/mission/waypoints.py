@@ -26,7 +26,7 @@ from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
 
-from gcs_planner.aircraft.autopilot import keeps_home_item
+from gcs_planner.aircraft.autopilot import DEFAULT_AUTOPILOT, keeps_home_item
 from gcs_planner.errors import InputError
 from gcs_planner.mission.builder import FIRMWARES, Mission
 from gcs_planner.mission.items import (
@@ -84,7 +84,7 @@ PX4_REFUSED = (
 def dumps_waypoints(mission: Mission) -> str:
     """The mission as a .waypoints text; ArduPilot only (module docstring)."""
     if not keeps_home_item(mission.firmware):
-        raise InputError(PX4_REFUSED, field="--firmware")
+        raise InputError(PX4_REFUSED, field="--autopilot")
     return dumps_items(mission.items, mission.firmware, mission.home)
 
 
@@ -153,7 +153,7 @@ def _parse_row(line: str, lineno: int, source: str) -> tuple[int, MissionItem]:
     return int(values["index"]), item
 
 
-def loads_waypoints(text: str, firmware: str = "ardupilot", source: str = "") -> MissionFile:
+def loads_waypoints(text: str, firmware: str = DEFAULT_AUTOPILOT, source: str = "") -> MissionFile:
     """Parse a .waypoints text. ``firmware`` says how to number the items (the format does not
     record it): ArduPilot keeps row 0 as home at seq 0, PX4 starts at row 1."""
     if firmware not in FIRMWARES:
@@ -184,7 +184,7 @@ def loads_waypoints(text: str, firmware: str = "ardupilot", source: str = "") ->
     return MissionFile(items=items, firmware=firmware, home=home)
 
 
-def read_waypoints(path: str | os.PathLike[str], firmware: str = "ardupilot") -> MissionFile:
+def read_waypoints(path: str | os.PathLike[str], firmware: str = DEFAULT_AUTOPILOT) -> MissionFile:
     """Read a Mission Planner .waypoints file."""
     try:
         text = Path(path).read_text(encoding="utf-8")
