@@ -23,19 +23,17 @@ from functools import cached_property
 
 import numpy as np
 
+from gcs_planner.aircraft.autopilot import DEFAULT_AUTOPILOT
 from gcs_planner.aircraft.profile import G, VehicleProfile
 from gcs_planner.mission.items import GLOBAL_AMSL_FRAMES, GLOBAL_RELATIVE_FRAMES, MissionItem
 from gcs_planner.scenario.georef import LocalFrame
 from sim import atmosphere, flight_kernel
 from sim.aircraft import AircraftState, FlightModelFace
+from sim.ins import InsEstimate
 from sim.jsbsim_airframe import AirframeLimit, LegNeed
 from sim.navigators import NAVIGATORS
-from sim.navigators.base import (
-    COARSE_STEPS,
-    DEFAULT_STEP_S,
+from sim.navigators.commands import (
     DO_CHANGE_SPEED,
-    L1_DAMPING,
-    L1_PERIOD_S,
     LOITERS,
     NAV_LAND,
     NAV_LOITER_TIME,
@@ -49,6 +47,8 @@ from sim.navigators.base import (
     NavCommand,
 )
 from sim.navigators.params import AutopilotParams
+from sim.navigators.state import COARSE_STEPS, DEFAULT_STEP_S
+from sim.navigators.steering import L1_DAMPING, L1_PERIOD_S
 from sim.wind import WindField, WindModel
 
 __all__ = [
@@ -163,7 +163,7 @@ def fly(
     start: tuple[float, float, float],
     profile: VehicleProfile,
     *,
-    flavour: str = "ardupilot",
+    flavour: str = DEFAULT_AUTOPILOT,
     params: AutopilotParams | None = None,
     home_at_seq0: bool = False,
     home_alt: float | None = None,
@@ -171,7 +171,7 @@ def fly(
     dt: float = DEFAULT_STEP_S,
     time_limit: float | None = None,
     wind: WindModel | None = None,
-    ins: object | None = None,
+    ins: InsEstimate | None = None,
     compiled: bool = True,
     commands: Sequence[NavCommand] | None = None,
     flight_model: FlightModelFace | None = None,

@@ -26,6 +26,7 @@ import pytest
 from test_helix_flight import DS2, DS2_LIMITS, configured
 from test_mission_builder import make_plan, steep_scenario
 
+from gcs_planner.aircraft.autopilot import ARDUPLANE, PX4, autopilot_for
 from gcs_planner.core.planner import plan
 from gcs_planner.mission.builder import build_mission
 from gcs_planner.mission.plan_json import plan_to_dict
@@ -71,8 +72,9 @@ kernel_decisions: list[int] = []
 
 
 def both(items, scenario, flavour, autopilot, wind, runs=0, estimate=True):
-    kw = dict(home_at_seq0=flavour == "ardupilot", flavour=flavour, autopilot=autopilot,
-              wind=wind, navigate_on_estimate=estimate, runs=runs, seed=4)  # fmt: skip
+    kw = dict(home_at_seq0=autopilot_for(flavour).home_at_seq0, flavour=flavour,
+              autopilot=autopilot, wind=wind, navigate_on_estimate=estimate, runs=runs,
+              seed=4)  # fmt: skip
     # (seed 3 flew PX4 to one waypoint of the helix mission exactly 10 m off its altitude, its
     # altitude acceptance: the two flights' sub-millimetre differences decided either way there,
     # a knife edge rather than a different flight)
@@ -132,7 +134,7 @@ def assert_same_flight(ref, got) -> None:
 
 
 @pytest.mark.parametrize("wind", list(WINDS))
-@pytest.mark.parametrize("flavour", ["ardupilot", "px4"])
+@pytest.mark.parametrize("flavour", [ARDUPLANE.firmware, PX4.firmware])
 @pytest.mark.parametrize("shipped", [False, True], ids=["configured", "shipped"])
 def test_helix_missions_fly_the_same_compiled(kernel_steps, flavour, wind, shipped):
     """Helices of 5 to 22 turns (ArduPlane LOITER_TURNS, PX4 LOITER_TO_ALT), set up for the plan
@@ -153,7 +155,7 @@ def test_helix_missions_fly_the_same_compiled(kernel_steps, flavour, wind, shipp
     assert sum(kernel_steps) >= 0.99 * outside > 0
 
 
-@pytest.mark.parametrize("flavour", ["ardupilot", "px4"])
+@pytest.mark.parametrize("flavour", [ARDUPLANE.firmware, PX4.firmware])
 def test_truth_flown_and_monte_carlo_of_flights_are_the_same_compiled(flavour):
     """Flying the truth (the INS replayed after) and a Monte Carlo of flights in gusts: the
     seeded draws are the same, so the summaries are equal."""
@@ -167,7 +169,7 @@ def test_truth_flown_and_monte_carlo_of_flights_are_the_same_compiled(flavour):
     assert ref.monte_carlo is not None and ref.monte_carlo.flown
 
 
-@pytest.mark.parametrize("flavour", ["ardupilot", "px4"])
+@pytest.mark.parametrize("flavour", [ARDUPLANE.firmware, PX4.firmware])
 def test_straight_leg_plans_fly_the_same_compiled(flavour):
     """R = 0 (turns on the spot): the kernel leaves these steps to Python; the flight is the
     same whichever is asked for."""
@@ -184,10 +186,10 @@ def ds2_missions(dataset_paths):
     p = plan_to_dict(plan(scenario, objectives=("length", "corrections", "probability"),
                           choice="most-reliable"))  # fmt: skip
     return scenario, {f: build_mission(p, firmware=f, acceptance_radius=1) for f in
-                      ("ardupilot", "px4")}  # fmt: skip
+                      (ARDUPLANE.firmware, PX4.firmware)}  # fmt: skip
 
 
-@pytest.mark.parametrize("flavour", ["ardupilot", "px4"])
+@pytest.mark.parametrize("flavour", [ARDUPLANE.firmware, PX4.firmware])
 def test_dataset2_lost_flight_is_the_same_compiled(kernel_steps, ds2_missions, flavour):
     """Dataset 2's certain route with the shipped parameters (PX4 at 3 m/s circles for its
     altitudes and misses landmarks; the flights are lost): the same losses, the same misses."""
@@ -197,7 +199,7 @@ def test_dataset2_lost_flight_is_the_same_compiled(kernel_steps, ds2_missions, f
     assert not ref.arrived
     assert_same_flight(ref, got)
     assert sum(kernel_steps) > len(got.flight.t) // 2
-    if flavour == "px4":
+    if autopilot_for(flavour).switches_early:
         # PX4 switches ~56 m before its waypoints, away from the landmarks on them: most of
         # its decisions (waypoints reached, circled for altitude and left) are the kernel's.
         assert any(e.kind == "altitude" for e in got.flight.events)

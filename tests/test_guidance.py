@@ -9,6 +9,7 @@ import math
 import numpy as np
 import pytest
 
+from gcs_planner.aircraft.autopilot import ARDUPLANE, PX4, autopilot_for
 from gcs_planner.aircraft.profile import VehicleProfile
 from gcs_planner.mission.items import MissionItem
 from gcs_planner.scenario.georef import LocalFrame
@@ -42,7 +43,7 @@ def turn_radii(flight) -> np.ndarray:
         return np.where(bank > 1e-9, v * v / (9.80665 * np.tan(bank)), np.inf)
 
 
-@pytest.mark.parametrize("flavour", ["ardupilot", "px4"])
+@pytest.mark.parametrize("flavour", [ARDUPLANE.firmware, PX4.firmware])
 def test_a_sharp_turn_is_flown_at_the_autopilots_roll_limit_no_tighter(flavour):
     """The autopilot banks up to its roll limit (ROLL_LIMIT_DEG 45, FW_R_LIM 50), not to the bank
     of the planner's radius: a sharp corner is turned on V^2 / (g tan(limit)), tighter than the
@@ -53,7 +54,7 @@ def test_a_sharp_turn_is_flown_at_the_autopilots_roll_limit_no_tighter(flavour):
     ap = AutopilotParams(flavour, acceptance_radius=1.0)
     f = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour=flavour, params=ap)
     assert f.ended == "mission end"
-    limit = {"ardupilot": 45.0, "px4": 50.0}[flavour]
+    limit = {ARDUPLANE.firmware: 45.0, PX4.firmware: 50.0}[flavour]
     # Rolling into the turn (sim/aircraft.py step: a first-order lag of ROLL_TAU_S 0.8 s) with
     # the limit asked for the ~3.5 s of the corner, more than three time constants: past 95 %
     # of the limit (measured 44.95 and 48.86 deg), never beyond it.
@@ -61,7 +62,7 @@ def test_a_sharp_turn_is_flown_at_the_autopilots_roll_limit_no_tighter(flavour):
     tightest = f.tas**2 / (9.80665 * math.tan(math.radians(limit)))
     assert np.all(turn_radii(f) >= tightest * (1 - 1e-9))
     assert turn_radii(f).min() < PROFILE.turn_radius / 2
-    if flavour == "ardupilot":
+    if not autopilot_for(flavour).switches_early:
         # It flew up to the finish line, then turned: wider than the chord corner.
         assert f.cumulative[-1] > 6000.0 - 2 * 100.0 + math.pi / 2 * 100.0 - 1.0
     else:
@@ -69,7 +70,7 @@ def test_a_sharp_turn_is_flown_at_the_autopilots_roll_limit_no_tighter(flavour):
         assert f.cumulative[-1] < 6000.0 - 2 * 59.0 + math.pi / 2 * 59.0 + 1.0
 
 
-@pytest.mark.parametrize("flavour", ["ardupilot", "px4"])
+@pytest.mark.parametrize("flavour", [ARDUPLANE.firmware, PX4.firmware])
 def test_climb_and_sink_never_exceed_the_limits(flavour):
     items = mission((16, (0, 0, 1000), {"param2": 1}), (16, (2000, 0, 2000), {"param2": 1}),
                     (16, (4000, 0, 500), {"param2": 1}))  # fmt: skip
@@ -84,7 +85,7 @@ def test_arduplane_passes_a_waypoint_it_could_not_climb_to_and_moves_on():
     # 1000 m up over 2 km: 26.6 degrees, more than the aircraft's 15.
     items = mission((16, (0, 0, 1000), {"param2": 1}), (16, (2000, 0, 2000), {"param2": 1}),
                     (16, (6000, 0, 2000), {"param2": 1}))  # fmt: skip
-    f = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour="ardupilot")
+    f = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour=ARDUPLANE.firmware)
     reached = [e for e in f.events if e.kind == "reached" and e.seq == 1]
     assert reached
     z_there = f.xyz[reached[0].sample, 2]
@@ -94,8 +95,8 @@ def test_arduplane_passes_a_waypoint_it_could_not_climb_to_and_moves_on():
 
 def test_px4_circles_a_waypoint_until_its_altitude_is_reached():
     items = mission((16, (0, 0, 1000)), (16, (2000, 0, 2000)), (16, (6000, 0, 2000)))
-    f = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour="px4",
-            params=AutopilotParams("px4", acceptance_radius=1.0))  # fmt: skip
+    f = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour=PX4.firmware,
+            params=AutopilotParams(PX4.firmware, acceptance_radius=1.0))  # fmt: skip
     assert [e for e in f.events if e.kind == "altitude" and e.seq == 1]
     reached = [e for e in f.events if e.kind == "reached" and e.seq == 1][0]
     assert abs(f.xyz[reached.sample, 2] - 2000.0) <= 10.0  # NAV_FW_ALT_RAD
@@ -108,7 +109,7 @@ def test_arduplane_loiter_turns_counts_its_turns_and_leaves_towards_the_next_way
     items = mission((16, (0, 0, 1000), {"param2": 1}),
                     (18, (3000, 0, 700), {"param1": 2, "param3": 300, "param4": xtrack}),
                     (16, (8000, 0, 700), {"param2": 1}))  # fmt: skip
-    f = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour="ardupilot")
+    f = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour=ARDUPLANE.firmware)
     assert f.ended == "mission end"
     during = f.current == 1
     centre = np.array([3000.0, 0.0])
@@ -129,7 +130,7 @@ def test_arduplane_loiter_turns_counts_its_turns_and_leaves_towards_the_next_way
     assert np.sum(np.diff(np.unwrap(f.course[during]))) < 0
 
 
-@pytest.mark.parametrize("flavour", ["ardupilot", "px4"])
+@pytest.mark.parametrize("flavour", [ARDUPLANE.firmware, PX4.firmware])
 def test_loiter_to_altitude_climbs_on_the_circle_then_leaves(flavour):
     # LOITER_TO_ALT carries its signed radius in param2 (common.xml; PX4 and ArduPilot read it
     # there), not in param3 as the other loiters.
@@ -146,27 +147,28 @@ def test_loiter_to_altitude_climbs_on_the_circle_then_leaves(flavour):
     assert np.sum(np.diff(np.unwrap(f.course[during]))) > 2 * math.pi
     r = np.linalg.norm(f.xyz[during, :2] - np.array([3000.0, 0.0]), axis=1)
     # ArduPlane flies the radius scaled to the altitude (EAS2TAS^2), PX4 the radius as given.
-    scale = [eas2tas(z) ** 2 if flavour == "ardupilot" else 1.0 for z in f.xyz[during, 2]]
+    widens = autopilot_for(flavour).loiter_widens_with_tas
+    scale = [eas2tas(z) ** 2 if widens else 1.0 for z in f.xyz[during, 2]]
     assert np.median(r / (250.0 * np.array(scale))) == pytest.approx(1.0, rel=0.05)
 
 
 def test_px4_skips_loiter_turns_and_says_so():
     items = mission((16, (0, 0, 1000)), (18, (3000, 0, 700), {"param1": 2, "param3": 300}),
                     (16, (8000, 0, 1000)))  # fmt: skip
-    f = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour="px4",
-            params=AutopilotParams("px4", acceptance_radius=1.0))  # fmt: skip
+    f = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour=PX4.firmware,
+            params=AutopilotParams(PX4.firmware, acceptance_radius=1.0))  # fmt: skip
     assert [e for e in f.events if e.kind == "skipped" and e.seq == 1]
     assert any("LOITER_TURNS" in n for n in f.notes)
 
 
 def test_loiter_unlimited_ends_the_flight_and_a_time_limit_stops_a_stuck_one():
     items = mission((16, (0, 0, 1000), {"param2": 1}), (17, (3000, 0, 1000), {"param3": 200}))
-    f = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour="ardupilot")
+    f = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour=ARDUPLANE.firmware)
     assert f.ended == "loiter at end"
     # PX4 at a waypoint 5 km up with a 15 degree aircraft: circles, until the time limit.
     items = mission((16, (0, 0, 1000)), (16, (2000, 0, 90000)))
-    f = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour="px4", time_limit=600.0,
-            params=AutopilotParams("px4", acceptance_radius=1.0))  # fmt: skip
+    f = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour=PX4.firmware, time_limit=600.0,
+            params=AutopilotParams(PX4.firmware, acceptance_radius=1.0))  # fmt: skip
     assert f.ended == "time limit"
 
 
@@ -175,11 +177,11 @@ def test_do_change_speed_changes_the_airspeed_and_widens_the_turns():
                     (16, (3000, 0, 1000), {"param2": 1}),
                     (16, (3000, 3000, 1000), {"param2": 1}))  # fmt: skip
     # ArduPlane takes a speed within AIRSPEED_MIN..AIRSPEED_MAX only (shipped 9..22 m/s)
-    shipped = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour="ardupilot")
+    shipped = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour=ARDUPLANE.firmware)
     assert shipped.airspeed.max() == pytest.approx(PROFILE.cruise_airspeed)
     assert any("DO_CHANGE_SPEED 35 m/s lies outside" in note for note in shipped.notes)
-    params = AutopilotParams("ardupilot", airspeed_max=40.0)
-    f = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour="ardupilot", params=params)
+    params = AutopilotParams(ARDUPLANE.firmware, airspeed_max=40.0)
+    f = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour=ARDUPLANE.firmware, params=params)
     assert f.airspeed.max() == pytest.approx(35.0)
     # Same roll limit (45 deg), faster: the tightest turn V^2 / (g tan 45) grows by (35/25)^2.
     fast = f.airspeed > 30.0
@@ -195,8 +197,8 @@ def test_px4_loiter_to_altitude_leaves_on_the_heading_only_when_param1_asks(head
                     (31, (3000, 0, 1300), {"param1": heading_required, "param2": -250,
                                            "param4": 1}),
                     (16, (3000, 6000, 1300)))  # fmt: skip
-    f = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour="px4",
-            params=AutopilotParams("px4", acceptance_radius=1.0))  # fmt: skip
+    f = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour=PX4.firmware,
+            params=AutopilotParams(PX4.firmware, acceptance_radius=1.0))  # fmt: skip
     assert f.ended == "mission end"
     left = [e for e in f.events if e.kind == "reached" and e.seq == 1][0].sample
     bearing = math.atan2(6000.0 - f.xyz[left, 1], 3000.0 - f.xyz[left, 0])
@@ -217,7 +219,7 @@ def test_the_instant_bank_model_is_kept_for_the_cross_check():
 
     items = mission((16, (0, 0, 1000), {"param2": 1}), (16, (3000, 0, 1000), {"param2": 1}),
                     (16, (3000, 3000, 1000), {"param2": 1}))  # fmt: skip
-    ap = AutopilotParams("ardupilot", acceptance_radius=1.0)
+    ap = AutopilotParams(ARDUPLANE.firmware, acceptance_radius=1.0)
     instant = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, params=ap,
                   flight_model=InstantBankFlightModel())  # fmt: skip
     rolling = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, params=ap)

@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 from test_mission_builder import make_plan, steep_scenario
 
+from gcs_planner.aircraft.autopilot import ARDUPLANE, PX4, autopilot_for
 from gcs_planner.aircraft.profile import DEFAULT_CAPTURE_RADIUS_M
 from gcs_planner.core.bnb import flown_route
 from gcs_planner.core.planner import plan
@@ -57,8 +58,8 @@ def flown_against_planned(
     """(point, helix turns, flown minus planned length of the leg to it) for each correction
     point of the route, after checking that the flight overflew it within the capture radius."""
     autopilot = autopilot or configured(scenario, flavour)
-    report = replay(items, scenario, home_at_seq0=flavour == "ardupilot", flavour=flavour,
-                    autopilot=autopilot)  # fmt: skip
+    report = replay(items, scenario, home_at_seq0=autopilot_for(flavour).home_at_seq0,
+                    flavour=flavour, autopilot=autopilot)  # fmt: skip
     met = {e.id: e for e in report.encounters}
     out = []
     flown_before = planned_before = 0.0
@@ -79,8 +80,10 @@ def test_helix_legs_are_flown_as_planned_on_a_small_steep_route():
     s = steep_scenario()
     points = [0, 1, 2, 3, 4, 5, 6]
     route = flown_route(s, tuple(points))
-    m = build_mission(make_plan(s, routes=(points,), probability=False), firmware="ardupilot")
-    legs = flown_against_planned(route.stops, m.items, s, "ardupilot")
+    m = build_mission(
+        make_plan(s, routes=(points,), probability=False), firmware=ARDUPLANE.firmware
+    )
+    legs = flown_against_planned(route.stops, m.items, s, ARDUPLANE.firmware)
     assert sum(turns > 0 for _, turns, _ in legs) >= 4
     for pid, turns, over in legs:
         assert -LEG_OVERRUN_M < over < LEG_OVERRUN_M, f"leg to {pid} ({turns} turns)"
@@ -92,9 +95,11 @@ def test_arduplane_shipped_loiter_scaling_lengthens_the_helices_at_altitude():
     s = steep_scenario()
     points = [0, 1, 2, 3, 4, 5, 6]
     route = flown_route(s, tuple(points))
-    m = build_mission(make_plan(s, routes=(points,), probability=False), firmware="ardupilot")
-    report = replay(m.items, s, home_at_seq0=True, flavour="ardupilot",
-                    autopilot=configured(s, "ardupilot", lim_bank=0.0))  # fmt: skip
+    m = build_mission(
+        make_plan(s, routes=(points,), probability=False), firmware=ARDUPLANE.firmware
+    )
+    report = replay(m.items, s, home_at_seq0=True, flavour=ARDUPLANE.firmware,
+                    autopilot=configured(s, ARDUPLANE.firmware, lim_bank=0.0))  # fmt: skip
     met = {e.id: e for e in report.encounters}
     first = route.stops[1]
     assert first.id in met and int(first.leg.helix_turns) > 0
@@ -108,9 +113,9 @@ def test_px4_switch_distance_misses_the_correction_points_of_a_helix_route():
     s = steep_scenario()
     points = [0, 1, 2, 3, 4, 5, 6]
     route = flown_route(s, tuple(points))
-    m = build_mission(make_plan(s, routes=(points,), probability=False), firmware="px4")
-    report = replay(m.items, s, home_at_seq0=False, flavour="px4",
-                    autopilot=configured(s, "px4"))  # fmt: skip
+    m = build_mission(make_plan(s, routes=(points,), probability=False), firmware=PX4.firmware)
+    report = replay(m.items, s, home_at_seq0=False, flavour=PX4.firmware,
+                    autopilot=configured(s, PX4.firmware))  # fmt: skip
     met = {e.id for e in report.encounters}
     assert not {stop.id for stop in route.stops[1:-1]} <= met
 
@@ -131,7 +136,7 @@ def test_dataset2_helix_legs_are_overflown_when_arduplane_climbs_at_the_true_air
     gives no climb feed-forward before its ramp starts), never more than about 120 m per turn.
     At the plan's rates as EAS angles it arrives low (next test)."""
     scenario, route, plan_dict = ds2_route
-    flavour = "ardupilot"
+    flavour = ARDUPLANE.firmware
     m = build_mission(plan_dict, firmware=flavour, acceptance_radius=1)
     legs = flown_against_planned(route.stops, m.items, scenario, flavour)
     assert any(turns > 0 for _, turns, _ in legs)
@@ -145,10 +150,10 @@ def test_dataset2_at_the_plans_rates_arrives_low_at_altitude(ds2_route):
     15 degrees through the air at 34 m/s true, so correction points high up are missed below."""
     scenario, _, plan_dict = ds2_route
     v = scenario.vehicle
-    ap = AutopilotParams("ardupilot", loiter_radius=v.turn_radius, acceptance_radius=1.0,
+    ap = AutopilotParams(ARDUPLANE.firmware, loiter_radius=v.turn_radius, acceptance_radius=1.0,
                          loiter_bank_limit=45.0).with_rates(v.climb_rate, v.sink_rate)  # fmt: skip
-    m = build_mission(plan_dict, firmware="ardupilot", acceptance_radius=1)
-    report = replay(m.items, scenario, home_at_seq0=True, flavour="ardupilot", autopilot=ap)
+    m = build_mission(plan_dict, firmware=ARDUPLANE.firmware, acceptance_radius=1)
+    report = replay(m.items, scenario, home_at_seq0=True, flavour=ARDUPLANE.firmware, autopilot=ap)
     assert not report.arrived and report.missed
 
 
@@ -175,7 +180,7 @@ def test_px4_helix_beside_its_target_is_written_as_waypoints():
     plan_dict = make_plan(s, routes=([0, 1, 2, 3],), probability=False)
     leg = route_legs(plan_dict["front"][0])[1]
     assert leg.helix_turns == 5 and not px4_leaves_on_heading(leg)
-    m = build_mission(plan_dict, firmware="px4")
+    m = build_mission(plan_dict, firmware=PX4.firmware)
     assert not [it for it in m.items if it.command in (18, 31)]
     helix = [it for it in m.items if it.note.startswith("helix 1->2")]
     assert len(helix) == math.ceil(5 * 360 / 16)
@@ -198,7 +203,7 @@ def test_no_arduplane_arc_waypoint_lies_within_the_lap_counts_slack_after_a_heli
     )
 
     _, _, plan_dict = ds2_route
-    m = build_mission(plan_dict, firmware="ardupilot", acceptance_radius=1)
+    m = build_mission(plan_dict, firmware=ARDUPLANE.firmware, acceptance_radius=1)
     frame = LocalFrame(m.origin)
     legs = [leg for leg in route_legs(route_entry(plan_dict)[1]) if leg.helix_turns > 0]
     loiters = [k for k, it in enumerate(m.items) if it.command == MAV_CMD_NAV_LOITER_TURNS]

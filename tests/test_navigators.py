@@ -11,9 +11,14 @@ import numpy as np
 import pytest
 from test_guidance import FRAME, PROFILE, mission
 
+from gcs_planner.aircraft.autopilot import (
+    ARDUPLANE,
+    MAV_CMD_NAV_LOITER_TURNS,
+    PX4,
+    autopilot_for,
+)
 from sim.atmosphere import eas2tas
 from sim.guidance import AutopilotParams, fly
-from sim.navigators.params import SHIPPED
 
 
 def reached(f, seq):
@@ -29,8 +34,8 @@ def test_px4_accepts_a_fixed_wing_waypoint_at_the_npfg_switch_distance():
     """NAV_ACC_RAD 1 m, as the dry run sets it, does not make PX4 fly up to the waypoint: it
     switches at max(NAV_ACC_RAD, NPFG_SW_DST_MLT * NPFG_PERIOD * NPFG_DAMPING * ground speed)."""
     items = mission((16, (0, 0, 0)), (16, (4000, 0, 0)), (16, (4000, 4000, 0)))
-    f = fly(items, FRAME, (0.0, 0.0, 0.0), PROFILE, flavour="px4",
-            params=AutopilotParams("px4", acceptance_radius=1.0))  # fmt: skip
+    f = fly(items, FRAME, (0.0, 0.0, 0.0), PROFILE, flavour=PX4.firmware,
+            params=AutopilotParams(PX4.firmware, acceptance_radius=1.0))  # fmt: skip
     e = reached(f, 1)
     x, y, _ = f.xyz[e.sample]
     vg = f.ground_speed[e.sample - 1]
@@ -40,7 +45,7 @@ def test_px4_accepts_a_fixed_wing_waypoint_at_the_npfg_switch_distance():
     # ArduPlane with param2 = 1 flies up to the finish line.
     ardu = mission((16, (0, 0, 0), {"param2": 1}), (16, (4000, 0, 0), {"param2": 1}),
                    (16, (4000, 4000, 0), {"param2": 1}))  # fmt: skip
-    g = fly(ardu, FRAME, (0.0, 0.0, 0.0), PROFILE, flavour="ardupilot")
+    g = fly(ardu, FRAME, (0.0, 0.0, 0.0), PROFILE, flavour=ARDUPLANE.firmware)
     x, y, _ = g.xyz[reached(g, 1).sample]
     assert math.hypot(4000.0 - x, y) < 1.5
 
@@ -51,8 +56,9 @@ def test_px4_passes_an_early_accepted_waypoint_at_its_altitude(compiled):
     600 m: its altitude setpoint holds the waypoint's altitude until abeam of it (the altitude
     first-order hold), so the aircraft passes it level, not already climbing."""
     items = mission((16, (0, 0, 1000)), (16, (4000, 0, 1000)), (16, (8000, 0, 1600)))
-    f = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour="px4",
-            params=AutopilotParams("px4", acceptance_radius=1.0), compiled=compiled)  # fmt: skip
+    f = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour=PX4.firmware,
+            params=AutopilotParams(PX4.firmware, acceptance_radius=1.0),
+            compiled=compiled)  # fmt: skip
     x, _, _ = f.xyz[reached(f, 1).sample]
     assert x < 4000.0 - 40.0  # accepted early
     at = int(np.argmin(np.abs(f.xyz[:, 0] - 4000.0)))
@@ -62,15 +68,15 @@ def test_px4_passes_an_early_accepted_waypoint_at_its_altitude(compiled):
 
 def test_px4_altitude_ramp_ends_nav_loiter_rad_before_the_waypoint():
     items = mission((16, (0, 0, 0)), (16, (4000, 0, 100)), (16, (8000, 0, 100)))
-    ap = AutopilotParams("px4", acceptance_radius=1.0, loiter_radius=400.0)
-    f = fly(items, FRAME, (0.0, 0.0, 0.0), PROFILE, flavour="px4", params=ap)
+    ap = AutopilotParams(PX4.firmware, acceptance_radius=1.0, loiter_radius=400.0)
+    f = fly(items, FRAME, (0.0, 0.0, 0.0), PROFILE, flavour=PX4.firmware, params=ap)
     at = int(np.argmin(np.abs(f.xyz[:, 0] - 3700.0)))  # 300 m before: past the ramp's end
     assert f.xyz[at, 2] == pytest.approx(100.0, abs=3.0)
     mid = int(np.argmin(np.abs(f.xyz[:, 0] - 1800.0)))  # half way along the 3600 m ramp
     assert f.xyz[mid, 2] == pytest.approx(50.0, abs=3.0)
 
 
-@pytest.mark.parametrize("flavour", ["ardupilot", "px4"])
+@pytest.mark.parametrize("flavour", [ARDUPLANE.firmware, PX4.firmware])
 def test_climb_and_sink_at_the_autopilots_tecs_rates(flavour):
     """ArduPlane TECS_CLMB_MAX = TECS_SINK_MAX = 5 m/s; PX4 in missions FW_T_CLMB_R_SP = 3 and
     FW_T_SINK_R_SP = 2 m/s: whatever angle the planner assumed (15 degrees: 6.5 m/s)."""
@@ -78,16 +84,17 @@ def test_climb_and_sink_at_the_autopilots_tecs_rates(flavour):
                     (16, (6000, 0, 1000), {"param2": 1}), (16, (12000, 0, 1000)))  # fmt: skip
     f = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour=flavour,
             params=AutopilotParams(flavour, acceptance_radius=1.0))  # fmt: skip
-    climb, sink = {"ardupilot": (5.0, 5.0), "px4": (3.0, 2.0)}[flavour]
+    climb, sink = {ARDUPLANE.firmware: (5.0, 5.0), PX4.firmware: (3.0, 2.0)}[flavour]
     assert f.climb.max() == pytest.approx(climb)
     assert f.climb.min() == pytest.approx(-sink)
 
 
 def test_vehicle_parameters_override_the_shipped_defaults():
-    ap = AutopilotParams.from_parameters("px4", {"FW_T_CLMB_R_SP": 4.0, "FW_T_CLMB_MAX": 3.5})
-    assert ap.climb_rate == 3.5 and ap.sink_rate == SHIPPED["px4"]["FW_T_SINK_R_SP"]
+    vehicle = {"FW_T_CLMB_R_SP": 4.0, "FW_T_CLMB_MAX": 3.5}
+    ap = AutopilotParams.from_parameters(PX4.firmware, vehicle)
+    assert ap.climb_rate == 3.5 and ap.sink_rate == PX4.defaults["FW_T_SINK_R_SP"]
     assert ap.bank_limit == 50.0
-    ap = AutopilotParams.from_parameters("ardupilot", {"ROLL_LIMIT_DEG": float("nan")})
+    ap = AutopilotParams.from_parameters(ARDUPLANE.firmware, {"ROLL_LIMIT_DEG": float("nan")})
     assert ap.bank_limit == 45.0 and ap.climb_rate == 5.0
 
 
@@ -101,10 +108,12 @@ def test_arduplane_scales_its_loiter_radius_with_altitude(altitude):
                         (18, (3000, 0, altitude), {"param1": 2, "param3": 200}),
                         (16, (8000, 0, altitude), {"param2": 1}))  # fmt: skip
         f = fly(items, FRAME, (0.0, 0.0, altitude), PROFILE, flavour=flavour)
-        during = (f.current == 1) if flavour == "ardupilot" else None
+        # ArduPlane flies LOITER_TURNS (its helix); PX4 skips it.
+        turns = autopilot_for(flavour).helix_command == MAV_CMD_NAV_LOITER_TURNS
+        during = (f.current == 1) if turns else None
         return f, during
 
-    f, during = ring("ardupilot")
+    f, during = ring(ARDUPLANE.firmware)
     r = np.linalg.norm(f.xyz[during, :2] - np.array([3000.0, 0.0]), axis=1)
     r = r[r < 600.0]  # on the circle, not on the way to it
     assert np.median(r) == pytest.approx(200.0 * eas2tas(altitude) ** 2, rel=0.03)
@@ -116,8 +125,8 @@ def test_px4_leaves_a_loiter_within_5_degrees_of_the_exit_course():
     items = mission((16, (0, 0, 1000)),
                     (31, (3000, 0, 1300), {"param1": 1, "param2": -250, "param4": 1}),
                     (16, (3000, 6000, 1300)))  # fmt: skip
-    f = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour="px4",
-            params=AutopilotParams("px4", acceptance_radius=1.0))  # fmt: skip
+    f = fly(items, FRAME, (0.0, 0.0, 1000.0), PROFILE, flavour=PX4.firmware,
+            params=AutopilotParams(PX4.firmware, acceptance_radius=1.0))  # fmt: skip
     left = reached(f, 1).sample
     bearing = math.atan2(6000.0 - f.xyz[left, 1], 3000.0 - f.xyz[left, 0])
     error = abs((f.course[left] - bearing + math.pi) % (2 * math.pi) - math.pi)

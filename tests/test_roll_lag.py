@@ -1,6 +1,6 @@
 """The point mass rolls into its turns (sim/aircraft.py ``step``, issue 31): its bank follows the
-one asked as a first-order lag, and the compiled twin (sim/flight_kernel.py ``_step``) flies the
-same steps. ``arc_step`` is the bank taken at once (the model before the lag)."""
+one asked as a first-order lag, and the compiled twin (sim/point_mass_kernel.py ``step``) flies
+the same steps. ``arc_step`` is the bank taken at once (the model before the lag)."""
 
 from __future__ import annotations
 
@@ -10,11 +10,10 @@ import numpy as np
 import pytest
 
 from gcs_planner.aircraft.profile import G
-from sim import flight_kernel as fk
+from sim import point_mass_kernel as pm
 from sim.aircraft import (
     ROLL_ONE_ARC_DEG_S,
     ROLL_RATE_DEG_S,
-    ROLL_SETTLED_DEG,
     ROLL_SUBSTEP_S,
     ROLL_TAU_S,
     AircraftState,
@@ -22,7 +21,8 @@ from sim.aircraft import (
     arc_step,
     step,
 )
-from sim.navigators.base import POINT_MASS
+from sim.flight_records import STATE_SIZE, aircraft_record
+from sim.navigators.airframe import POINT_MASS
 
 ENV = Envelope(45.0, 45.0, 5.0, 5.0)
 
@@ -83,25 +83,15 @@ def test_free_turn_turns_on_the_spot_as_before():
     assert (a.x, a.y) == pytest.approx((50.0 * math.cos(1.0), 50.0 * math.sin(1.0)))
 
 
-def _kernel_params(env: Envelope) -> np.ndarray:
-    p = np.zeros(fk.PARAM_SIZE)
-    p[fk.P_AIRSPEED], p[fk.P_BANK], p[fk.P_CLIMB], p[fk.P_SINK] = (
-        env.airspeed, env.bank_limit_deg, env.climb_rate, env.sink_rate)  # fmt: skip
-    p[fk.P_ROLL_TAU], p[fk.P_ROLL_RATE] = ROLL_TAU_S, ROLL_RATE_DEG_S
-    p[fk.P_ROLL_SUBSTEP], p[fk.P_ROLL_SETTLED] = ROLL_SUBSTEP_S, ROLL_SETTLED_DEG
-    p[fk.P_ROLL_ONE_ARC] = ROLL_ONE_ARC_DEG_S
-    return p
-
-
 def test_the_compiled_step_flies_the_python_step():
     """Random states, demands, steps (a finish-line cut, a fine step, a coarse one) and winds:
-    the kernel's _step gives the Python step's state to rounding, bank included; a chain of
+    the kernel's step gives the Python step's state to rounding, bank included; a chain of
     steps carries the bank alike."""
     rng = np.random.default_rng(31)
     env = Envelope(28.0, 35.0, 4.0, 3.0)
-    p = _kernel_params(env)
-    limit = fk._max_lateral(env.bank_limit_deg)
-    out = np.empty(fk.STATE_SIZE)
+    aircraft = aircraft_record(env)
+    limit = pm.max_lateral(env.bank_limit_deg)
+    out = np.empty(STATE_SIZE)
     settled_seen = 0
     for trial in range(300):
         x, y, z, course, heading = (float(v) for v in rng.uniform(-3, 3, 5) * (150, 150, 150, 1, 1))
@@ -120,7 +110,7 @@ def test_the_compiled_step_flies_the_python_step():
                           s.tas, s.ground_speed] + [0.0] * 6)  # fmt: skip
         for _ in range(3):
             py = step(s, env, lateral, climb, dt, (wx, wy), e2t)
-            fk._step(state, p, lateral, climb, dt, wx, wy, e2t, limit, out)
+            pm.step(state, aircraft, lateral, climb, dt, wx, wy, e2t, limit, out)
             want = [py.x, py.y, py.z, py.course, py.t, py.bank_deg, py.climb_rate, py.heading,
                     py.tas, py.ground_speed]  # fmt: skip
             assert out[:10] == pytest.approx(want, rel=1e-9, abs=1e-9)

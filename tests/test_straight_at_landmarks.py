@@ -20,6 +20,7 @@ from test_plan_exact import TWO, assert_plans_enumeration, enumerate_fronts, tal
 from test_probes import probed_scenario
 from test_search_kernel import assert_compiled_flies_as_python
 
+from gcs_planner.aircraft.autopilot import ARDUPLANE, PX4
 from gcs_planner.core.planner import plan
 from gcs_planner.geometry.airplane import airplane_leg, tangent_lengths
 from gcs_planner.geometry.legs import AirplaneLegs, leg_model_of, scenario_leg_model
@@ -142,7 +143,7 @@ def test_no_runs_leave_the_legs_as_they_were() -> None:
     assert leg.run_out == 0.0 and leg.departure_point is None
 
 
-@pytest.mark.parametrize("firmware", ["ardupilot", "px4"])
+@pytest.mark.parametrize("firmware", [ARDUPLANE.firmware, PX4.firmware])
 def test_the_mission_overflies_each_point_straight_on_to_its_departure_waypoint(
     firmware: str,
 ) -> None:
@@ -188,7 +189,7 @@ def test_b_is_overflown_straight_on_before_the_end_action() -> None:
         approach=300.0, departure=600.0
     )
     plan_dict = plan_to_dict(plan(scenario, objectives=TWO, time_limit=None))
-    for firmware in ("ardupilot", "px4"):
+    for firmware in (ARDUPLANE.firmware, PX4.firmware):
         items = build_mission(plan_dict, firmware=firmware).items
         b_seq = dict(build_mission(plan_dict, firmware=firmware).point_seqs)[
             plan_dict["front"][plan_dict["chosen"]]["route"][-1]
@@ -242,21 +243,21 @@ def _plan_json(capsys, dataset_paths, *extra) -> dict:
 def test_the_runs_are_derived_from_the_autopilot_and_stated(capsys, dataset_paths) -> None:
     from gcs_planner.aircraft.autopilot import effective
 
-    px4 = _plan_json(capsys, dataset_paths, "--firmware", "px4", "--wind", "5")
+    px4 = _plan_json(capsys, dataset_paths, "--autopilot", PX4.firmware, "--wind", "5")
     env = px4["vehicle"]["envelope"]
     # npfg's track error bound at the largest ground speed: NPFG_PERIOD * NPFG_DAMPING * (V + W)
-    want = effective("px4", {}).settle_distance(env["tas"] + 5.0)
+    want = effective(PX4.firmware, {}).settle_distance(env["tas"] + 5.0)
     assert want == pytest.approx(10.0 * 0.7 * (env["tas"] + 5.0))
     assert px4["parameters"]["approach"] == pytest.approx(want)
     assert px4["parameters"]["departure"] == pytest.approx(want)
     assert env["approach_m"] == pytest.approx(want) and "npfg" in env["runs_source"]
     assert "straight at every landmark" in px4["vehicle"]["description"]
-    ardu = _plan_json(capsys, dataset_paths, "--firmware", "ardupilot")
+    ardu = _plan_json(capsys, dataset_paths, "--autopilot", ARDUPLANE.firmware)
     v = ardu["vehicle"]["envelope"]["tas"]
     assert ardu["parameters"]["approach"] == pytest.approx(17.0 * 0.75 * v / math.pi)
     # stated: the flags win
     stated = _plan_json(
-        capsys, dataset_paths, "--firmware", "px4", "--approach", "0", "--departure", "120"
+        capsys, dataset_paths, "--autopilot", PX4.firmware, "--approach", "0", "--departure", "120"
     )
     assert stated["parameters"]["approach"] == 0.0
     assert stated["parameters"]["departure"] == 120.0

@@ -118,6 +118,12 @@ class MissionProtocol:
     # frame MISSION) and refuses any other MAV_MISSION_UNSUPPORTED; ArduPilot stores a command
     # it knows whatever the frame (``AP_Mission::mavlink_int_to_mission_cmd``).
     commands_by_frame: bool = False
+    # PX4 answers a download request only for the next item or the last one again and ends the
+    # transfer with MISSION_ACK MAV_MISSION_ERROR on any other
+    # (``MavlinkMissionManager::handle_mission_request_both``), so a client keeps one request
+    # out; ArduPilot answers each request on its own, whatever came before
+    # (``MissionItemProtocol::handle_mission_request_int``), so requests can be pipelined.
+    requests_in_sequence: bool = False
 
 
 # MAV_MISSION_RESULT (common.xml)
@@ -309,6 +315,7 @@ ARDUPLANE = Autopilot(
         serves_mission_file=True,
         announces_mission_float=False,
         commands_by_frame=False,
+        requests_in_sequence=False,
     ),
 )
 
@@ -372,6 +379,7 @@ PX4 = Autopilot(
         serves_mission_file=False,
         announces_mission_float=True,
         commands_by_frame=True,
+        requests_in_sequence=True,
     ),
 )
 

@@ -27,17 +27,11 @@ from __future__ import annotations
 
 import math
 
+from gcs_planner.aircraft.autopilot import ARDUPLANE
 from gcs_planner.aircraft.profile import G
-from sim.navigators.base import (
-    L1_DAMPING,
-    L1_PERIOD_S,
-    NAV_LOITER_TO_ALT,
-    NAV_LOITER_TURNS,
-    NAV_WAYPOINT,
-    NavCommand,
-    Navigator,
-    wrap,
-)
+from sim.navigators.base import Navigator
+from sim.navigators.commands import NAV_LOITER_TO_ALT, NAV_LOITER_TURNS, NAV_WAYPOINT, NavCommand
+from sim.navigators.steering import L1_DAMPING, L1_PERIOD_S, wrap
 
 LOITER_ALTITUDE_M = 5.0  # verify_loiter_to_alt
 EXIT_COURSE_DEG = 10.0  # isHeadingLinedUp_cd: 10 degrees, + 10 per lap
@@ -45,7 +39,8 @@ EXIT_REACHABLE = 1.05  # isHeadingLinedUp: next waypoint within 1.05 WP_LOITER_R
 
 
 class ArduPlaneNavigator(Navigator):
-    flavour = "ardupilot"
+    autopilot = ARDUPLANE
+    flavour = ARDUPLANE.firmware
 
     def acceptance(self, c: NavCommand) -> float:
         acp = int(c.params[1]) & 0xFF if c.command == NAV_WAYPOINT else 0

@@ -10,166 +10,59 @@ computes it, on the GROUND velocity (its _groundspeed_vector): lateral accelerat
 K Vg^2 / L1 sin(Nu), K = 4 damping^2, L1 = damping period Vg / pi (NAVL1_PERIOD 17 s,
 NAVL1_DAMPING 0.75), Nu the intercept angle asin(xtrack / L1) (limited to 45 degrees) plus the
 track-angle error of the ground course; behind the previous waypoint and farther than L1 from it
-the aircraft heads for it first. PX4's npfg follows the line with the same structure on the
-ground velocity too (npfg.cpp NPFG::guideToPath); its own gains are not modelled, its switch
-distance is (sim/navigators/px4.py).
+the aircraft heads for it first (sim/navigators/steering.py). PX4's npfg follows the line with
+the same structure on the ground velocity too (npfg.cpp NPFG::guideToPath); its own gains are
+not modelled, its switch distance is (sim/navigators/px4.py).
 
-The navigator steers its ESTIMATE of where it is (``estimate``: the true position plus the INS
-error of sim/ins.py when one is given), never the truth; the aircraft (sim/aircraft.py) flies
-the truth through the wind (sim/wind.py).
+What the navigator holds over a flight (the state, the estimate it steers, the track) is
+sim/navigators/state.py; the mission's words sim/navigators/commands.py.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
-from typing import Protocol
+from typing import ClassVar
 
-import numpy as np
+from gcs_planner.aircraft.autopilot import Autopilot
+from sim.navigators import steering
+from sim.navigators.airframe import POINT_MASS, Airframe, PointMass
+from sim.navigators.commands import (
+    DO_CHANGE_SPEED,
+    LOITERS,
+    NAV_LAND,
+    NAV_LOITER_TIME,
+    NAV_LOITER_TO_ALT,
+    NAV_LOITER_TURNS,
+    NAV_LOITER_UNLIM,
+    NAV_RETURN_TO_LAUNCH,
+    NAV_TAKEOFF,
+    NAV_WAYPOINT,
+    Event,
+    NavCommand,
+)
+from sim.navigators.state import COARSE_STEPS, DEFAULT_STEP_S, SAMPLE_FIELDS, NavigatorState
+from sim.navigators.steering import L1_DAMPING, L1_PERIOD_S, wrap
 
-from sim import atmosphere
-from sim.aircraft import AircraftState, Envelope, step
-from sim.navigators.params import AutopilotParams
-from sim.wind import WindField
+# The names this module has been read by (the mission's words, the airframe, the guidance).
+__all__ = [
+    "ALTITUDE_TIME_CONSTANT_S", "COARSE_STEPS", "DEFAULT_STEP_S", "DO_CHANGE_SPEED",
+    "L1_DAMPING", "L1_PERIOD_S", "LOITERS", "NAV_LAND", "NAV_LOITER_TIME", "NAV_LOITER_TO_ALT",
+    "NAV_LOITER_TURNS", "NAV_LOITER_UNLIM", "NAV_RETURN_TO_LAUNCH", "NAV_TAKEOFF", "NAV_WAYPOINT",
+    "POINT_MASS", "SAMPLE_FIELDS", "Airframe", "Event", "NavCommand", "Navigator",
+    "NavigatorFactory", "PointMass", "wrap",
+]  # fmt: skip
 
-NAV_WAYPOINT = 16
-NAV_LOITER_UNLIM = 17
-NAV_LOITER_TURNS = 18
-NAV_LOITER_TIME = 19
-NAV_RETURN_TO_LAUNCH = 20
-NAV_LAND = 21
-NAV_TAKEOFF = 22
-NAV_LOITER_TO_ALT = 31
-DO_CHANGE_SPEED = 178
-LOITERS = frozenset({NAV_LOITER_UNLIM, NAV_LOITER_TURNS, NAV_LOITER_TIME, NAV_LOITER_TO_ALT})
-
-# ArduPlane defaults NAVL1_PERIOD, NAVL1_DAMPING (the guidance of both navigators).
-L1_PERIOD_S = 17.0
-L1_DAMPING = 0.75
 # TECS altitude time constant (ArduPlane TECS_TIME_CONST, PX4 FW_T_ALT_TC): 5 s.
 ALTITUDE_TIME_CONSTANT_S = 5.0
-# On a straight leg where the aircraft is settled on the track and its glide slope in a steady
-# air mass, nothing changes but the position, so the step grows COARSE_STEPS times: the long
-# legs of a 170 km mission cost little, the turns and the gusts keep the fine step.
-DEFAULT_STEP_S = 0.5
-COARSE_STEPS = 8
-SAMPLE_FIELDS = 12
 
 
-@dataclass(frozen=True)
-class NavCommand:
-    """One mission item the guidance acts on, its position in the local frame when it has one."""
+class Navigator(NavigatorState):
+    """Mode AUTO over one flight. Subclasses are the autopilots: ``autopilot`` is the record of
+    the one each flies as (gcs_planner/aircraft/autopilot.py), ``flavour`` its name."""
 
-    seq: int
-    command: int
-    pos: tuple[float, float, float] | None
-    params: tuple[float, float, float, float]
-
-
-@dataclass(frozen=True)
-class Event:
-    """Something the autopilot did: ``kind`` "reached", "skipped", "altitude" or "end";
-    ``sample`` the index of the track sample at that moment."""
-
-    t: float
-    sample: int
-    seq: int
-    kind: str
-    text: str = ""
-
-
-class Airframe(Protocol):
-    """What flies a navigator's demands for one step: a lateral acceleration (m/s^2, + left) and
-    a climb rate (m/s) within ``env``, through ``wind`` (east, north m/s), from ``s`` (the state
-    it returned last). ``exact``: it can fly any step again from any state it returned, so a
-    step may be cut at a finish line and lengthened on settled straight legs (the point mass);
-    a flight model with its own state (JSBSim) cannot."""
-
-    exact: bool
-
-    def step(
-        self,
-        s: AircraftState,
-        env: Envelope,
-        lateral_accel: float,
-        climb_rate: float,
-        dt: float,
-        wind: tuple[float, float] = (0.0, 0.0),
-        eas2tas: float = 1.0,
-        heading: float | None = None,
-    ) -> AircraftState: ...
-
-
-class PointMass:
-    """The point mass of sim/aircraft.py as an airframe."""
-
-    exact = True
-    step = staticmethod(step)
-
-
-POINT_MASS = PointMass()
-
-
-def wrap(a: float) -> float:
-    return (a + math.pi) % (2 * math.pi) - math.pi
-
-
-class Navigator:
-    """The state of mode AUTO over one flight. Subclasses are the autopilots."""
-
-    flavour = ""
-
-    def __init__(
-        self,
-        commands: list[NavCommand],
-        airspeed: float,
-        ap: AutopilotParams,
-        start: AircraftState,
-        dt: float,
-        *,
-        free_turn: bool = False,
-        wind: WindField | None = None,
-        alt_offset: float = 0.0,
-        ins: object | None = None,
-        airframe: Airframe | None = None,
-    ) -> None:
-        self.cmds = commands
-        # What flies the navigator's demands: the point mass (sim/aircraft.py) unless another
-        # flight model is given (sim/jsbsim_airframe.py), the navigator code the same for both.
-        self.airframe: Airframe = airframe or POINT_MASS
-        self.cruise = airspeed
-        self.ap = ap
-        self.free_turn = free_turn
-        self.dt = dt
-        self.wind = wind
-        self.alt_offset = alt_offset
-        # The INS (sim/ins.py): offset(state) -> (dx, dy, dz) of the estimate from the truth;
-        # observe(before, after) after every step (corrections happen there, in the truth).
-        self.ins = ins
-        self.env = self._envelope(airspeed)
-        self.s = start
-        if self.s.tas <= 0:
-            self.s.tas = self.s.ground_speed = airspeed * self.eas2tas(start.z)
-        # The flown track, one row per step (see record), grown by doubling; the compiled
-        # flight (sim/flight_kernel.py) writes its steps into the same array.
-        self.track = np.empty((4096, SAMPLE_FIELDS))
-        self.n_samples = 0
-        self.events: list[Event] = []
-        self.notes: list[str] = []
-        self.k = -1  # index of the active command
-        self.est = (start.x, start.y, start.z)
-        self.prev = self.est
-        self.phase = "track"  # "track" | "loiter" (circling: a loiter item, or PX4 for altitude)
-        self.loiter_sum = 0.0
-        self.loiter_started = False
-        self.loiter_t0 = 0.0
-        self.min_dist = math.inf
-        self.hold_alt: float | None = None
-        self.ended = ""
-        self.settled = False  # on the track and the glide slope (see COARSE_STEPS)
-        self.alt_error = 0.0
-        self._estimate()
+    autopilot: ClassVar[Autopilot]
+    flavour: ClassVar[str] = ""
 
     # Hooks: each autopilot's rules --------------------------------------------------------
     def acceptance(self, c: NavCommand) -> float:
@@ -213,84 +106,24 @@ class Navigator:
     def on_loiter_started(self, c: NavCommand) -> None:
         """Called once when the aircraft is on the loiter's circle."""
 
-    # The air and the estimate -------------------------------------------------------------
-    def _envelope(self, airspeed: float) -> Envelope:
-        bank = 90.0 if self.free_turn else float(self.ap.bank_limit or 45.0)
-        climb = float(self.ap.climb_rate or 5.0)
-        sink = float(self.ap.sink_rate or 5.0)
-        return Envelope(float(airspeed), bank, climb, sink)
-
-    def eas2tas(self, z: float) -> float:
-        return atmosphere.eas2tas(z + self.alt_offset)
-
-    def _estimate(self) -> None:
-        s = self.s
-        if self.ins is None:
-            self.est = (s.x, s.y, s.z)
-        else:
-            dx, dy, dz = self.ins.offset(s)  # type: ignore[attr-defined]
-            self.est = (s.x + dx, s.y + dy, s.z + dz)
-
-    def ground_speed(self) -> float:
-        """Speed over the ground of the last step: L1 and npfg work on the ground velocity, so
-        a headwind (or a steep climb) shortens L1 and slows the turns they ask for."""
-        return max(self.s.ground_speed, 1e-3)
-
-    def _fly(self, lateral: float, climb: float, dt: float, heading: float | None = None) -> None:
-        wind = (0.0, 0.0) if self.wind is None else self.wind.step(dt)
-        before = self.s
-        e2t = self.eas2tas(before.z)
-        self.s = self.airframe.step(before, self.env, lateral, climb, dt, wind, e2t, heading)
-        self._after(before)
-
-    def _after(self, before: AircraftState) -> None:
-        if self.ins is not None:
-            self.ins.observe(before, self.s)  # type: ignore[attr-defined]
-        self._estimate()
-
     # The mission sequence -----------------------------------------------------------------
-    def record(self) -> None:
-        s = self.s
-        seq = self.cmds[self.k].seq if 0 <= self.k < len(self.cmds) else -1
-        if self.n_samples >= len(self.track):
-            self.reserve(1)
-        self.track[self.n_samples] = (
-            s.t, s.x, s.y, s.z, s.course, s.bank_deg, s.climb_rate, self.env.airspeed, seq,
-            s.heading, s.tas, s.ground_speed,
-        )  # fmt: skip
-        self.n_samples += 1
-
-    def reserve(self, rows: int) -> None:
-        """Room for ``rows`` more samples."""
-        need = self.n_samples + rows
-        if need > len(self.track):
-            grown = np.empty((max(need, 2 * len(self.track)), SAMPLE_FIELDS))
-            grown[: self.n_samples] = self.track[: self.n_samples]
-            self.track = grown
-
-    @property
-    def samples(self) -> np.ndarray:
-        """(t, x, y, z, course, bank, climb, EAS, seq, heading, TAS, ground speed) per step."""
-        return self.track[: self.n_samples]
-
-    def event(self, seq: int, kind: str, text: str = "") -> None:
-        self.events.append(Event(self.s.t, self.n_samples - 1, seq, kind, text))
-
     def flies(self, c: NavCommand) -> bool:
+        """Whether the autopilot flies item ``c`` as a position (or ends the flight at it)."""
         if c.command == NAV_RETURN_TO_LAUNCH:
             return True
         if c.pos is None or self.skips(c):
             return False
         return c.command in (NAV_WAYPOINT, NAV_TAKEOFF, NAV_LAND) or c.command in LOITERS
 
-    def _next_nav_index(self, start: int) -> int | None:
+    def next_nav_index(self, start: int) -> int | None:
+        """The index of the first command from ``start`` on that the autopilot flies."""
         for j in range(start, len(self.cmds)):
             if self.flies(self.cmds[j]):
                 return j
         return None
 
     def next_target(self) -> tuple[float, float, float] | None:
-        j = self._next_nav_index(self.k + 1)
+        j = self.next_nav_index(self.k + 1)
         return None if j is None else self.cmds[j].pos
 
     def advance(self) -> bool:
@@ -361,47 +194,15 @@ class Navigator:
     # Lateral guidance ---------------------------------------------------------------------
     def l1_line(self, a: tuple, b: tuple) -> float:
         """Lateral acceleration (m/s^2, + left) of L1 guidance on the line a -> b."""
-        s, v = self.s, self.ground_speed()
-        x, y = self.est[0], self.est[1]
-        l1 = L1_DAMPING * L1_PERIOD_S * v / math.pi
-        abx, aby = b[0] - a[0], b[1] - a[1]
-        n = math.hypot(abx, aby)
-        if n < 1e-6:
-            abx, aby = b[0] - x, b[1] - y
-            n = math.hypot(abx, aby) or 1.0
-        ux, uy = abx / n, aby / n
-        ax, ay = x - a[0], y - a[1]
-        cx, cy = math.cos(s.course), math.sin(s.course)
-        dist_a = math.hypot(ax, ay)
-        along = ax * ux + ay * uy
-        self.settled = False
-        if dist_a > l1 and along < -0.7071 * dist_a:
-            # Behind the start of the leg and far: head for it (AP_L1_Control).
-            nu = wrap(math.atan2(-ay, -ax) - s.course)
-        else:
-            xtrack = ux * ay - uy * ax  # > 0: left of the track
-            nu1 = math.asin(max(-0.7071, min(0.7071, xtrack / l1)))
-            eta = math.atan2(ux * cy - uy * cx, ux * cx + uy * cy)  # course left of track: > 0
-            nu = -(nu1 + eta)
-            self.settled = abs(xtrack) < 0.5 and abs(eta) < 0.005
-        nu = max(-math.pi / 2, min(math.pi / 2, nu))
-        k = 4.0 * L1_DAMPING * L1_DAMPING
-        return k * v * v / l1 * math.sin(nu)
+        lateral, self.settled = steering.l1_line(self.est, self.s.course, self.ground_speed(), a, b)
+        return lateral
 
     def circle(self, centre: tuple, radius: float, direction: int) -> float:
         """Lateral acceleration holding a circle: the centripetal term of the ground speed plus
         L1 on the tangent's course with an intercept angle."""
-        s, v = self.s, self.ground_speed()
-        l1 = L1_DAMPING * L1_PERIOD_S * v / math.pi
-        rx, ry = self.est[0] - centre[0], self.est[1] - centre[1]
-        r = math.hypot(rx, ry)
-        theta = math.atan2(ry, rx)
-        intercept = math.atan((r - radius) / (0.5 * l1))
-        want = theta + direction * (math.pi / 2 + intercept)
-        err = wrap(want - s.course)
-        ff = direction * v * v / radius if radius > 0 and abs(r - radius) < l1 else 0.0
-        k = 4.0 * L1_DAMPING * L1_DAMPING
-        return ff + k * v * v / l1 * math.sin(max(-math.pi / 2, min(math.pi / 2, err)))
+        return steering.circle(
+            self.est, self.s.course, self.ground_speed(), centre, radius, direction
+        )
 
     # Altitude -----------------------------------------------------------------------------
     def climb_to(self, alt: float, feedforward: float = 0.0) -> float:

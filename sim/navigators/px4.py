@@ -37,13 +37,9 @@ from __future__ import annotations
 
 import math
 
-from sim.navigators.base import (
-    NAV_LOITER_TIME,
-    NAV_LOITER_TO_ALT,
-    NAV_LOITER_TURNS,
-    NavCommand,
-    Navigator,
-)
+from gcs_planner.aircraft.autopilot import PX4
+from sim.navigators.base import Navigator
+from sim.navigators.commands import NAV_LOITER_TIME, NAV_LOITER_TO_ALT, NAV_LOITER_TURNS, NavCommand
 
 ALTITUDE_ACCEPTANCE_M = 10.0  # NAV_FW_ALT_RAD
 EXIT_COURSE_DEG = 5.0  # kCosineExitCourseThreshold
@@ -52,7 +48,8 @@ SWITCH_DISTANCE_CAP_M = 500.0  # FixedwingPositionControl: _npfg.switchDistance(
 
 
 class PX4Navigator(Navigator):
-    flavour = "px4"
+    autopilot = PX4
+    flavour = PX4.firmware
     _held_for = -1  # seq of the LOITER_TO_ALT whose approach altitude is held
 
     def switch_distance(self) -> float:
