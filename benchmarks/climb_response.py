@@ -14,10 +14,11 @@ from __future__ import annotations
 
 import argparse
 
+from gcs_planner.sim import atmosphere
+from gcs_planner.sim.aircraft import AircraftState, Envelope
+from gcs_planner.sim.jsbsim_airframe import DEFAULT_AIRCRAFT, FlightModel
+
 from benchmarks.report import table
-from sim import atmosphere
-from sim.aircraft import AircraftState, Envelope
-from sim.jsbsim_airframe import DEFAULT_AIRCRAFT, FlightModel
 
 STEP_S = 0.5  # the dry run's navigator step (sim/jsbsim_airframe.py OUTER_STEP_S)
 LEVEL_S = 20.0

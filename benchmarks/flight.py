@@ -32,6 +32,9 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
+from gcs_planner.sim import replay as replay_mod
+from gcs_planner.sim.guidance import AutopilotParams
+from gcs_planner.sim.wind import WindSpec
 
 from benchmarks.cases import DATA, load_case
 from benchmarks.report import seconds, table
@@ -41,9 +44,6 @@ from gcs_planner.dryrun.run import DRY_RUN_ACCEPTANCE_RADIUS_M, max_deviation
 from gcs_planner.mission.builder import build_mission
 from gcs_planner.mission.geo_exports import trajectory_local
 from gcs_planner.mission.plan_json import plan_to_dict
-from sim import replay as replay_mod
-from sim.guidance import AutopilotParams
-from sim.wind import WindSpec
 
 # The real-world flight timed beside the still-air one: 5 m/s from 270 deg, 1.5 m/s gusts, the
 # aircraft steering its INS estimate.
@@ -186,8 +186,8 @@ def out_and_back(items: list, home: bool) -> list:
 
 
 def run_long(runs: int) -> list[LongRow]:
-    from sim.guidance import fly
-    from sim.replay import scenario_frame
+    from gcs_planner.sim.guidance import fly
+    from gcs_planner.sim.replay import scenario_frame
 
     scenario = load_case("dataset2", TURN_RADIUS)
     result = plan(scenario, objectives=("length", "corrections"))

@@ -20,13 +20,14 @@ import tempfile
 import time
 from pathlib import Path
 
+from gcs_planner.sim.aircraft import InstantBankFlightModel
+from gcs_planner.sim.jsbsim_airframe import DEFAULT_AIRCRAFT, CheckedPointMass, FlightModel
+from gcs_planner.sim.wind import WindSpec
+
 from benchmarks.report import machine, table
 from gcs_planner.core.planner import plan
 from gcs_planner.dryrun.run import dry_run
 from gcs_planner.scenario.readers import load_scenario
-from sim.aircraft import InstantBankFlightModel
-from sim.jsbsim_airframe import DEFAULT_AIRCRAFT, CheckedPointMass, FlightModel
-from sim.wind import WindSpec
 
 MISSION = Path(__file__).resolve().parents[1] / "missions" / "jsbsim" / "scenario.toml"
 WIND = WindSpec(5.0, 270.0, 1.5)

@@ -13,14 +13,15 @@ import argparse
 import statistics
 import time
 
+from gcs_planner.sim.faults import FaultRates
+from gcs_planner.sim.vehicle import MockVehicle, free_udp_port
+
 from gcs_planner.errors import LinkError
 from gcs_planner.link.connection import open_link
 from gcs_planner.link.mission_client import MissionClient
 from gcs_planner.link.protocol import ITEM_TIMEOUT_S, mission_differences
 from gcs_planner.link.rtt import RoundTrip
 from gcs_planner.mission.items import MissionItem
-from sim.faults import FaultRates
-from sim.vehicle import MockVehicle, free_udp_port
 
 TARGETS_S = {0.05: 15.0, 0.20: 60.0}  # issue 14: 1,000 items, medians
 

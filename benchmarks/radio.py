@@ -46,6 +46,9 @@ import time
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 
+from gcs_planner.sim.radio import RadioConfig, SikRadio, Timing
+from gcs_planner.sim.vehicle import MockVehicle, free_udp_port
+
 from benchmarks.report import machine
 from gcs_planner.errors import InputError, LinkError
 from gcs_planner.link.connection import mavlink, open_link
@@ -53,8 +56,6 @@ from gcs_planner.link.mission_client import MissionClient
 from gcs_planner.link.protocol import ITEM_TIMEOUT_S, item_to_message, mission_differences
 from gcs_planner.link.rtt import RoundTrip
 from gcs_planner.mission.items import MissionItem
-from sim.radio import RadioConfig, SikRadio, Timing
-from sim.vehicle import MockVehicle, free_udp_port
 
 BURST = 4.0  # mean loss burst, packets
 TARGET_FACTOR = 2.0  # issue 33: within 2x the air time

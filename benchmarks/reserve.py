@@ -95,13 +95,14 @@ def flown_at(
 def flight(result, firmware: str, wind: float, gust: float, seed: int, from_deg=None):
     """The replay report of one flight of the chosen route, the wind from ``from_deg`` (None:
     a direction drawn from ``seed``)."""
+    from gcs_planner.sim.guidance import AutopilotParams
+    from gcs_planner.sim.replay import replay
+    from gcs_planner.sim.wind import WindSpec
+
     from gcs_planner.aircraft.profile import ENVELOPE_PARAMS
     from gcs_planner.link.vehicle_check import needs
     from gcs_planner.mission.builder import build_mission
     from gcs_planner.mission.plan_json import plan_to_dict
-    from sim.guidance import AutopilotParams
-    from sim.replay import replay
-    from sim.wind import WindSpec
 
     plan_dict = plan_to_dict(result)
     mission = build_mission(plan_dict, firmware=firmware, acceptance_radius=1)

@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import statistics
 
+from gcs_planner.sim.vehicle import MockVehicle, free_udp_port
+
 from benchmarks.report import seconds, table
 from gcs_planner.aircraft.profile import FIRMWARES
 from gcs_planner.link.connection import open_link
 from gcs_planner.link.mission_client import MissionClient
 from gcs_planner.mission.items import MissionItem
-from sim.vehicle import MockVehicle, free_udp_port
 
 FLAVOURS = FIRMWARES
 

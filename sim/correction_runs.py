@@ -10,12 +10,8 @@ import math
 from collections.abc import Sequence
 
 import numpy as np
-
-from gcs_planner.aircraft.profile import DEFAULT_CAPTURE_RADIUS_M
-from gcs_planner.dryrun.confidence import wilson_interval
-from gcs_planner.scenario.model import Kind, Parameters, Scenario
-from sim.ins import InsEstimate
-from sim.replay_records import (
+from gcs_planner.sim.ins import InsEstimate
+from gcs_planner.sim.replay_records import (
     CorrectionRow,
     Encounter,
     FlightPath,
@@ -23,6 +19,10 @@ from sim.replay_records import (
     MonteCarloSummary,
     ReplayRun,
 )
+
+from gcs_planner.aircraft.profile import DEFAULT_CAPTURE_RADIUS_M
+from gcs_planner.dryrun.confidence import wilson_interval
+from gcs_planner.scenario.model import Kind, Parameters, Scenario
 
 
 def corrections_run(

@@ -7,12 +7,12 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
+from gcs_planner.sim import flight_kernel
+from gcs_planner.sim.replay_records import Encounter, FlightPath, Missed
 from scipy.spatial import cKDTree
 
 from gcs_planner.aircraft.profile import DEFAULT_CAPTURE_RADIUS_M
 from gcs_planner.scenario.model import Kind, Scenario
-from sim import flight_kernel
-from sim.replay_records import Encounter, FlightPath, Missed
 
 
 def _segment_distances(

@@ -39,9 +39,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
-
-from sim.flight_records import (
+from gcs_planner.sim.flight_records import (
     E_KIND,
     E_SAMPLE,
     E_SEQ,
@@ -79,7 +77,7 @@ from sim.flight_records import (
     ins_record,
     resume_gusts,
 )
-from sim.navigator_kernel import (
+from gcs_planner.sim.navigator_kernel import (
     acceptance,
     advance,
     altitude_loiter_decision,
@@ -95,16 +93,17 @@ from sim.navigator_kernel import (
     track_demand,
     waypoint_altitude_ok,
 )
-from sim.navigators.base import Navigator
-from sim.navigators.commands import Event
-from sim.navigators.compiled import (
+from gcs_planner.sim.navigators.base import Navigator
+from gcs_planner.sim.navigators.commands import Event
+from gcs_planner.sim.navigators.compiled import (
     commands_record,
     compiled_mode,
     flight_record,
     resume,
     state_vector,
 )
-from sim.point_mass_kernel import eas2tas, max_lateral, step
+from gcs_planner.sim.point_mass_kernel import eas2tas, max_lateral, step
+from numba import njit
 
 
 @njit(cache=True)

@@ -18,8 +18,7 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
-
-from sim.aircraft import (
+from gcs_planner.sim.aircraft import (
     ROLL_ONE_ARC_DEG_S,
     ROLL_RATE_DEG_S,
     ROLL_SETTLED_DEG,
@@ -27,8 +26,8 @@ from sim.aircraft import (
     ROLL_TAU_S,
     Envelope,
 )
-from sim.ins import InsEstimate
-from sim.wind import WindField
+from gcs_planner.sim.ins import InsEstimate
+from gcs_planner.sim.wind import WindField
 
 # Why the kernel stopped.
 STOP_EVENT = 0  # the next step is not plain: the Python navigator flies it

@@ -52,6 +52,9 @@ from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from typing import Any
 
+from gcs_planner.sim.mission_items import check_item, mission_protocol
+from gcs_planner.sim.mission_server import MissionServer
+
 from gcs_planner.link import ftp
 from gcs_planner.link.mission_ftp import (
     CRC_READ,
@@ -65,8 +68,6 @@ from gcs_planner.link.mission_ftp import (
 )
 from gcs_planner.link.pacing import RadioFlow
 from gcs_planner.mission.items import MissionItem
-from sim.mission_items import check_item, mission_protocol
-from sim.mission_server import MissionServer
 
 MISSION_FILE = "@MISSION/mission.dat"
 STAT_SIZE = 1024 * 1024  # AP_Filesystem_Mission::stat's fixed size

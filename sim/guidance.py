@@ -22,17 +22,12 @@ from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
-
-from gcs_planner.aircraft.autopilot import DEFAULT_AUTOPILOT
-from gcs_planner.aircraft.profile import G, VehicleProfile
-from gcs_planner.mission.items import GLOBAL_AMSL_FRAMES, GLOBAL_RELATIVE_FRAMES, MissionItem
-from gcs_planner.scenario.georef import LocalFrame
-from sim import atmosphere, flight_kernel
-from sim.aircraft import AircraftState, FlightModelFace
-from sim.ins import InsEstimate
-from sim.jsbsim_airframe import AirframeLimit, LegNeed
-from sim.navigators import NAVIGATORS
-from sim.navigators.commands import (
+from gcs_planner.sim import atmosphere, flight_kernel
+from gcs_planner.sim.aircraft import AircraftState, FlightModelFace
+from gcs_planner.sim.ins import InsEstimate
+from gcs_planner.sim.jsbsim_airframe import AirframeLimit, LegNeed
+from gcs_planner.sim.navigators import NAVIGATORS
+from gcs_planner.sim.navigators.commands import (
     DO_CHANGE_SPEED,
     LOITERS,
     NAV_LAND,
@@ -46,10 +41,15 @@ from sim.navigators.commands import (
     Event,
     NavCommand,
 )
-from sim.navigators.params import AutopilotParams
-from sim.navigators.state import COARSE_STEPS, DEFAULT_STEP_S
-from sim.navigators.steering import L1_DAMPING, L1_PERIOD_S
-from sim.wind import WindField, WindModel
+from gcs_planner.sim.navigators.params import AutopilotParams
+from gcs_planner.sim.navigators.state import COARSE_STEPS, DEFAULT_STEP_S
+from gcs_planner.sim.navigators.steering import L1_DAMPING, L1_PERIOD_S
+from gcs_planner.sim.wind import WindField, WindModel
+
+from gcs_planner.aircraft.autopilot import DEFAULT_AUTOPILOT
+from gcs_planner.aircraft.profile import G, VehicleProfile
+from gcs_planner.mission.items import GLOBAL_AMSL_FRAMES, GLOBAL_RELATIVE_FRAMES, MissionItem
+from gcs_planner.scenario.georef import LocalFrame
 
 __all__ = [
     "COARSE_STEPS", "DEFAULT_STEP_S", "DO_CHANGE_SPEED", "L1_DAMPING", "L1_PERIOD_S", "LOITERS",

@@ -22,9 +22,9 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from gcs_planner.sim.aircraft import AircraftState
 
 from gcs_planner.scenario.model import Kind, Parameters, Scenario
-from sim.aircraft import AircraftState
 
 DEFAULT_ERROR_UNIT_M = 0.1
 _CELL_M = 1000.0

@@ -45,9 +45,10 @@ from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 
+from gcs_planner.sim import atmosphere
+from gcs_planner.sim.aircraft import AircraftState, Envelope
+
 from gcs_planner.aircraft.profile import G
-from sim import atmosphere
-from sim.aircraft import AircraftState, Envelope
 
 FT = 0.3048
 RATE_HZ = 60.0  # FDM and inner loops (the 50-120 Hz; ArduPlane's fast loop is 50 Hz)

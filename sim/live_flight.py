@@ -43,19 +43,19 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from gcs_planner.sim import flight_kernel, guidance
+from gcs_planner.sim.aircraft import AircraftState
+from gcs_planner.sim.ins import InsCorrection, InsEstimate
+from gcs_planner.sim.navigators import NAVIGATORS
+from gcs_planner.sim.navigators.base import Event, NavCommand
+from gcs_planner.sim.replay import FlightPath, ReplayRun, _ins_run, closest_approach, scenario_frame
+from gcs_planner.sim.wind import WindField, WindModel
 from scipy.spatial import cKDTree
 
 from gcs_planner.aircraft.autopilot import autopilot_for
 from gcs_planner.aircraft.profile import VehicleProfile
 from gcs_planner.mission.items import MissionItem
 from gcs_planner.scenario.model import Kind, Scenario
-from sim import flight_kernel, guidance
-from sim.aircraft import AircraftState
-from sim.ins import InsCorrection, InsEstimate
-from sim.navigators import NAVIGATORS
-from sim.navigators.base import Event, NavCommand
-from sim.replay import FlightPath, ReplayRun, _ins_run, closest_approach, scenario_frame
-from sim.wind import WindField, WindModel
 
 
 @dataclass(frozen=True)

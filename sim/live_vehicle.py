@@ -28,15 +28,15 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
+from gcs_planner.sim import telemetry
+from gcs_planner.sim.guidance import AutopilotParams
+from gcs_planner.sim.ins import InsCorrection
+from gcs_planner.sim.live_flight import Happened, LiveFlight
+from gcs_planner.sim.replay import FlightPath, ReplayRun, scenario_frame
 
 from gcs_planner.link.connection import mavlink
 from gcs_planner.link.correction_report import format_report
 from gcs_planner.link.protocol import DEFAULT_TIMEOUT_S
-from sim import telemetry
-from sim.guidance import AutopilotParams
-from sim.ins import InsCorrection
-from sim.live_flight import Happened, LiveFlight
-from sim.replay import FlightPath, ReplayRun, scenario_frame
 
 DEFAULT_TIME_SCALE = 20.0
 # A correction report is a STATUSTEXT, which no one acknowledges: it goes out this many times,

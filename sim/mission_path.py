@@ -14,6 +14,8 @@ import math
 from collections.abc import Sequence
 
 import numpy as np
+from gcs_planner.sim import guidance
+from gcs_planner.sim.replay_records import FlightPath
 
 from gcs_planner.aircraft.profile import DEFAULT_CAPTURE_RADIUS_M, DEFAULT_CRUISE_AIRSPEED
 from gcs_planner.mission.items import (
@@ -24,8 +26,6 @@ from gcs_planner.mission.items import (
 )
 from gcs_planner.scenario.georef import DEFAULT_ORIGIN, LocalFrame
 from gcs_planner.scenario.model import Scenario
-from sim import guidance
-from sim.replay_records import FlightPath
 
 MAV_CMD_DO_CHANGE_SPEED = 178
 

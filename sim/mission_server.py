@@ -47,17 +47,18 @@ from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from typing import Any
 
-from gcs_planner.aircraft.autopilot import autopilot_for
-from gcs_planner.link.connection import mavlink
-from gcs_planner.link.protocol import item_to_message
-from gcs_planner.mission.items import MAV_MISSION_TYPE_MISSION, MissionItem
-from sim.mission_items import (
+from gcs_planner.sim.mission_items import (
     Peer,
     check_item,
     item_from_wire,
     legacy_item_message,
     mission_protocol,
 )
+
+from gcs_planner.aircraft.autopilot import autopilot_for
+from gcs_planner.link.connection import mavlink
+from gcs_planner.link.protocol import item_to_message
+from gcs_planner.mission.items import MAV_MISSION_TYPE_MISSION, MissionItem
 
 MAV_MISSION_TYPE_FENCE = 1
 MAV_MISSION_TYPE_RALLY = 2

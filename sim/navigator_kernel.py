@@ -19,9 +19,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
-
-from sim.flight_records import (
+from gcs_planner.sim.flight_records import (
     AIRCRAFT_SIZE,
     E_KIND,
     E_SAMPLE,
@@ -55,15 +53,16 @@ from sim.flight_records import (
     Ins,
     Rules,
 )
-from sim.navigators.base import ALTITUDE_TIME_CONSTANT_S, COARSE_STEPS
-from sim.navigators.px4 import (
+from gcs_planner.sim.navigators.base import ALTITUDE_TIME_CONSTANT_S, COARSE_STEPS
+from gcs_planner.sim.navigators.px4 import (
     ALTITUDE_ACCEPTANCE_M,
     EXIT_COURSE_DEG,
     EXIT_REACHABLE,
     SWITCH_DISTANCE_CAP_M,
 )
-from sim.navigators.steering import L1_DAMPING, L1_PERIOD_S
-from sim.point_mass_kernel import wrap
+from gcs_planner.sim.navigators.steering import L1_DAMPING, L1_PERIOD_S
+from gcs_planner.sim.point_mass_kernel import wrap
+from numba import njit
 
 
 @njit(cache=True, inline="always")

@@ -12,11 +12,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
-
-from gcs_planner.aircraft.profile import G
-from sim import atmosphere
-from sim.flight_records import (
+from gcs_planner.sim import atmosphere
+from gcs_planner.sim.flight_records import (
     S_BANK,
     S_CLIMB,
     S_COURSE,
@@ -29,6 +26,9 @@ from sim.flight_records import (
     S_Z,
     Aircraft,
 )
+from numba import njit
+
+from gcs_planner.aircraft.profile import G
 
 _SIGMA11 = atmosphere._SIGMA11
 _T11 = atmosphere._T11

@@ -40,7 +40,7 @@ radios here stay in step), ECC's error correction (ECC only doubles the air time
 resend, RTS/CTS, and the host's own serial buffer, which is taken as large (a writer to a serial
 port blocks rather than loses bytes).
 
-Run as a relay process: ``python -m sim.radio --ground udpin:127.0.0.1:14550 --vehicle
+Run as a relay process: ``python -m gcs_planner.sim.radio --ground udpin:127.0.0.1:14550 --vehicle
 udpout:127.0.0.1:14551 [--air-rate 64] [--loss 0.05 --burst 4] [--seed 0]``; or from
 ``gcs-planner mock-vehicle --radio sik[:AIR_RATE]``.
 """
@@ -50,7 +50,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from sim.sik_config import (
+from gcs_planner.sim.sik_config import (
     MAX_PACKET_LENGTH,
     TICK_S,
     TRAILER_BYTES,
@@ -59,8 +59,14 @@ from sim.sik_config import (
     Timing,
     parse_radio,
 )
-from sim.sik_relay import LINK_UPDATE_S, RADIO_COMPONENT, RADIO_SYSTEM, STATISTICS_BYTES, SikRadio
-from sim.sik_serial import NOISE, RSSI_BAD, RSSI_GOOD, RadioCounts
+from gcs_planner.sim.sik_relay import (
+    LINK_UPDATE_S,
+    RADIO_COMPONENT,
+    RADIO_SYSTEM,
+    STATISTICS_BYTES,
+    SikRadio,
+)
+from gcs_planner.sim.sik_serial import NOISE, RSSI_BAD, RSSI_GOOD, RadioCounts
 
 # The radio's parts live by purpose (sik_config: settings, timing and channel; sik_serial: one
 # radio and its host; sik_relay: the pair as a relay); their names stay importable from here.
@@ -87,7 +93,7 @@ __all__ = [
 
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(
-        prog="python -m sim.radio",
+        prog="python -m gcs_planner.sim.radio",
         description="A SiK telemetry radio pair between a ground station and a vehicle, as a "
         "UDP relay on this machine.",
     )

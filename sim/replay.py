@@ -46,15 +46,9 @@ from collections.abc import Sequence
 from dataclasses import replace
 
 import numpy as np
-
-from gcs_planner.aircraft.autopilot import AUTOPILOTS, DEFAULT_AUTOPILOT
-from gcs_planner.aircraft.profile import DEFAULT_CAPTURE_RADIUS_M, VehicleProfile
-from gcs_planner.mission.items import MissionItem
-from gcs_planner.scenario.georef import DEFAULT_ORIGIN
-from gcs_planner.scenario.model import Parameters, Scenario
-from sim import guidance
-from sim.correction_runs import arrival_at_b, corrections_run, ins_run, monte_carlo
-from sim.encounters import (
+from gcs_planner.sim import guidance
+from gcs_planner.sim.correction_runs import arrival_at_b, corrections_run, ins_run, monte_carlo
+from gcs_planner.sim.encounters import (
     _first_pass,
     _segment_distances,
     closest_approach,
@@ -62,8 +56,8 @@ from sim.encounters import (
     find_missed,
     mission_landmarks,
 )
-from sim.ins import DEFAULT_ERROR_UNIT_M
-from sim.mission_path import (
+from gcs_planner.sim.ins import DEFAULT_ERROR_UNIT_M
+from gcs_planner.sim.mission_path import (
     CHORD_SHORTFALL,
     DEFAULT_CRUISE_SPEED,
     DENSIFY_MAX_DEG,
@@ -73,8 +67,8 @@ from sim.mission_path import (
     flown_path,
     scenario_frame,
 )
-from sim.replay_flights import FlightSetup, monte_carlo_flights
-from sim.replay_records import (
+from gcs_planner.sim.replay_flights import FlightSetup, monte_carlo_flights
+from gcs_planner.sim.replay_records import (
     CorrectionRow,
     Encounter,
     FlightPath,
@@ -84,7 +78,13 @@ from sim.replay_records import (
     ReplayReport,
     ReplayRun,
 )
-from sim.wind import WindSpec
+from gcs_planner.sim.wind import WindSpec
+
+from gcs_planner.aircraft.autopilot import AUTOPILOTS, DEFAULT_AUTOPILOT
+from gcs_planner.aircraft.profile import DEFAULT_CAPTURE_RADIUS_M, VehicleProfile
+from gcs_planner.mission.items import MissionItem
+from gcs_planner.scenario.georef import DEFAULT_ORIGIN
+from gcs_planner.scenario.model import Parameters, Scenario
 
 # The names the replay's callers have always imported from here, wherever they now live.
 _fly = corrections_run

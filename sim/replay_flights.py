@@ -9,19 +9,31 @@ from dataclasses import dataclass, replace
 from functools import cached_property
 
 import numpy as np
+from gcs_planner.sim import guidance
+from gcs_planner.sim.correction_runs import corrections_run, ins_run
+from gcs_planner.sim.encounters import (
+    closest_approach,
+    find_encounters,
+    find_missed,
+    mission_landmarks,
+)
+from gcs_planner.sim.ins import InsEstimate
+from gcs_planner.sim.mission_path import flown_path
+from gcs_planner.sim.replay_records import (
+    Encounter,
+    FlightPath,
+    LostRun,
+    Missed,
+    MonteCarloSummary,
+    ReplayRun,
+)
+from gcs_planner.sim.wind import WindModel, WindSpec
 
 from gcs_planner.aircraft.profile import VehicleProfile
 from gcs_planner.dryrun.confidence import wilson_interval
 from gcs_planner.mission.items import MissionItem
 from gcs_planner.scenario.georef import LocalFrame
 from gcs_planner.scenario.model import Parameters, Scenario
-from sim import guidance
-from sim.correction_runs import corrections_run, ins_run
-from sim.encounters import closest_approach, find_encounters, find_missed, mission_landmarks
-from sim.ins import InsEstimate
-from sim.mission_path import flown_path
-from sim.replay_records import Encounter, FlightPath, LostRun, Missed, MonteCarloSummary, ReplayRun
-from sim.wind import WindModel, WindSpec
 
 
 @dataclass(frozen=True)

@@ -8,9 +8,9 @@ from dataclasses import asdict, dataclass, field
 from functools import cached_property
 
 import numpy as np
+from gcs_planner.sim import flight_kernel, guidance
 
 from gcs_planner.scenario.model import Kind
-from sim import flight_kernel, guidance
 
 
 @dataclass(frozen=True)

@@ -14,9 +14,8 @@ import threading
 import time
 from collections.abc import Callable
 
-from gcs_planner.link.connection import mavlink
-from sim.sik_config import TRAILER_BYTES, GilbertElliott, RadioConfig, Timing
-from sim.sik_serial import (
+from gcs_planner.sim.sik_config import TRAILER_BYTES, GilbertElliott, RadioConfig, Timing
+from gcs_planner.sim.sik_serial import (
     NOISE,
     RSSI_BAD,
     RSSI_GOOD,
@@ -26,6 +25,8 @@ from sim.sik_serial import (
     is_heartbeat,
     udp_endpoint,
 )
+
+from gcs_planner.link.connection import mavlink
 
 # SiK's MAVLink report comes from system '3', component 'D' (mavlink.c: RADIO_SOURCE_SYSTEM).
 RADIO_SYSTEM = 51

@@ -34,6 +34,15 @@ import time
 from collections.abc import Iterable
 from typing import Any
 
+from gcs_planner.sim import replay as replay_mod
+from gcs_planner.sim import telemetry
+from gcs_planner.sim.faults import FaultInjector, FaultRates
+from gcs_planner.sim.ftp_server import FtpServer
+from gcs_planner.sim.guidance import AutopilotParams
+from gcs_planner.sim.mission_items import mission_protocol
+from gcs_planner.sim.mission_server import MissionServer, seq_from_param
+from gcs_planner.sim.param_server import ParamServer, parameter_table
+
 from gcs_planner.aircraft.autopilot import (
     AUTOPILOTS,
     DEFAULT_AUTOPILOT,
@@ -44,14 +53,6 @@ from gcs_planner.link.connection import Link, mavlink
 from gcs_planner.link.pacing import RadioFlow
 from gcs_planner.mission.items import MissionItem
 from gcs_planner.scenario.model import Scenario
-from sim import replay as replay_mod
-from sim import telemetry
-from sim.faults import FaultInjector, FaultRates
-from sim.ftp_server import FtpServer
-from sim.guidance import AutopilotParams
-from sim.mission_items import mission_protocol
-from sim.mission_server import MissionServer, seq_from_param
-from sim.param_server import ParamServer, parameter_table
 
 FLAVOURS = tuple(AUTOPILOTS)  # the autopilots it can be (imported by the CLI and the dry run)
 # Copies of one frame by a radio or a router arrive within milliseconds; a ground station
@@ -488,7 +489,7 @@ class MockVehicle:
         STATUSTEXT, never the vehicle (which goes on answering and can fly again)."""
         try:
             if self.live:
-                from sim.live_vehicle import fly_live
+                from gcs_planner.sim.live_vehicle import fly_live
 
                 fly_live(self, seed=self.flight_seed, time_scale=self.speedup)
             else:

@@ -8,11 +8,10 @@ import math
 
 import numpy as np
 import pytest
+from gcs_planner.sim.aircraft import AircraftState, Envelope, step
+from gcs_planner.sim.guidance import AutopilotParams, fly
+from gcs_planner.sim.wind import WindField, WindModel
 from test_guidance import FRAME, PROFILE, mission
-
-from sim.aircraft import AircraftState, Envelope, step
-from sim.guidance import AutopilotParams, fly
-from sim.wind import WindField, WindModel
 
 ENV = Envelope(25.0, 45.0, 5.0, 5.0)
 

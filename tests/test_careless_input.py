@@ -13,11 +13,11 @@ import warnings
 from pathlib import Path
 
 import pytest
+from gcs_planner.sim.vehicle import free_udp_port
 
 from gcs_planner.cli import main
 from gcs_planner.errors import InputError
 from gcs_planner.scenario.readers import load_scenario
-from sim.vehicle import free_udp_port
 
 REPO = Path(__file__).resolve().parents[1]
 COAST = REPO / "missions" / "coast" / "scenario.toml"  # plans in about 3 s

@@ -155,7 +155,7 @@ def test_the_check_reads_numba_files_without_loading_numba(
     assert stream.text == f"gcs-planner: {NOTICE} 30 s\n"
     # The dry run's flight kernels (sim/) announce it too.
     flight = compile_notice._Notice(_Terminal(), 14.0)
-    flight.on_compile(Event("sim.flight_kernel"))
+    flight.on_compile(Event("gcs_planner.sim.flight_kernel"))
     assert flight.stream.text == f"gcs-planner: {NOTICE} 14 s\n"
 
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "cached"))

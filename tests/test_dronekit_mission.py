@@ -5,10 +5,10 @@ from __future__ import annotations
 
 import dronekit
 import pytest
+from gcs_planner.sim.vehicle import MockVehicle, free_udp_port
 from pymavlink import mavutil
 
 from gcs_planner.mission.items import MissionItem
-from sim.vehicle import MockVehicle, free_udp_port
 
 WAYPOINTS = [(30.5 + 0.001 * i, 123.5 + 0.002 * i, 100.0 + i) for i in range(5)]
 

@@ -147,8 +147,9 @@ def test_steep_cs3d_mission_is_caught_through_mock_vehicle_and_upload_processes(
     import sys
     import time
 
+    from gcs_planner.sim.vehicle import free_udp_port
+
     from gcs_planner.link.connection import mavlink, open_link
-    from sim.vehicle import free_udp_port
 
     workbook = str(dataset_paths[2])
     out = tmp_path / "steep"

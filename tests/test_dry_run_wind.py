@@ -7,12 +7,12 @@ from __future__ import annotations
 import json
 
 import pytest
+from gcs_planner.sim.wind import WindSpec
 
 from gcs_planner.cli import main
 from gcs_planner.core.planner import plan
 from gcs_planner.dryrun.run import EXIT_LOST, dry_run
 from gcs_planner.scenario.readers import load_scenario
-from sim.wind import WindSpec
 
 DS1 = ["--alpha1", "25", "--alpha2", "15", "--beta1", "20", "--beta2", "25", "--theta", "30",
        "--delta", "0.001", "--turn-radius", "200", "--max-climb-angle", "15",

@@ -23,6 +23,12 @@ import re
 
 import numpy as np
 import pytest
+from gcs_planner.sim import flight_kernel
+from gcs_planner.sim.aircraft import ROLL_RATE_DEG_S
+from gcs_planner.sim.guidance import AutopilotParams
+from gcs_planner.sim.navigators.base import LOITERS
+from gcs_planner.sim.replay import replay
+from gcs_planner.sim.wind import WindSpec
 from test_helix_flight import DS2, DS2_LIMITS, configured
 from test_mission_builder import make_plan, steep_scenario
 
@@ -31,12 +37,6 @@ from gcs_planner.core.planner import plan
 from gcs_planner.mission.builder import build_mission
 from gcs_planner.mission.plan_json import plan_to_dict
 from gcs_planner.scenario.readers import load_scenario
-from sim import flight_kernel
-from sim.aircraft import ROLL_RATE_DEG_S
-from sim.guidance import AutopilotParams
-from sim.navigators.base import LOITERS
-from sim.replay import replay
-from sim.wind import WindSpec
 
 TRACK_TOLERANCE_M = 2.5
 END_TOLERANCE_M = 0.5
@@ -210,7 +210,7 @@ def test_closest_approaches_compiled_are_numpys():
     """sim/replay.py closest_approach on a flown track, compiled (one pass over bounding boxes
     of the segments, skipping those too far) and in numpy: the same first pass, the same
     closest approach when there is none, for points on, near and far from the track."""
-    from sim.replay import FlightPath, closest_approach
+    from gcs_planner.sim.replay import FlightPath, closest_approach
 
     rng = np.random.default_rng(5)
     steps = rng.normal(0.0, 1.0, (5000, 3)) * (12.0, 12.0, 1.0) + (10.0, 3.0, 0.0)

@@ -15,6 +15,9 @@ from contextlib import contextmanager
 from dataclasses import replace
 
 import pytest
+from gcs_planner.sim import ftp_server
+from gcs_planner.sim.radio import RadioConfig, SikRadio
+from gcs_planner.sim.vehicle import MockVehicle, free_udp_port
 
 from gcs_planner.cli import main
 from gcs_planner.errors import LinkError
@@ -33,9 +36,6 @@ from gcs_planner.link.mission_ftp import (
 )
 from gcs_planner.link.protocol import item_differences, mission_differences
 from gcs_planner.mission.items import MissionItem
-from sim import ftp_server
-from sim.radio import RadioConfig, SikRadio
-from sim.vehicle import MockVehicle, free_udp_port
 
 
 def _mission(n: int) -> list[MissionItem]:

@@ -8,14 +8,14 @@ import math
 
 import numpy as np
 import pytest
+from gcs_planner.sim.atmosphere import eas2tas
+from gcs_planner.sim.guidance import AutopilotParams, fly
 
 from gcs_planner.aircraft.autopilot import ARDUPLANE, PX4, autopilot_for
 from gcs_planner.aircraft.profile import VehicleProfile
 from gcs_planner.mission.items import MissionItem
 from gcs_planner.scenario.georef import LocalFrame
 from gcs_planner.scenario.model import Origin
-from sim.atmosphere import eas2tas
-from sim.guidance import AutopilotParams, fly
 
 FRAME = LocalFrame(Origin(30.5, 123.5, 0.0))
 PROFILE = VehicleProfile(turn_radius=200.0, max_climb_angle=15.0, max_descent_angle=15.0)
@@ -215,7 +215,7 @@ def test_the_instant_bank_model_is_kept_for_the_cross_check():
     before the roll lag; benchmarks/jsbsim_check.py compares it): on the sharp corner it jumps
     to the roll limit within a step, where the default aircraft rolls at most 70 deg/s and
     turns later, so its flight is longer."""
-    from sim.aircraft import ROLL_RATE_DEG_S, InstantBankFlightModel
+    from gcs_planner.sim.aircraft import ROLL_RATE_DEG_S, InstantBankFlightModel
 
     items = mission((16, (0, 0, 1000), {"param2": 1}), (16, (3000, 0, 1000), {"param2": 1}),
                     (16, (3000, 3000, 1000), {"param2": 1}))  # fmt: skip

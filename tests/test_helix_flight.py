@@ -16,6 +16,9 @@ import math
 
 import numpy as np
 import pytest
+from gcs_planner.sim.atmosphere import eas2tas
+from gcs_planner.sim.guidance import AutopilotParams
+from gcs_planner.sim.replay import replay
 from test_mission_builder import make_plan, steep_scenario
 
 from gcs_planner.aircraft.autopilot import ARDUPLANE, PX4, autopilot_for
@@ -28,9 +31,6 @@ from gcs_planner.mission.plan_json import plan_to_dict
 from gcs_planner.scenario.georef import LocalFrame
 from gcs_planner.scenario.model import Kind, Scenario
 from gcs_planner.scenario.readers import load_scenario
-from sim.atmosphere import eas2tas
-from sim.guidance import AutopilotParams
-from sim.replay import replay
 
 # Turn entry: the aircraft banks at most to its turning radius, so a turn it starts late is
 # never caught up; a leg's arc is flown up to this much longer than planned (both autopilots).

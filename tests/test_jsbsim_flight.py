@@ -11,14 +11,15 @@ import pytest
 
 pytest.importorskip("jsbsim", reason="the jsbsim extra is not installed (pip install '.[jsbsim]')")
 
+from gcs_planner.sim import guidance  # noqa: E402
+from gcs_planner.sim.aircraft import AircraftState, Envelope  # noqa: E402
+from gcs_planner.sim.jsbsim_airframe import FlightModel, JSBSimAirframe, LegNeed  # noqa: E402
+from gcs_planner.sim.navigators.base import NavCommand  # noqa: E402
+
 from gcs_planner.aircraft.profile import G, VehicleProfile  # noqa: E402
 from gcs_planner.cli import main  # noqa: E402
 from gcs_planner.dryrun.run import EXIT_LOST  # noqa: E402
 from gcs_planner.scenario.georef import DEFAULT_ORIGIN, LocalFrame  # noqa: E402
-from sim import guidance  # noqa: E402
-from sim.aircraft import AircraftState, Envelope  # noqa: E402
-from sim.jsbsim_airframe import FlightModel, JSBSimAirframe, LegNeed  # noqa: E402
-from sim.navigators.base import NavCommand  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENARIO = ROOT / "missions" / "jsbsim" / "scenario.toml"

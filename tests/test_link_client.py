@@ -7,14 +7,14 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 
 import pytest
+from gcs_planner.sim.faults import FaultRates
+from gcs_planner.sim.vehicle import MockVehicle, free_udp_port
 
 from gcs_planner.errors import LinkError
 from gcs_planner.link.connection import mavlink, open_link
 from gcs_planner.link.mission_client import MissionClient
 from gcs_planner.link.protocol import mission_differences
 from gcs_planner.mission.items import MissionItem
-from sim.faults import FaultRates
-from sim.vehicle import MockVehicle, free_udp_port
 
 
 def make_items(n: int, frame: int = 0) -> list[MissionItem]:

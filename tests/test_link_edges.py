@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from gcs_planner.sim.vehicle import MockVehicle, free_udp_port
 
 from gcs_planner.cli import main
 from gcs_planner.errors import LinkError
@@ -18,7 +19,6 @@ from gcs_planner.link.connection import Link, mavlink, open_link
 from gcs_planner.link.mission_client import MissionClient
 from gcs_planner.link.protocol import item_to_message, mission_differences
 from gcs_planner.mission.items import MissionItem
-from sim.vehicle import MockVehicle, free_udp_port
 
 HOME = "0\t1\t0\t16\t0\t0\t0\t0\t30.5\t123.5\t10\t1"
 ITEMS = [MissionItem(i, 0, 16, x=305_000_000 + 10 * i, y=1_235_000_000, z=100.0) for i in range(6)]

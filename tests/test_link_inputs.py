@@ -8,12 +8,12 @@ import stat
 from pathlib import Path
 
 import pytest
+from gcs_planner.sim.vehicle import MockVehicle, free_udp_port
 
 from gcs_planner.cli import main
 from gcs_planner.errors import InputError
 from gcs_planner.link.connection import check_connection
 from gcs_planner.runtime.atomic import write_atomic
-from sim.vehicle import MockVehicle, free_udp_port
 
 WORKBOOK = Path(__file__).resolve().parents[2] / "shared" / "data" / "gmcm2019f" / "dataset1.xlsx"
 FLAGS = ["--alpha1", "25", "--alpha2", "15", "--beta1", "20", "--beta2", "25", "--theta", "30",

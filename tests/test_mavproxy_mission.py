@@ -11,10 +11,10 @@ import time
 from pathlib import Path
 
 import pytest
+from gcs_planner.sim.vehicle import MockVehicle, free_udp_port
 
 from gcs_planner.mission.items import MissionItem
 from gcs_planner.mission.waypoints import dumps_items, loads_waypoints
-from sim.vehicle import MockVehicle, free_udp_port
 
 ITEMS = [MissionItem(i, 0, 16, x=305_000_000 + 1000 * i, y=1_235_000_000, z=100.0 + i)
          for i in range(6)]  # fmt: skip

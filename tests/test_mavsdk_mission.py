@@ -6,6 +6,7 @@ from __future__ import annotations
 import threading
 
 import pytest
+from gcs_planner.sim.vehicle import MockVehicle, free_udp_port
 from mavsdk import ComponentType, Configuration, Mavsdk
 from mavsdk.plugins.mission_raw import MissionItem as RawItem
 from mavsdk.plugins.mission_raw import MissionRaw
@@ -18,7 +19,6 @@ from gcs_planner.mission.builder import Mission
 from gcs_planner.mission.items import MissionItem
 from gcs_planner.mission.qgc_plan import read_plan, write_plan
 from gcs_planner.scenario.model import Origin
-from sim.vehicle import MockVehicle, free_udp_port
 
 _FIELDS = ("seq", "frame", "command", "autocontinue", "param1", "param2", "param3", "param4")
 

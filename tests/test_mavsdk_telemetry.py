@@ -7,6 +7,7 @@ from __future__ import annotations
 import threading
 
 import numpy as np
+from gcs_planner.sim.vehicle import MockVehicle, free_udp_port
 from mavsdk import ComponentType, Configuration, Mavsdk
 from mavsdk.plugins.mission_raw import MissionItem as RawItem
 from mavsdk.plugins.mission_raw import MissionRaw
@@ -16,7 +17,6 @@ from gcs_planner.mission.items import MissionItem
 from gcs_planner.scenario.generate import DATASET1
 from gcs_planner.scenario.georef import LocalFrame
 from gcs_planner.scenario.model import Kind, Origin, Scenario
-from sim.vehicle import MockVehicle, free_udp_port
 
 ORIGIN = Origin(30.5, 123.5, 0.0)
 WAIT_S = 60.0  # generous: a busy machine; every wait ends on the event it waits for

@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 import pytest
+from gcs_planner.sim.vehicle import MockVehicle, free_udp_port
 
 from gcs_planner.aircraft.autopilot import AUTOPILOTS, effective
 from gcs_planner.link.connection import Link, mavlink, open_link
@@ -22,7 +23,6 @@ from gcs_planner.mission.items import MissionItem
 from gcs_planner.scenario.generate import DATASET1
 from gcs_planner.scenario.georef import LocalFrame
 from gcs_planner.scenario.model import Kind, Origin, Scenario
-from sim.vehicle import MockVehicle, free_udp_port
 
 ORIGIN = Origin(30.5, 123.5, 0.0)
 WAIT_S = 30.0  # generous: every wait ends on the message it waits for

@@ -5,14 +5,14 @@ from __future__ import annotations
 
 import time
 
+from gcs_planner.sim.faults import FaultInjector, FaultRates
+from gcs_planner.sim.vehicle import MockVehicle, free_udp_port
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from gcs_planner.link.connection import mavlink, open_link
 from gcs_planner.link.mission_client import MissionClient
 from gcs_planner.mission.items import MissionItem
-from sim.faults import FaultInjector, FaultRates
-from sim.vehicle import MockVehicle, free_udp_port
 
 ITEMS = [MissionItem(i, 0, 16, x=305_000_000 + i, y=1_235_000_000, z=100.0) for i in range(4)]
 
@@ -264,7 +264,7 @@ def test_a_one_shot_request_from_each_new_client_is_answered():
 def test_a_copy_after_the_window_is_a_new_message():
     """The same bytes from the same address later than DUPLICATE_WINDOW_S are handled again
     (a radio's copy comes within milliseconds; this is a resend)."""
-    from sim.vehicle import DUPLICATE_WINDOW_S
+    from gcs_planner.sim.vehicle import DUPLICATE_WINDOW_S
 
     port = free_udp_port()
     with MockVehicle(f"udpin:127.0.0.1:{port}", flavour="px4") as vehicle:

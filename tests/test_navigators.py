@@ -9,6 +9,8 @@ import math
 
 import numpy as np
 import pytest
+from gcs_planner.sim.atmosphere import eas2tas
+from gcs_planner.sim.guidance import AutopilotParams, fly
 from test_guidance import FRAME, PROFILE, mission
 
 from gcs_planner.aircraft.autopilot import (
@@ -17,8 +19,6 @@ from gcs_planner.aircraft.autopilot import (
     PX4,
     autopilot_for,
 )
-from sim.atmosphere import eas2tas
-from sim.guidance import AutopilotParams, fly
 
 
 def reached(f, seq):

@@ -16,6 +16,8 @@ import threading
 from dataclasses import replace
 
 import pytest
+from gcs_planner.sim.live_flight import passed_within
+from gcs_planner.sim.vehicle import MockVehicle, free_udp_port
 from policy_scenario import policy_missions, policy_scenario, write_scenario
 
 from gcs_planner.cli import main
@@ -25,8 +27,6 @@ from gcs_planner.link.mission_client import MissionClient
 from gcs_planner.link.protocol import mission_differences
 from gcs_planner.mission.policy_missions import PolicyMissions
 from gcs_planner.policies.flight import PolicyFlight
-from sim.live_flight import passed_within
-from sim.vehicle import MockVehicle, free_udp_port
 
 SCALE = 20.0
 # The flights whose verdict hangs on a switch made in time fly slower: the window after the
@@ -71,7 +71,7 @@ def _fly(p_success: float, loss: float = 0.0, scale: float = SCALE):
     port = free_udp_port()
     faults = None
     if loss:
-        from sim.faults import FaultRates
+        from gcs_planner.sim.faults import FaultRates
 
         faults = FaultRates(drop=loss)
     vehicle = MockVehicle(
@@ -254,9 +254,8 @@ def test_a_landmark_passed_outside_the_capture_radius_is_reported_missed(flavour
     """PX4 counts a waypoint reached at its switch distance (~56 m) and cuts the corner at P and
     at V3 on the branch; ArduPilot, accepting at 1 m, overflies both."""
     import numpy as np
-
-    from sim.guidance import AutopilotParams
-    from sim.live_flight import LiveFlight
+    from gcs_planner.sim.guidance import AutopilotParams
+    from gcs_planner.sim.live_flight import LiveFlight
 
     scenario = policy_scenario(0.0)
     items = policy_missions(scenario, flavour).missions["after-P2"].items

@@ -8,12 +8,12 @@ import json
 from types import SimpleNamespace
 
 import pytest
+from gcs_planner.sim.live_vehicle import SETTLE_WALL_S, _Window
 
 from gcs_planner.errors import InputError
 from gcs_planner.mission.policy_file import FORMAT, VERSION
 from gcs_planner.policies.dry_run import policy_probability, policy_switch_room
 from gcs_planner.policies.flight import _resume_item
-from sim.live_vehicle import SETTLE_WALL_S, _Window
 
 # Missions as item lists: the primary and a branch that shares its first four items.
 PRIMARY = ["home", "wp1", "wp2", "fix", "dep", "p5", "p6", "B"]

@@ -14,6 +14,8 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 
 import pytest
+from gcs_planner.sim.radio import GilbertElliott, RadioConfig, SikRadio, Timing, parse_radio
+from gcs_planner.sim.vehicle import MockVehicle, free_udp_port
 
 from gcs_planner.cli import main
 from gcs_planner.errors import LinkError
@@ -22,8 +24,6 @@ from gcs_planner.link.mission_client import MissionClient
 from gcs_planner.link.pacing import RadioFlow, Window
 from gcs_planner.link.protocol import mission_differences
 from gcs_planner.mission.items import MissionItem
-from sim.radio import GilbertElliott, RadioConfig, SikRadio, Timing, parse_radio
-from sim.vehicle import MockVehicle, free_udp_port
 
 SCENARIO = "missions/example/scenario.toml"
 

@@ -8,6 +8,9 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from gcs_planner.sim.guidance import AutopilotParams
+from gcs_planner.sim.replay import CHORD_SHORTFALL, QUANTISATION_M, flavour_for
+from gcs_planner.sim.replay import replay as fly_and_replay
 
 from gcs_planner.aircraft.autopilot import autopilot_for
 from gcs_planner.core.probability import success_probability
@@ -18,9 +21,6 @@ from gcs_planner.mission.items import MissionItem
 from gcs_planner.scenario.generate import DATASET1, random_scenario
 from gcs_planner.scenario.georef import LocalFrame
 from gcs_planner.scenario.model import Kind, Origin, Scenario
-from sim.guidance import AutopilotParams
-from sim.replay import CHORD_SHORTFALL, QUANTISATION_M, flavour_for
-from sim.replay import replay as fly_and_replay
 
 # The flown length may differ from the planned one: the aircraft overshoots a little after each
 # turn (L1 guidance at its bank limit) and smooths the chords of densified arcs.

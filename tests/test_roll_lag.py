@@ -8,10 +8,8 @@ import math
 
 import numpy as np
 import pytest
-
-from gcs_planner.aircraft.profile import G
-from sim import point_mass_kernel as pm
-from sim.aircraft import (
+from gcs_planner.sim import point_mass_kernel as pm
+from gcs_planner.sim.aircraft import (
     ROLL_ONE_ARC_DEG_S,
     ROLL_RATE_DEG_S,
     ROLL_SUBSTEP_S,
@@ -21,8 +19,10 @@ from sim.aircraft import (
     arc_step,
     step,
 )
-from sim.flight_records import STATE_SIZE, aircraft_record
-from sim.navigators.airframe import POINT_MASS
+from gcs_planner.sim.flight_records import STATE_SIZE, aircraft_record
+from gcs_planner.sim.navigators.airframe import POINT_MASS
+
+from gcs_planner.aircraft.profile import G
 
 ENV = Envelope(45.0, 45.0, 5.0, 5.0)
 
@@ -122,7 +122,7 @@ def test_the_compiled_step_flies_the_python_step():
 def test_one_arc_near_the_bank_asked_is_the_substeps(monkeypatch):
     """Within ROLL_ONE_ARC_DEG_S / dt of the bank asked a step is one arc at the lag's mean turn
     rate: the exact lag's bank at its end, the heading and position of fine substeps."""
-    import sim.aircraft as aircraft
+    import gcs_planner.sim.aircraft as aircraft
 
     s0 = AircraftState(0.0, 0.0, 700.0, 0.2, bank_deg=-20.0)
     for dt in (0.5, 4.0):

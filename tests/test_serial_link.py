@@ -13,10 +13,11 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
+from gcs_planner.sim.vehicle import MockVehicle
+
 from gcs_planner.cli import main
 from gcs_planner.mission.items import MissionItem
 from gcs_planner.mission.waypoints import dumps_items
-from sim.vehicle import MockVehicle
 
 
 @contextmanager

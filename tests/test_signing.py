@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 import pytest
+from gcs_planner.sim.vehicle import MockVehicle, free_udp_port
 
 from gcs_planner.errors import LinkError
 from gcs_planner.link.connection import open_link
 from gcs_planner.link.mission_client import MissionClient
 from gcs_planner.link.signing import key_from_passphrase
 from gcs_planner.mission.items import MissionItem
-from sim.vehicle import MockVehicle, free_udp_port
 
 ITEMS = [MissionItem(i, 0, 16, x=305_000_000 + i, y=1_235_000_000, z=100.0) for i in range(5)]
 

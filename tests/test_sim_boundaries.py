@@ -25,15 +25,15 @@ def imported_by(module: str) -> list[str]:
 @pytest.mark.parametrize(
     "module",
     [
-        "sim.aircraft",
-        "sim.guidance",
-        "sim.replay",
-        "sim.telemetry",
-        "sim.vehicle",
-        "sim.ins",
-        "sim.wind",
-        "sim.atmosphere",
-        "sim.navigators",
+        "gcs_planner.sim.aircraft",
+        "gcs_planner.sim.guidance",
+        "gcs_planner.sim.replay",
+        "gcs_planner.sim.telemetry",
+        "gcs_planner.sim.vehicle",
+        "gcs_planner.sim.ins",
+        "gcs_planner.sim.wind",
+        "gcs_planner.sim.atmosphere",
+        "gcs_planner.sim.navigators",
     ],  # fmt: skip
 )
 def test_sim_does_not_import_the_planning_core(module):
@@ -43,7 +43,15 @@ def test_sim_does_not_import_the_planning_core(module):
 
 
 @pytest.mark.parametrize(
-    "module", ["sim.aircraft", "sim.guidance", "sim.replay", "sim.telemetry", "sim.ins", "sim.wind"]
+    "module",
+    [
+        "gcs_planner.sim.aircraft",
+        "gcs_planner.sim.guidance",
+        "gcs_planner.sim.replay",
+        "gcs_planner.sim.telemetry",
+        "gcs_planner.sim.ins",
+        "gcs_planner.sim.wind",
+    ],
 )
 def test_the_flight_does_not_import_the_ground_stations_client(module):
     loaded = imported_by(module)

@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from gcs_planner.sim.guidance import AutopilotParams
+from gcs_planner.sim.live_flight import LiveFlight
 from test_mission_builder import make_plan
 
 from gcs_planner.aircraft.profile import tas_from_eas
@@ -25,8 +27,6 @@ from gcs_planner.core.switch_room import (
 from gcs_planner.mission.builder import build_mission
 from gcs_planner.scenario.generate import DATASET1
 from gcs_planner.scenario.model import Kind, Origin, Scenario
-from sim.guidance import AutopilotParams
-from sim.live_flight import LiveFlight
 
 IDS = ("A0", "H1", "P2", "V3", "B4")
 XYZ = np.array([

@@ -6,9 +6,9 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from gcs_planner.sim.vehicle import MockVehicle, free_udp_port
 
 from gcs_planner.cli import main
-from sim.vehicle import MockVehicle, free_udp_port
 
 ROWS = [("P0", 0, 0, "A", 0), ("P1", 12_000, 300, "V", 0), ("P2", 24_000, 0, "H", 0),
         ("P3", 36_000, 300, "V", 0), ("P4", 48_000, 0, "B", 0)]  # fmt: skip

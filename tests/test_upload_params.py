@@ -10,10 +10,10 @@ import math
 from pathlib import Path
 
 import pytest
+from gcs_planner.sim.vehicle import MockVehicle, free_udp_port
 
 from gcs_planner.cli import main
 from gcs_planner.link.vehicle_check import needs
-from sim.vehicle import MockVehicle, free_udp_port
 
 DS1 = ["--alpha1", "25", "--alpha2", "15", "--beta1", "20", "--beta2", "25", "--theta", "30",
        "--delta", "0.001"]  # fmt: skip

@@ -4,13 +4,13 @@ and PX4's own names) becomes the planner's cruise airspeed, bank limit and climb
 from __future__ import annotations
 
 import pytest
+from gcs_planner.sim.param_server import parameter_table
+from gcs_planner.sim.vehicle import MockVehicle, free_udp_port
 
 import gcs_planner.cli.plan as plan_cli
 from gcs_planner.aircraft.autopilot import effective
 from gcs_planner.aircraft.profile import ENVELOPE_PARAMS
 from gcs_planner.cli import main
-from sim.param_server import parameter_table
-from sim.vehicle import MockVehicle, free_udp_port
 
 ROWS = [("P0", 0, 0, "A", 0), ("P1", 12_000, 300, "V", 0), ("P2", 24_000, 0, "H", 0),
         ("P3", 36_000, 300, "V", 0), ("P4", 48_000, 0, "B", 0)]  # fmt: skip

@@ -9,6 +9,8 @@ import json
 import math
 
 import pytest
+from gcs_planner.sim.param_server import parameter_table
+from gcs_planner.sim.vehicle import MockVehicle, free_udp_port
 
 import gcs_planner.cli.plan as plan_cli
 from gcs_planner.aircraft.profile import (
@@ -18,8 +20,6 @@ from gcs_planner.aircraft.profile import (
     tas_from_eas,
 )
 from gcs_planner.cli import main
-from sim.param_server import parameter_table
-from sim.vehicle import MockVehicle, free_udp_port
 
 ROWS = [("P0", 0, 0, "A", 0), ("P1", 12_000, 300, "V", 0), ("P2", 24_000, 0, "H", 0),
         ("P3", 36_000, 300, "V", 0), ("P4", 48_000, 0, "B", 0)]  # fmt: skip

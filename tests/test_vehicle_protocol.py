@@ -10,12 +10,12 @@ from contextlib import contextmanager
 from typing import Any
 
 import pytest
+from gcs_planner.sim.vehicle import MockVehicle, free_udp_port
 
 from gcs_planner.link.connection import Link, mavlink, open_link
 from gcs_planner.link.mission_client import MissionClient
 from gcs_planner.link.protocol import item_to_message
 from gcs_planner.mission.items import MissionItem
-from sim.vehicle import MockVehicle, free_udp_port
 
 ITEMS = [MissionItem(i, 0, 16, x=305_000_000 + 10 * i, y=1_235_000_000, z=100.0) for i in range(4)]
 PROOF_S = 10.0  # generous: an event-driven wait, not a time window

@@ -10,6 +10,8 @@ import math
 from pathlib import Path
 
 import pytest
+from gcs_planner.sim.navigators.params import AutopilotParams
+from gcs_planner.sim.vehicle import MockVehicle, free_udp_port
 from pymavlink.mavparm import MAVParmDict
 
 from gcs_planner.aircraft.profile import tas_from_eas
@@ -17,8 +19,6 @@ from gcs_planner.cli import main
 from gcs_planner.errors import InputError
 from gcs_planner.mission import param_files
 from gcs_planner.mission.vehicle_setup import needs
-from sim.navigators.params import AutopilotParams
-from sim.vehicle import MockVehicle, free_udp_port
 
 COAST = "missions/coast/scenario.toml"
 EXAMPLE = "missions/example/scenario.toml"

@@ -18,6 +18,8 @@ import time
 from typing import Any
 
 import pytest
+from gcs_planner.sim.mission_server import check_item
+from gcs_planner.sim.vehicle import MockVehicle, free_udp_port
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -26,8 +28,6 @@ from gcs_planner.link.connection import mavlink, open_link
 from gcs_planner.link.mission_client import MissionClient
 from gcs_planner.link.protocol import item_to_message
 from gcs_planner.mission.items import MissionItem
-from sim.mission_server import check_item
-from sim.vehicle import MockVehicle, free_udp_port
 
 VEHICLE_TYPES = (
     "HEARTBEAT", "MISSION_COUNT", "MISSION_ITEM_INT", "MISSION_ITEM", "MISSION_REQUEST_LIST",

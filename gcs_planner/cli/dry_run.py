@@ -44,9 +44,9 @@ from gcs_planner.errors import InputError, LinkError
 from gcs_planner.link.protocol import DEFAULT_TIMEOUT_S
 from gcs_planner.mission.geo_exports import trajectory_local
 from gcs_planner.mission.plan_json import plan_to_dict
-from sim.live_vehicle import DEFAULT_TIME_SCALE
-from sim.replay import ReplayReport
-from sim.wind import WindSpec
+from gcs_planner.sim.live_vehicle import DEFAULT_TIME_SCALE
+from gcs_planner.sim.replay import ReplayReport
+from gcs_planner.sim.wind import WindSpec
 
 # The report's text moved to gcs_planner/dryrun/render.py; its names stay importable here.
 __all__ = [
@@ -290,7 +290,7 @@ def flight_model_from_args(args: argparse.Namespace) -> object | None:
         import jsbsim  # noqa: F401
     except ImportError:
         raise InputError("needs the jsbsim package: pip install '.[jsbsim]'", field=flag) from None
-    from sim.jsbsim_airframe import (
+    from gcs_planner.sim.jsbsim_airframe import (
         DEFAULT_AIRCRAFT,
         CheckedPointMass,
         FlightModel,

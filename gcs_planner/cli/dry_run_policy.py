@@ -19,8 +19,8 @@ from gcs_planner.policies.dry_run import (
     policy_probability,
     policy_switch_room,
 )
-from sim.live_vehicle import DEFAULT_TIME_SCALE
-from sim.replay import DEFAULT_CAPTURE_RADIUS_M
+from gcs_planner.sim.live_vehicle import DEFAULT_TIME_SCALE
+from gcs_planner.sim.replay import DEFAULT_CAPTURE_RADIUS_M
 
 EXIT_VERDICT = 5  # the dry run's: flown, but the verdict failed
 

@@ -26,10 +26,10 @@ from gcs_planner.cli.upload import id_in
 from gcs_planner.errors import InputError
 from gcs_planner.link.connection import check_connection
 from gcs_planner.link.signing import key_from_passphrase
-from sim.faults import FaultRates
-from sim.radio import RadioConfig, SikRadio, parse_radio
-from sim.replay import DEFAULT_CAPTURE_RADIUS_M
-from sim.vehicle import MockVehicle, free_udp_port
+from gcs_planner.sim.faults import FaultRates
+from gcs_planner.sim.radio import RadioConfig, SikRadio, parse_radio
+from gcs_planner.sim.replay import DEFAULT_CAPTURE_RADIUS_M
+from gcs_planner.sim.vehicle import MockVehicle, free_udp_port
 
 
 def _rate(text: str) -> float:

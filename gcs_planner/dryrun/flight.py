@@ -26,9 +26,9 @@ from gcs_planner.dryrun.world import DryRunSettings, DryRunWorld
 from gcs_planner.link.vehicle_check import Shortfall, shortfalls
 from gcs_planner.mission.vehicle_setup import ParameterNeed
 from gcs_planner.scenario.model import Parameters
-from sim import replay as replay_mod
-from sim.guidance import AutopilotParams
-from sim.vehicle import MockVehicle
+from gcs_planner.sim import replay as replay_mod
+from gcs_planner.sim.guidance import AutopilotParams
+from gcs_planner.sim.vehicle import MockVehicle
 
 # The planned path's sampling for the deviation (the figure is within half of it).
 DEVIATION_STEP_M = 2.0

@@ -6,8 +6,8 @@ from __future__ import annotations
 
 from gcs_planner.core.planner import Plan
 from gcs_planner.dryrun.flight import DryRunRow
-from sim import replay as replay_mod
-from sim.wind import WindSpec
+from gcs_planner.sim import replay as replay_mod
+from gcs_planner.sim.wind import WindSpec
 
 
 def plan_assumptions(plan: Plan, wind: WindSpec | None = None) -> tuple[str, ...]:

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from gcs_planner.dryrun.flight import LostRunRow
 from gcs_planner.dryrun.report import DryRunReport
-from sim.replay import CHORD_SHORTFALL, QUANTISATION_M
+from gcs_planner.sim.replay import CHORD_SHORTFALL, QUANTISATION_M
 
 # Runs lost by the flight named one by one in the text report (all of them in --json).
 SHOWN_FLIGHT_LOSSES = 5

@@ -30,7 +30,7 @@ from gcs_planner.dryrun.world import DRY_RUN_ACCEPTANCE_RADIUS_M, DryRunSettings
 from gcs_planner.mission.builder import Mission
 from gcs_planner.mission.geo_exports import trajectory_local
 from gcs_planner.mission.items import HELIX_COMMANDS
-from sim import replay as replay_mod
+from gcs_planner.sim import replay as replay_mod
 
 
 @dataclass(frozen=True)

@@ -65,9 +65,11 @@ from gcs_planner.mission.builder import Mission, build_mission
 from gcs_planner.mission.plan_json import plan_to_dict
 from gcs_planner.mission.vehicle_setup import needs as setup_needs
 from gcs_planner.scenario.model import Scenario
-from sim import replay as replay_mod  # the flight's module, as callers reach it from here
-from sim.faults import FaultRates
-from sim.vehicle import MockVehicle, free_udp_port
+from gcs_planner.sim import (
+    replay as replay_mod,  # the flight's module, as callers reach it from here
+)
+from gcs_planner.sim.faults import FaultRates
+from gcs_planner.sim.vehicle import MockVehicle, free_udp_port
 
 # The names callers import from this module, wherever they now live.
 __all__ = [

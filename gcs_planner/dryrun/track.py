@@ -19,7 +19,7 @@ import numpy as np
 
 from gcs_planner.runtime.atomic import write_atomic
 from gcs_planner.scenario.model import Scenario
-from sim import replay as replay_mod
+from gcs_planner.sim import replay as replay_mod
 
 
 def _geodetic(frame: Any, points: np.ndarray) -> list[list[float]]:

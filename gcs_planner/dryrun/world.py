@@ -18,9 +18,9 @@ from gcs_planner.aircraft.autopilot import AUTOPILOTS, DEFAULT_AUTOPILOT
 from gcs_planner.core.planner import Plan
 from gcs_planner.link.protocol import DEFAULT_RETRIES, DEFAULT_TIMEOUT_S
 from gcs_planner.scenario.model import Scenario
-from sim.ins import DEFAULT_ERROR_UNIT_M
-from sim.replay import DEFAULT_CAPTURE_RADIUS_M
-from sim.wind import WindSpec
+from gcs_planner.sim.ins import DEFAULT_ERROR_UNIT_M
+from gcs_planner.sim.replay import DEFAULT_CAPTURE_RADIUS_M
+from gcs_planner.sim.wind import WindSpec
 
 # ArduPilot's wait before it asks again for a mission item it has not received.
 VEHICLE_REQUEST_TIMEOUT_S = 1.0

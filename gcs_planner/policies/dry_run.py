@@ -30,11 +30,11 @@ from gcs_planner.link.params import set_parameter
 from gcs_planner.mission.policy_missions import PolicyMissions
 from gcs_planner.policies.flight import PolicyFlight
 from gcs_planner.scenario.model import Kind, Scenario
-from sim.faults import FaultRates
-from sim.guidance import nav_commands
-from sim.live_vehicle import DEFAULT_TIME_SCALE
-from sim.replay import DEFAULT_CAPTURE_RADIUS_M, scenario_frame
-from sim.vehicle import MockVehicle, free_udp_port
+from gcs_planner.sim.faults import FaultRates
+from gcs_planner.sim.guidance import nav_commands
+from gcs_planner.sim.live_vehicle import DEFAULT_TIME_SCALE
+from gcs_planner.sim.replay import DEFAULT_CAPTURE_RADIUS_M, scenario_frame
+from gcs_planner.sim.vehicle import MockVehicle, free_udp_port
 
 # The dry run's waypoint acceptance radius (m): where the autopilot ignores a waypoint's own
 # (PX4 fixed wing ignores param2), it is set as the vehicle-wide parameter.

@@ -38,8 +38,8 @@ KERNELS: dict[tuple[str, str], float] = {
     ("gcs_planner.geometry.airplane_kernel", "airplane_lengths"): 0.5,
     ("gcs_planner.core.search_kernel", "search"): 17.0,
     # The compiled flight of the dry run (measured 12.6 s and 2.0 s on the 2-core machine).
-    ("sim.flight_kernel", "fly_plain"): 12.0,
-    ("sim.flight_kernel", "closest_approach"): 2.0,
+    ("gcs_planner.sim.flight_kernel", "fly_plain"): 12.0,
+    ("gcs_planner.sim.flight_kernel", "closest_approach"): 2.0,
 }
 
 

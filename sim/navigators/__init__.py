@@ -4,11 +4,12 @@ the compiled flight reads it is compiled.py."""
 
 from __future__ import annotations
 
+from gcs_planner.sim.navigators.arduplane import ArduPlaneNavigator
+from gcs_planner.sim.navigators.base import Navigator
+from gcs_planner.sim.navigators.params import AutopilotParams
+from gcs_planner.sim.navigators.px4 import PX4Navigator
+
 from gcs_planner.aircraft.autopilot import ARDUPLANE, PX4
-from sim.navigators.arduplane import ArduPlaneNavigator
-from sim.navigators.base import Navigator
-from sim.navigators.params import AutopilotParams
-from sim.navigators.px4 import PX4Navigator
 
 NAVIGATORS: dict[str, type[Navigator]] = {
     ARDUPLANE.firmware: ArduPlaneNavigator,

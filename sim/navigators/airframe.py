@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Protocol
 
-from sim.aircraft import AircraftState, Envelope, step
+from gcs_planner.sim.aircraft import AircraftState, Envelope, step
 
 
 class Airframe(Protocol):

@@ -27,11 +27,17 @@ from __future__ import annotations
 
 import math
 
+from gcs_planner.sim.navigators.base import Navigator
+from gcs_planner.sim.navigators.commands import (
+    NAV_LOITER_TO_ALT,
+    NAV_LOITER_TURNS,
+    NAV_WAYPOINT,
+    NavCommand,
+)
+from gcs_planner.sim.navigators.steering import L1_DAMPING, L1_PERIOD_S, wrap
+
 from gcs_planner.aircraft.autopilot import ARDUPLANE
 from gcs_planner.aircraft.profile import G
-from sim.navigators.base import Navigator
-from sim.navigators.commands import NAV_LOITER_TO_ALT, NAV_LOITER_TURNS, NAV_WAYPOINT, NavCommand
-from sim.navigators.steering import L1_DAMPING, L1_PERIOD_S, wrap
 
 LOITER_ALTITUDE_M = 5.0  # verify_loiter_to_alt
 EXIT_COURSE_DEG = 10.0  # isHeadingLinedUp_cd: 10 degrees, + 10 per lap

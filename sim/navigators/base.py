@@ -24,10 +24,9 @@ import math
 from collections.abc import Callable
 from typing import ClassVar
 
-from gcs_planner.aircraft.autopilot import Autopilot
-from sim.navigators import steering
-from sim.navigators.airframe import POINT_MASS, Airframe, PointMass
-from sim.navigators.commands import (
+from gcs_planner.sim.navigators import steering
+from gcs_planner.sim.navigators.airframe import POINT_MASS, Airframe, PointMass
+from gcs_planner.sim.navigators.commands import (
     DO_CHANGE_SPEED,
     LOITERS,
     NAV_LAND,
@@ -41,8 +40,15 @@ from sim.navigators.commands import (
     Event,
     NavCommand,
 )
-from sim.navigators.state import COARSE_STEPS, DEFAULT_STEP_S, SAMPLE_FIELDS, NavigatorState
-from sim.navigators.steering import L1_DAMPING, L1_PERIOD_S, wrap
+from gcs_planner.sim.navigators.state import (
+    COARSE_STEPS,
+    DEFAULT_STEP_S,
+    SAMPLE_FIELDS,
+    NavigatorState,
+)
+from gcs_planner.sim.navigators.steering import L1_DAMPING, L1_PERIOD_S, wrap
+
+from gcs_planner.aircraft.autopilot import Autopilot
 
 # The names this module has been read by (the mission's words, the airframe, the guidance).
 __all__ = [

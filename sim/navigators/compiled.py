@@ -7,9 +7,8 @@ navigator resumed from what the kernel flew.
 from __future__ import annotations
 
 import numpy as np
-
-from sim.aircraft import AircraftState
-from sim.flight_records import (
+from gcs_planner.sim.aircraft import AircraftState
+from gcs_planner.sim.flight_records import (
     AIRCRAFT_SIZE,
     MODE_ALTITUDE_LOITER,
     MODE_TRACK,
@@ -21,8 +20,8 @@ from sim.flight_records import (
     Rules,
     aircraft_record,
 )
-from sim.navigators.base import Navigator
-from sim.navigators.commands import LOITERS, NAV_WAYPOINT
+from gcs_planner.sim.navigators.base import Navigator
+from gcs_planner.sim.navigators.commands import LOITERS, NAV_WAYPOINT
 
 
 def compiled_mode(nav: Navigator) -> int | None:

@@ -37,9 +37,15 @@ from __future__ import annotations
 
 import math
 
+from gcs_planner.sim.navigators.base import Navigator
+from gcs_planner.sim.navigators.commands import (
+    NAV_LOITER_TIME,
+    NAV_LOITER_TO_ALT,
+    NAV_LOITER_TURNS,
+    NavCommand,
+)
+
 from gcs_planner.aircraft.autopilot import PX4
-from sim.navigators.base import Navigator
-from sim.navigators.commands import NAV_LOITER_TIME, NAV_LOITER_TO_ALT, NAV_LOITER_TURNS, NavCommand
 
 ALTITUDE_ACCEPTANCE_M = 10.0  # NAV_FW_ALT_RAD
 EXIT_COURSE_DEG = 5.0  # kCosineExitCourseThreshold

@@ -12,14 +12,13 @@ from __future__ import annotations
 import math
 
 import numpy as np
-
-from sim import atmosphere
-from sim.aircraft import AircraftState, Envelope
-from sim.ins import InsEstimate
-from sim.navigators.airframe import POINT_MASS, Airframe
-from sim.navigators.commands import Event, NavCommand
-from sim.navigators.params import AutopilotParams
-from sim.wind import WindField
+from gcs_planner.sim import atmosphere
+from gcs_planner.sim.aircraft import AircraftState, Envelope
+from gcs_planner.sim.ins import InsEstimate
+from gcs_planner.sim.navigators.airframe import POINT_MASS, Airframe
+from gcs_planner.sim.navigators.commands import Event, NavCommand
+from gcs_planner.sim.navigators.params import AutopilotParams
+from gcs_planner.sim.wind import WindField
 
 # On a straight leg where the aircraft is settled on the track and its glide slope in a steady
 # air mass, nothing changes but the position, so the step grows COARSE_STEPS times: the long
