@@ -213,3 +213,67 @@ def test_unsigned_upload_to_a_signed_vehicle_names_the_signing_key_flag(tmp_path
         assert vehicle.mission == []
     err = capsys.readouterr().err
     assert "--signing-key" in err and "\n" not in err.strip()
+
+
+# The radio's own reports on a signed link ----------------------------------------------------
+def test_the_radios_unsigned_radio_status_reaches_the_pacing_on_a_signed_link():
+    """A keyed ground station refused the radio's RADIO_STATUS (the radio knows no key): the
+    pacing built for it never ran. ArduPilot (GCS_Signing.cpp, accept_unsigned_callback) and
+    PX4 (mavlink_sign_control.cpp, accept_unsigned) take it unsigned; anything else unsigned
+    is still refused."""
+    import socket
+
+    from gcs_planner.link.connection import mavlink
+    from gcs_planner.link.session import VehicleSession
+
+    port = free_udp_port()
+    link = open_link(f"udpin:127.0.0.1:{port}", signing_key=KEY)
+    try:
+        session = VehicleSession(link)
+        radio = mavlink.MAVLink(None, srcSystem=51, srcComponent=68)  # SiK's ids
+        stranger = mavlink.MAVLink(None, srcSystem=1, srcComponent=1)
+        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:
+            for msg, mav in (
+                (radio.radio_status_encode(200, 190, 25, 40, 40, 0, 0), radio),
+                (stranger.heartbeat_encode(1, 3, 0, 0, 4), stranger),
+                (radio.radio_encode(200, 190, 25, 40, 40, 0, 0), radio),  # SiK's older report
+            ):
+                sock.sendto(bytes(msg.pack(mav)), ("127.0.0.1", port))
+            assert session._recv(1.0, {"HEARTBEAT"}, None) is None
+        assert session.radio.reports == 2 and session.radio.congested()  # 25 % free: the gate
+        assert link.refused_signature == 1  # the unsigned heartbeat
+    finally:
+        link.close()
+
+
+def test_radio_status_reaches_a_signed_client_through_the_emulated_sik_radio():
+    from gcs_planner.sim.radio import RadioConfig, SikRadio
+
+    port = free_udp_port()
+    with MockVehicle(f"udpin:127.0.0.1:{port}", signing_key=KEY) as vehicle:
+        with SikRadio("udpin:127.0.0.1:0", f"udpout:127.0.0.1:{port}", RadioConfig()) as r:
+            link = open_link(r.ground_connection, signing_key=KEY)
+            try:
+                client = MissionClient(link, transfer="mission")
+                client.connect(timeout=30.0)
+                client.upload_verified(ITEMS)
+            finally:
+                link.close()
+        assert r.counts.statuses > 0 and client.radio.reports > 0
+        assert link.refused_signature == 0
+        assert len(vehicle.mission) == len(ITEMS)
+
+
+def test_unsigned_ftp_upload_to_a_signed_vehicle_names_the_signing_key_flag(tmp_path, capsys):
+    from gcs_planner.cli import main
+
+    plan = tmp_path / "m.waypoints"
+    plan.write_text("QGC WPL 110\n0\t1\t0\t16\t0\t0\t0\t0\t30.5\t123.5\t10\t1\n"
+                    "1\t0\t0\t16\t0\t0\t0\t0\t30.6\t123.5\t10\t1\n")  # fmt: skip
+    port = free_udp_port()
+    with MockVehicle(f"udpin:127.0.0.1:{port}", flavour="ardupilot", signing_key=KEY) as vehicle:
+        conn = ["--connect", f"udpout:127.0.0.1:{port}", "--quiet", "--timeout", "0.3"]
+        code = main(["upload", str(plan), *conn, "--retries", "1", "--transfer", "ftp"])
+        assert code == 4 and vehicle.ftp.writes_stored == 0
+    err = capsys.readouterr().err
+    assert "MAVFTP" in err and "--signing-key" in err and "\n" not in err.strip()

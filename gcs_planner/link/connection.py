@@ -14,6 +14,7 @@ import socket
 import stat
 import threading
 import time
+from collections.abc import Callable
 from typing import Any
 
 # pymavlink picks the wire protocol when mavutil is first imported; MAVLink 2 is needed for
@@ -140,6 +141,9 @@ class Link:
             self.conn.handle_disconnect = self._on_peer_closed
             self.conn.handle_eof = self._on_peer_closed
         self._send_lock = threading.Lock()
+        # Called with every message ``recv`` returns, whoever reads: what a session keeps
+        # track of (the vehicle's AUTOPILOT_VERSION) is seen by a parameter read too.
+        self.watchers: list[Callable[[Any], None]] = []
 
     def _on_peer_closed(self) -> None:
         self.peer_closed = True
@@ -211,6 +215,8 @@ class Link:
                     continue
                 if not self.signed and _is_signed(msg):
                     self.peer_signed += 1
+                for watch in self.watchers:
+                    watch(msg)
                 return msg
             remaining = deadline - time.monotonic()
             if remaining <= 0:

@@ -1,51 +1,96 @@
-"""MAVLink FTP, ground-station side: the payload of FILE_TRANSFER_PROTOCOL, and the reads and
-writes of one file with burst reads and resumption of what a lossy link lost.
+"""MAVLink FTP, ground-station side: the reads and writes of one file with burst reads and
+resumption of what a lossy link lost.
 
-The payload (https://mavlink.io/en/services/ftp.html, "Payload"; ArduPilot's
-``GCS_FTP::handle_file_transfer_protocol`` and ``send_reply`` in
-libraries/GCS_MAVLink/GCS_FTP.cpp read and write the same layout): seq_number u16, session
-u8, opcode u8, size u8, req_opcode u8, burst_complete u8, a padding byte, offset u32, then
-239 data bytes, little-endian. A reply carries the request's sequence number plus one, its
-opcode in req_opcode, and ACK (128) or NAK (129) with the error code in data[0].
+The payload and its codes are :mod:`gcs_planner.link.ftp_payload`'s (re-exported here).
 
 What the vehicle sends is input like any other: a size over 239, data past the end of the
 file, a reply to a session that is not ours, or two different contents for one offset end the
 transfer with a :class:`FtpError` that says which, never a traceback.
+
+Why not pymavlink's ``mavftp.MAVFTP`` (read in pymavlink 2.4.50): it reads the connection
+itself (``master.recv_match`` for FILE_TRANSFER_PROTOCOL only), so it cannot share the session's
+receive loop, which keeps our heartbeat going, takes only the pinned vehicle's messages and
+reads the radio's RADIO_STATUS for the pacing. Its timers are fixed (``retry_time`` 0.5 s,
+``read_retry_time`` 1 s, ``idle_detection_time`` 3.7 s, a 5 s stall) where these follow the
+measured round trip and the radio's slowdown, and it does not hold back while the radio says its
+buffer is full. It keeps no bytes across sessions, where ArduPilot closes a session whose
+replies could not go for 3 s and a read here goes on in a new one from what it has. It does not
+take a file's length from its header (ArduPilot's stat of mission.dat says 1 MiB). A refused
+open is not asked again after ResetSessions (AP_Filesystem_Mission takes one upload at a time,
+and a lost open ACK leaves the file held by the first copy). It hands back no CRC value
+(``cmd_crc`` logs it). What a hostile vehicle sends is logged and returned as codes, not ended
+with an error that names it.
 """
 
 from __future__ import annotations
 
-import struct
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import Any
 
-from gcs_planner.errors import LinkError
+from gcs_planner.link.ftp_payload import (
+    ACK,
+    BURST_READ_FILE,
+    CALC_FILE_CRC32,
+    CREATE_FILE,
+    DATA_MAX,
+    EOF,
+    ERRORS,
+    FAIL_ERRNO,
+    FILE_NOT_FOUND,
+    LIST_DIRECTORY,
+    NAK,
+    NONE,
+    OPEN_FILE_RO,
+    OPEN_FILE_WO,
+    PAYLOAD_LEN,
+    READ_FILE,
+    REMOVE_FILE,
+    RESET_SESSIONS,
+    TERMINATE_SESSION,
+    UNKNOWN_COMMAND,
+    WRITE_FILE,
+    FtpBusy,
+    FtpError,
+    FtpQuiet,
+    Packet,
+    pack,
+    unpack,
+)
 from gcs_planner.link.pacing import Window
 from gcs_planner.link.rtt import RoundTrip
 
-# Opcodes (the specification's table; GCS_FTP.h, enum FTP_OP).
-NONE, TERMINATE_SESSION, RESET_SESSIONS, LIST_DIRECTORY, OPEN_FILE_RO, READ_FILE = range(6)
-CREATE_FILE, WRITE_FILE, REMOVE_FILE = 6, 7, 8
-OPEN_FILE_WO, CALC_FILE_CRC32, BURST_READ_FILE = 11, 14, 15
-ACK, NAK = 128, 129
-# NAK codes (data[0]).
-ERRORS = {
-    0: "no error",
-    1: "failed",
-    2: "failed with errno",
-    3: "invalid data size",
-    4: "invalid session",
-    5: "no sessions available",
-    6: "end of file",
-    7: "unknown command",
-    8: "file exists",
-    9: "file protected",
-    10: "file not found",
-}
-FAIL_ERRNO, EOF, UNKNOWN_COMMAND, FILE_NOT_FOUND = 2, 6, 7, 10
-DATA_MAX = 239  # data bytes in one payload
+__all__ = [
+    "NONE",
+    "TERMINATE_SESSION",
+    "RESET_SESSIONS",
+    "LIST_DIRECTORY",
+    "OPEN_FILE_RO",
+    "READ_FILE",
+    "CREATE_FILE",
+    "WRITE_FILE",
+    "REMOVE_FILE",
+    "OPEN_FILE_WO",
+    "CALC_FILE_CRC32",
+    "BURST_READ_FILE",
+    "ACK",
+    "NAK",
+    "ERRORS",
+    "FAIL_ERRNO",
+    "EOF",
+    "UNKNOWN_COMMAND",
+    "FILE_NOT_FOUND",
+    "DATA_MAX",
+    "PAYLOAD_LEN",
+    "FtpError",
+    "FtpQuiet",
+    "FtpBusy",
+    "Packet",
+    "pack",
+    "unpack",
+    "FtpClient",
+]
+
 WRITE_WINDOW = 6  # WriteFile requests out at once, at most
 FIRST_WAIT_S = 0.5
 SESSION_REOPENS = 2
@@ -57,79 +102,6 @@ SESSION_LOST = (1, 4, 10)  # Fail, InvalidSession, FileNotFound: the session is 
 # happens to be EEXIST), NoSessionsAvailable (every session answered in the last 3 s:
 # GCS_FTP::worker).
 OPEN_BUSY = (1, 2, 5, 8)
-PAYLOAD_LEN = 251
-_HEAD = struct.Struct("<HBBBBBxI")
-
-
-class FtpError(LinkError):
-    """An FTP transfer failed: the vehicle refused it, went quiet, or sent what cannot be."""
-
-    def __init__(self, message: str, code: int | None = None) -> None:
-        super().__init__(message)
-        self.code = code  # the NAK code when the vehicle refused
-
-
-class FtpQuiet(FtpError):
-    """The vehicle did not answer an FTP request through every resend (or a transfer made no
-    progress for as long)."""
-
-
-class FtpBusy(FtpError):
-    """The vehicle kept refusing to open a file as in use (or had no session free), after
-    each of our sessions was reset and a wait: someone else holds it."""
-
-
-@dataclass(frozen=True)
-class Packet:
-    seq: int
-    session: int
-    opcode: int
-    size: int
-    req_opcode: int
-    burst_complete: int
-    offset: int
-    data: bytes  # the first ``size`` data bytes
-
-    def nak_text(self) -> str:
-        code = self.data[0] if self.data else 0
-        text = ERRORS.get(code, f"error code {code}")
-        if code == FAIL_ERRNO and len(self.data) > 1:
-            text += f" {self.data[1]}"
-        return text
-
-
-def pack(
-    seq: int,
-    session: int,
-    opcode: int,
-    offset: int = 0,
-    data: bytes = b"",
-    *,
-    size: int | None = None,
-    req_opcode: int = 0,
-    burst_complete: int = 0,
-) -> list[int]:
-    """A FILE_TRANSFER_PROTOCOL payload (251 bytes) as pymavlink's encoder takes it."""
-    if len(data) > DATA_MAX:
-        raise ValueError(f"at most {DATA_MAX} data bytes, got {len(data)}")
-    head = _HEAD.pack(seq & 0xFFFF, session & 0xFF, opcode, len(data) if size is None else size,
-                      req_opcode, burst_complete, offset & 0xFFFFFFFF)  # fmt: skip
-    return list(head + data + bytes(DATA_MAX - len(data)))
-
-
-def unpack(payload: Any) -> Packet:
-    """The header and data of a payload; a size past the 239 data bytes is a :class:`FtpError`."""
-    raw = bytes(payload)
-    if len(raw) < _HEAD.size:
-        raw = raw + bytes(_HEAD.size - len(raw))
-    seq, session, opcode, size, req, burst, offset = _HEAD.unpack_from(raw)
-    if size > DATA_MAX:
-        raise FtpError(
-            f"the vehicle sent an FTP reply (opcode {opcode} to {req}) claiming {size} data "
-            f"bytes: a payload carries at most {DATA_MAX}"
-        )
-    data = raw[_HEAD.size : _HEAD.size + size]
-    return Packet(seq, session, opcode, size, req, burst, offset, data + bytes(size - len(data)))
 
 
 Recv = Callable[[float], Any]
@@ -154,6 +126,7 @@ class FtpClient:
         retries: int = 5,
         extra_wait: Callable[[], float] = lambda: 0.0,
         congested: Callable[[], bool] = lambda: False,
+        hint: Callable[[], str] = lambda: "",
     ) -> None:
         self.mav = mav
         self._send = send
@@ -163,6 +136,7 @@ class FtpClient:
         self.retries = retries
         self.extra_wait = extra_wait
         self.congested = congested
+        self.hint = hint  # what to add to a silence (the session's: signing may be why)
         # Resends wait the measured round trip of FTP requests (RFC 6298, Karn's rule), from
         # FIRST_WAIT_S until there is a sample: a 260-byte WriteFile on a TDM radio takes a
         # round and a serial time, longer than the mission protocol's item timeout.
@@ -245,6 +219,7 @@ class FtpClient:
                 f"; it answered for session(s) {sorted(self.foreign_sessions)}, not ours "
                 f"({self.session})"
             )
+        extra += self.hint()
         return FtpQuiet(f"MAVFTP {what}: no answer after {self.retries + 1} attempts{extra}")
 
     def _refused(self, p: Packet, what: str) -> FtpError:

@@ -11,14 +11,16 @@ The CRC check: ArduPilot builds the file it serves from the mission it stores
 (AP_Filesystem_Mission::read through AP_Mission::get_item), not from the bytes it was sent, so
 a CRC-32 equal to that of the file predicted for the items sent
 (:func:`~gcs_planner.link.mission_ftp.stored_file`, with the vehicle's own home read from the
-file's first item) says it stores them, every byte.
+file's first item) says it stores them, every byte. A download is checked the same way: the
+CRC the vehicle computes of its file against the CRC of the file as read
+(:func:`read_file_checked`).
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 
-from gcs_planner.aircraft.autopilot import AUTOPILOTS, keeps_home_item
+from gcs_planner.aircraft.autopilot import keeps_home_item
 from gcs_planner.errors import LinkError, UploadRefused
 from gcs_planner.link.connection import mavlink
 from gcs_planner.link.ftp import (
@@ -38,24 +40,18 @@ from gcs_planner.link.mission_ftp import (
     crc32,
     decode_mission,
     encode_mission,
+    file_crcs,
     mission_length,
     stored_file,
     stored_item_bytes,
     without_leftovers,
 )
 from gcs_planner.link.outcome import ACKNOWLEDGED, Outcome, ReadBackError, unconfirmed
-from gcs_planner.link.session import VehicleSession
+from gcs_planner.link.session import VehicleSession, serves_mission_file
 from gcs_planner.mission.items import MissionItem
 
 # An open refused with these says the vehicle has no such file or no FTP: auto falls back.
 _NO_MISSION_FILE = (FILE_NOT_FOUND, UNKNOWN_COMMAND)
-
-
-def serves_mission_file(firmware: str | None) -> bool:
-    """Whether the autopilot named ``firmware`` serves its mission as @MISSION/mission.dat;
-    False for one without a record (a generic autopilot, or none heard yet)."""
-    ap = AUTOPILOTS.get(firmware or "")
-    return ap is not None and ap.protocol is not None and ap.protocol.serves_mission_file
 
 
 def use_ftp(session: VehicleSession) -> bool:
@@ -82,6 +78,7 @@ def ftp_client(session: VehicleSession) -> FtpClient:
         retries=session.retries,
         extra_wait=session.radio.extra_wait,
         congested=session.radio.congested,
+        hint=session.signing_hint,
     )
 
 
@@ -128,9 +125,39 @@ def read_file(session: VehicleSession, chunks: dict[int, bytes]) -> list[Mission
         data = client.read(MISSION_PATH, mission_length, chunks)
     finally:
         session.retry_count += client.retry_count
+    return _items(data)
+
+
+def _items(data: bytes) -> list[MissionItem]:
     # A command without a position carries in ArduPilot's file the x, y, z of the item read
     # before it (one item buffer per read call), which the vehicle does not store.
     return without_leftovers(decode_mission(data))
+
+
+def read_file_checked(session: VehicleSession) -> tuple[list[MissionItem], str]:
+    """The vehicle's mission read from its file, and "" when the vehicle's CalcFileCRC32 of the
+    file is that of the bytes read; else why no CRC could be had (the vehicle refused it or
+    did not answer), for the caller to check the mission another way. A CRC that differs is a
+    :class:`LinkError`: a byte was altered on the way (each frame's own checksum is 16 bits,
+    and a relay that rewrites a frame writes a good one), or the mission changed meanwhile."""
+    client = ftp_client(session)
+    try:
+        data = client.read(MISSION_PATH, mission_length, {})
+        items = _items(data)
+        try:
+            vehicle_crc = client.crc32(MISSION_PATH)
+        except FtpError as exc:
+            return items, f"no CRC: {exc}"
+    finally:
+        session.retry_count += client.retry_count
+    expected = file_crcs(data)
+    if vehicle_crc not in expected:
+        raise LinkError(
+            f"the mission file read by MAVFTP is not the vehicle's: its CRC-32 is "
+            f"0x{expected[0]:08x}, the vehicle's 0x{vehicle_crc:08x}. It was altered on the "
+            "way, or the mission changed meanwhile: download it again"
+        )
+    return items, ""
 
 
 def read_back_file(

@@ -2,12 +2,12 @@
 
 One :class:`MissionClient` per vehicle, a facade over one work item per transfer:
 :mod:`~gcs_planner.link.session` (the vehicle, our heartbeat, its messages, the pace),
-:mod:`~gcs_planner.link.mission_upload` and :mod:`~gcs_planner.link.mission_download` (the
-mission protocol's transfers and the read-back), :mod:`~gcs_planner.link.mission_by_ftp` (the
-mission as ``@MISSION/mission.dat`` over MAVFTP), :mod:`~gcs_planner.link.mission_commands`
-(clear, set current, the loiter-radius check) and :mod:`~gcs_planner.link.verified_upload`
-(upload, verify, set the loiter radius); :mod:`~gcs_planner.link.outcome` holds what they come
-to.
+:mod:`~gcs_planner.link.mission_upload`, :mod:`~gcs_planner.link.mission_download` and
+:mod:`~gcs_planner.link.mission_read_back` (the mission protocol's transfers and the
+read-back), :mod:`~gcs_planner.link.mission_by_ftp` (the mission as ``@MISSION/mission.dat``
+over MAVFTP), :mod:`~gcs_planner.link.mission_commands` (clear, set current, the loiter-radius
+check) and :mod:`~gcs_planner.link.verified_upload` (upload, verify, set the loiter radius);
+:mod:`~gcs_planner.link.outcome` holds what they come to.
 
 Every wait has a deadline (1.5 s by default; for a single item the measured round trip, 0.25 s
 as the specification recommends until there is one) and a transfer that makes no progress for
@@ -100,8 +100,9 @@ class MissionClient(VehicleSession):
         self, mission_type: int = MAV_MISSION_TYPE_MISSION, *, validate: bool = True
     ) -> list[MissionItem]:
         """The vehicle's mission (MISSION_REQUEST_LIST, MISSION_COUNT, MISSION_REQUEST_INT for
-        each item with several requests outstanding, as MAVProxy does, then our MISSION_ACK;
-        or its mission file by MAVFTP), as :mod:`~gcs_planner.link.mission_download`
+        each item, one at a time where the autopilot serves them in sequence (PX4), several
+        outstanding where it answers any (ArduPilot), then our MISSION_ACK; or its mission file
+        by MAVFTP, checked by the vehicle's CRC), as :mod:`~gcs_planner.link.mission_download`
         describes. With ``validate`` (the default) an item no mission file may hold is a
         :class:`LinkError` naming its seq and field."""
         return download_mission(self, mission_type, validate=validate)

@@ -1,36 +1,44 @@
 """The mission protocol's download, one work item per transfer: MISSION_REQUEST_LIST, the
-vehicle's MISSION_COUNT, a MISSION_REQUEST_INT for each item with several requests outstanding
-(as MAVProxy does), then our MISSION_ACK; and the read-back after an upload, which resumes
-where a failed attempt stopped.
+vehicle's MISSION_COUNT, a MISSION_REQUEST_INT for each item, then our MISSION_ACK; and the
+download by MAVFTP, checked end to end.
 
-How many requests are out at once follows the link (:class:`~gcs_planner.link.pacing.Window`:
-delivery rate times the round trip), starting from the session's ``window``; none is added
-while the local radio says its buffer is nearly full. A request is asked again when later items
-overtook its answer (the link is in order, so it was lost) or after the round-trip timeout,
-doubled for each time it was asked already: never while its first copy can still be in the
-channel.
+How the requests go follows the autopilot (:meth:`VehicleSession.requests_in_sequence`, the
+record's ``protocol.requests_in_sequence``). PX4 answers only a request for the next item or the
+last one again and ends the transfer with MISSION_ACK MAV_MISSION_ERROR on any other
+(``MavlinkMissionManager::handle_mission_request_both``, src/modules/mavlink/
+mavlink_mission.cpp): one request is kept out, the next asked when its answer is in, so a loss
+can only make a request be asked again, which PX4 answers. ArduPilot answers every request on
+its own (``MissionItemProtocol::handle_mission_request_int``, libraries/GCS_MAVLink/
+MissionItemProtocol.cpp): several are kept out, as MAVProxy does, as many as the link carries
+(:class:`~gcs_planner.link.pacing.Window`: delivery rate times the round trip, from the
+session's ``window``); none is added while the local radio says its buffer is nearly full. A
+request is asked again when later items overtook its answer (the link is in order, so it was
+lost) or after the round-trip timeout, doubled for each time it was asked already: never while
+its first copy can still be in the channel.
+
+A MISSION_ACK with an error after the count is never let pass: the vehicle ended the transfer
+(PX4 goes idle and ignores later requests), so it is asked again from MISSION_REQUEST_LIST, up to
+the session's retries, and then it is a :class:`LinkError` naming the vehicle's answer. One that
+says MISSION_REQUEST_INT is unsupported turns the requests to the older MISSION_REQUEST.
+
+A mission read by MAVFTP is checked against the vehicle's own CRC-32 of its file
+(:func:`~gcs_planner.link.mission_by_ftp.read_file_checked`); where the vehicle offers no CRC it
+is read again by the mission protocol and the two compared. A file that fails either check is a
+:class:`LinkError`: nothing is taken from it.
 """
 
 from __future__ import annotations
 
 import itertools
 import time
-from collections.abc import Sequence
 from typing import Any
 
-from gcs_planner.aircraft.autopilot import keeps_home_item
 from gcs_planner.errors import LinkError
 from gcs_planner.link.connection import mavlink
 from gcs_planner.link.ftp import FtpError
-from gcs_planner.link.mission_by_ftp import falls_back, read_file, use_ftp
-from gcs_planner.link.outcome import ReadBackError
+from gcs_planner.link.mission_by_ftp import falls_back, read_file_checked, use_ftp
 from gcs_planner.link.pacing import Window
-from gcs_planner.link.protocol import (
-    Tolerance,
-    describe_result,
-    item_differences,
-    item_from_message,
-)
+from gcs_planner.link.protocol import describe_result, item_from_message, mission_differences
 from gcs_planner.link.session import VehicleSession
 from gcs_planner.link.validate import item_problem
 from gcs_planner.mission.items import MAV_MISSION_TYPE_MISSION, MissionItem
@@ -41,9 +49,6 @@ MAX_WINDOW = 32
 # answers (the links are in order; a radio or router reorders little): asked again at once.
 REORDER_SLACK = 3
 LEFTOVER_ACKS = (mavlink.MAV_MISSION_ACCEPTED, mavlink.MAV_MISSION_INVALID_SEQUENCE)
-# Late copies of our items reach an ArduPilot no longer receiving, which answers each with
-# MAV_MISSION_ERROR: left over from the upload, not a refusal.
-_AFTER_UPLOAD = mavlink.MAV_MISSION_ERROR
 _ANSWERS = {"MISSION_ITEM_INT", "MISSION_ITEM", "MISSION_ACK"}
 
 
@@ -61,11 +66,14 @@ def download(session: VehicleSession, mission_type: int, *, validate: bool) -> l
     if mission_type == MAV_MISSION_TYPE_MISSION and use_ftp(session):
         session.transfer_used = "ftp"
         try:
-            mission = read_file(session, {})
+            mission, unchecked = read_file_checked(session)
         except FtpError as exc:
             if not falls_back(session, exc):
                 raise
             session.transfer_used = "mission"
+        else:
+            if unchecked:
+                _confirm_by_mission_protocol(session, mission, unchecked)
     if mission is None:
         mission = MissionDownload(session, {}, mission_type).run()
     if validate:
@@ -79,9 +87,28 @@ def download(session: VehicleSession, mission_type: int, *, validate: bool) -> l
     return mission
 
 
-def download_count(session: VehicleSession, mission_type: int) -> int:
+def _confirm_by_mission_protocol(
+    session: VehicleSession, by_file: list[MissionItem], why: str
+) -> None:
+    """The mission read by MAVFTP, which the vehicle's CRC could not vouch for (``why``),
+    read again by the mission protocol: the two must be the same mission."""
+    by_protocol = MissionDownload(session, {}, MAV_MISSION_TYPE_MISSION).run()
+    diffs = mission_differences(by_protocol, by_file)
+    if diffs:
+        more = f"; and {len(diffs) - 5} more" if len(diffs) > 5 else ""
+        raise LinkError(
+            f"the mission read by MAVFTP ({why}) is not the one the mission protocol reads: "
+            f"{'; '.join(diffs[:5])}{more}. It was altered on the way, or changed meanwhile: "
+            "download it again"
+        )
+
+
+def download_count(
+    session: VehicleSession, mission_type: int, leftovers: tuple[int, ...] = LEFTOVER_ACKS
+) -> int:
     """The vehicle's MISSION_COUNT, asked with MISSION_REQUEST_LIST until it answers (a vehicle
-    busy receiving answers DENIED until it times out or is cancelled)."""
+    busy receiving answers DENIED until it times out or is cancelled). ``leftovers``: the
+    MISSION_ACK results taken as answers to an earlier transfer."""
     ts, tc = session._target()
     request_list = session.mav.mission_request_list_encode(ts, tc, mission_type)
     session.link.send(request_list)
@@ -110,7 +137,7 @@ def download_count(session: VehicleSession, mission_type: int) -> int:
         if kind == "MISSION_COUNT":
             return int(msg.count)
         if kind == "MISSION_ACK":
-            if msg.type in LEFTOVER_ACKS:
+            if msg.type in leftovers:
                 continue  # leftovers of an earlier transfer
             raise LinkError(f"download refused: {describe_result(msg.type)}")
         # A request we did not start: a late duplicate of an old MISSION_COUNT put the
@@ -118,11 +145,22 @@ def download_count(session: VehicleSession, mission_type: int) -> int:
         session._cancel_transfer(mission_type)
 
 
+class TransferEnded(Exception):
+    """The vehicle ended the download with a MISSION_ACK error (``result``)."""
+
+    def __init__(self, result: int) -> None:
+        super().__init__(result)
+        self.result = result
+
+
 class MissionDownload:
-    """One download into ``got`` (items already there are not asked for again, so a read-back
-    retried after a failure resumes). ``expect``: the count an earlier attempt read; a
-    different one now means the mission changed and ``got`` is started afresh. ``leftovers``:
-    the MISSION_ACK results taken as answers to an earlier transfer."""
+    """One download into ``got`` (items already there are not asked for again where the
+    autopilot answers requests in any order, so a read-back retried after a failure resumes).
+    ``expect``: the count an earlier attempt read; a different one now means the mission
+    changed and ``got`` is started afresh. ``leftovers``: the MISSION_ACK results taken, before
+    the count comes, as answers to an earlier transfer (the read-back's include the errors an
+    ArduPilot no longer receiving sends to our last items: on an in-order link they all come
+    before the count)."""
 
     def __init__(
         self,
@@ -139,12 +177,22 @@ class MissionDownload:
         self.leftovers = leftovers
         self.target = (0, 0)
         self.count = 0
+        self.in_sequence = session.requests_in_sequence()
+        self.request_int = True  # MISSION_REQUEST_INT until the vehicle says it has none
+        # The classic client (a window of 1), or an autopilot that serves in sequence: one
+        # request at a time, always.
+        fixed = session.window == 1 or self.in_sequence
+        start = 1 if self.in_sequence else session.window
+        self.window = Window(start, low=1 if fixed else 2, high=1 if fixed else MAX_WINDOW)
+        self.tickets = itertools.count()
+        self._fresh_transfer()
+
+    def _fresh_transfer(self) -> None:
+        """The state of one transfer, from its MISSION_REQUEST_LIST on."""
         self.sent: dict[int, tuple[float, int]] = {}  # seq -> (when last asked, times asked)
         self.ticket: dict[int, int] = {}  # seq -> the number of its last request, in order
         self.overtaken: dict[int, int] = {}  # seq -> answers to later requests that came first
-        self.tickets = itertools.count()
-        fixed = session.window == 1  # the classic client: one request at a time, always
-        self.window = Window(session.window, low=1 if fixed else 2, high=1 if fixed else MAX_WINDOW)
+        self.taken: set[int] = set()  # items answered in this transfer
         self.missing: list[int] = []
         self.next_new = 0  # index into missing
         self.stalls = 0  # timeouts in a row with no answer: the backoff of the whole link
@@ -152,22 +200,49 @@ class MissionDownload:
         # The timer resends only once a receive has found nothing waiting: a process kept off
         # the CPU past the timer finds the answer it waited for already here, not lost.
         self.drained = False
-        self.last_progress = 0.0
+        self.last_progress = time.monotonic()
 
     def run(self) -> list[MissionItem]:
-        """The vehicle's mission, in seq order."""
+        """The vehicle's mission, in seq order; asked again from the start each time the
+        vehicle ends the transfer, up to the session's retries."""
         s = self.session
         ts, tc = self.target = s._target()
-        count = self.count = download_count(s, self.mission_type)
+        ended = 0
+        while True:
+            try:
+                self._transfer()
+                break
+            except TransferEnded as exc:
+                ended += 1
+                if ended > s.retries:
+                    raise LinkError(
+                        f"download refused: the vehicle ended it {ended} times, last with "
+                        f"MISSION_ACK {describe_result(exc.result)}"
+                    ) from None
+                s.retry_count += 1
+                self._fresh_transfer()
+        done = s.mav.mission_ack_encode(ts, tc, mavlink.MAV_MISSION_ACCEPTED, self.mission_type)
+        s.link.send(done)
+        return [self.got[seq] for seq in range(self.count)]
+
+    def _transfer(self) -> None:
+        """One transfer from MISSION_REQUEST_LIST until every item is in."""
+        s = self.session
+        count = self.count = download_count(s, self.mission_type, self.leftovers)
         if self.expect is not None and count != self.expect:
             self.got.clear()
+        self.expect = count
         s._last_count = count
+        for seq in [seq for seq in self.got if seq >= count]:
+            del self.got[seq]
+        if not self.in_sequence:
+            self.taken = set(self.got)  # asked in any order: what is held is not asked again
+        self.missing = [seq for seq in range(count) if seq not in self.taken]
         bar = s.progress("download", count)
-        bar.update(len(self.got))
+        bar.update(len(self.taken))
         self.last_progress = time.monotonic()
-        self.missing = [seq for seq in range(count) if seq not in self.got]
         try:
-            while len(self.got) < count:
+            while len(self.taken) < count:
                 now = time.monotonic()
                 congested = s.radio.congested()
                 self._resend(now, congested)
@@ -176,22 +251,27 @@ class MissionDownload:
                 now = time.monotonic()
                 self.drained = msg is None
                 if self._take(msg, now):
-                    bar.update(len(self.got))
+                    bar.update(len(self.taken))
         finally:
             bar.close()
             s.window_used = self.window.size
-        done = s.mav.mission_ack_encode(ts, tc, mavlink.MAV_MISSION_ACCEPTED, self.mission_type)
-        s.link.send(done)
-        return [self.got[seq] for seq in range(count)]
 
     def _request(self, seq: int) -> None:
         ts, tc = self.target
-        self.session.link.send(
-            self.session.mav.mission_request_int_encode(ts, tc, seq, self.mission_type)
-        )
+        mav = self.session.mav
+        encode = mav.mission_request_int_encode if self.request_int else mav.mission_request_encode
+        self.session.link.send(encode(ts, tc, seq, self.mission_type))
 
     def _oldest(self) -> int | None:
         return min(self.sent, key=self.ticket.__getitem__, default=None)
+
+    def _ask_again(self, seq: int, now: float) -> None:
+        """Request ``seq`` again (a resend: its round trip is not sampled, Karn's rule)."""
+        self.session.retry_count += 1
+        self.behind[seq] = any(self.ticket[o] < self.ticket[seq] for o in self.sent if o != seq)
+        self.sent[seq] = (now, self.sent[seq][1] + 1)
+        self.ticket[seq], self.overtaken[seq] = next(self.tickets), 0
+        self._request(seq)
 
     def _resend(self, now: float, congested: bool) -> None:
         """Ask again for what is lost: overtaken by later answers, or the oldest request past
@@ -200,17 +280,13 @@ class MissionDownload:
         again for what is still on its way."""
         s = self.session
         oldest = self._oldest()
-        for seq, (when, asked) in list(self.sent.items()):
+        for seq, (when, _) in list(self.sent.items()):
             lost = self.overtaken[seq] >= REORDER_SLACK
             due = seq == oldest and self.drained and now - when > s._resend_wait(self.stalls)
             if not (lost or due) or congested:
                 continue
-            s.retry_count += 1
-            self.behind[seq] = any(self.ticket[o] < self.ticket[seq] for o in self.sent if o != seq)
             self.window.lost()
-            self.sent[seq] = (now, asked + 1)
-            self.ticket[seq], self.overtaken[seq] = next(self.tickets), 0
-            self._request(seq)
+            self._ask_again(seq, now)
             if due:
                 self.stalls += 1
                 # The timer restarts for what is still out, as TCP's does.
@@ -227,7 +303,7 @@ class MissionDownload:
         ):
             seq = self.missing[self.next_new]
             self.next_new += 1
-            if seq in self.got:
+            if seq in self.taken:
                 continue
             self.sent[seq] = (now, 1)
             self.ticket[seq], self.overtaken[seq] = next(self.tickets), 0
@@ -240,27 +316,42 @@ class MissionDownload:
             return self.session._resend_wait(0)
         return self.session._resend_wait(self.stalls) - (now - self.sent[oldest][0])
 
+    def _on_ack(self, result: int, now: float) -> None:
+        """A MISSION_ACK in the middle of the transfer: a leftover, the old spelling asked
+        for, or the vehicle ending the transfer (:class:`TransferEnded`)."""
+        if result in LEFTOVER_ACKS:
+            return  # leftovers of an earlier transfer
+        if result == mavlink.MAV_MISSION_UNSUPPORTED and self.request_int:
+            # No MISSION_REQUEST_INT here: the deprecated MISSION_REQUEST, which every
+            # autopilot answers (with MISSION_ITEM), for what is out.
+            self.request_int = False
+            for seq in list(self.sent):
+                self._ask_again(seq, now)
+            return
+        raise TransferEnded(result)
+
     def _take(self, msg: Any | None, now: float) -> bool:
         """Act on what came (None: nothing); True when it was a new item of the mission."""
         s = self.session
         if msg is None:
             if now - self.last_progress > s._stall_limit():
-                first = min(set(range(self.count)) - set(self.got))
+                first = min(set(range(self.count)) - self.taken)
                 raise s._give_up(f"download: item {first}")
             return False
         if msg.get_type() == "MISSION_ACK":
-            if msg.type in self.leftovers:
-                return False  # leftovers of an earlier transfer
-            raise LinkError(f"download refused: {describe_result(msg.type)}")
+            self._on_ack(int(msg.type), now)
+            return False
         seq = int(msg.seq)
-        if seq in self.got:
+        if seq in self.taken:
             # The answer to a request asked again (the first answer was late, not lost), or
             # the resend's after it.
             s.late_answers += 1
             s.hasty_resends += self.behind.get(seq, False)
             return False
-        if not 0 <= seq < self.count:
-            return False  # not an item of this mission
+        if not 0 <= seq < self.count or (self.in_sequence and seq not in self.sent):
+            # Not an item of this mission; or, served in sequence, the late answer to an
+            # earlier transfer's request: the vehicle is to be asked for it in its turn.
+            return False
         limited = len(self.sent) >= self.window.size
         asked = self.sent.pop(seq, None)
         mine = self.ticket.pop(seq, None)
@@ -276,83 +367,6 @@ class MissionDownload:
         self.window.delivered(now, limited)
         self.stalls = 0
         self.got[seq] = item_from_message(msg)
+        self.taken.add(seq)
         self.last_progress = now
         return True
-
-
-def read_back(
-    session: VehicleSession,
-    sent: Sequence[MissionItem],
-    tol: Tolerance,
-    *,
-    acknowledged: bool = True,
-    attempts: int = 3,
-) -> list[MissionItem]:
-    """The mission just uploaded, read back. A read-back that fails is said as such: "could
-    not read it back" is a :class:`ReadBackError`, never "it differs". Each attempt resumes
-    where the last one stopped (the items read stay read), so a link that drops out for a
-    while costs the time it is out, not the whole read-back again."""
-    got: dict[int, MissionItem] = {}
-    expect: int | None = None
-    session._last_count = None
-    leftovers = (*LEFTOVER_ACKS, _AFTER_UPLOAD)
-    for attempt in range(attempts):
-        try:
-            return MissionDownload(session, got, MAV_MISSION_TYPE_MISSION, expect, leftovers).run()
-        except LinkError as exc:
-            expect = session._last_count
-            if attempt < attempts - 1:
-                continue
-            raise _read_back_failed(session, sent, got, expect, tol, exc, acknowledged) from None
-    raise AssertionError("unreachable")
-
-
-def _read_back_failed(
-    session: VehicleSession,
-    sent: Sequence[MissionItem],
-    got: dict[int, MissionItem],
-    expect: int | None,
-    tol: Tolerance,
-    exc: LinkError,
-    acknowledged: bool,
-) -> LinkError:
-    """The error of a read-back whose last attempt failed: what was read is compared all the
-    same (a difference is a difference); otherwise what the vehicle holds is unknown."""
-    wrong = _partial_differences(session, sent, got, tol)
-    said = (
-        "the vehicle acknowledged the whole upload (MISSION_ACK ACCEPTED)"
-        if acknowledged
-        else "the vehicle never acknowledged the end of the upload"
-    )
-    read = (
-        f"{len(got)} of {expect} items were read back"
-        if expect is not None
-        else "not even the item count was read back"
-    )
-    if wrong:
-        return LinkError(
-            f"the mission read back differs from the upload ({read} before the "
-            f"link failed): {'; '.join(wrong[:5])}"
-        )
-    return ReadBackError(
-        f"{said} but it could not be read back to verify it: {exc}. {read}"
-        f"{', all as uploaded' if got and expect is not None else ''}; the "
-        "read-back failed, so whether the vehicle holds this mission is unknown: "
-        "run `gcs-planner download` to check"
-    )
-
-
-def _partial_differences(
-    session: VehicleSession,
-    sent: Sequence[MissionItem],
-    got: dict[int, MissionItem],
-    tol: Tolerance,
-) -> list[str]:
-    """The differences between the items read back so far and the ones sent."""
-    out: list[str] = []
-    for seq in sorted(got):
-        if seq >= len(sent):
-            out.append(f"item {seq}: read back, but only {len(sent)} items were uploaded")
-        elif not (seq == 0 and keeps_home_item(session.firmware)):
-            out.extend(f"item {seq}: {d}" for d in item_differences(sent[seq], got[seq], tol))
-    return out

@@ -225,3 +225,37 @@ def decode_mission(data: bytes) -> list[MissionItem]:
                                  x, y, z))  # fmt: skip
     del options  # NO_CLEAR is for writes; a read has nothing to say there
     return items
+
+
+# Where ``current`` lies in an item's 38 bytes (after param1-4, x, y, z, seq, command, target
+# system and component, frame).
+_CURRENT_AT = struct.calcsize("<ffffiifHHBBB")
+
+
+def file_crcs(data: bytes) -> list[int]:
+    """The CRC-32s a vehicle that served ``data`` (mission.dat as a read gave it) computes of
+    its file by CalcFileCRC32: first that of the same file; then, for a vehicle flying it, that
+    of the file once its running nav command changed, the one thing a flight changes in it
+    (get_item sets ``current`` on every item whose command id equals that index:
+    :func:`as_stored`), for each index the mission's commands can match, and for none.
+
+    The file is rebuilt as AP_Filesystem::crc32 reads it, :data:`CRC_READ` bytes a call
+    (:func:`read_call`): an item whose command writes no x, y or z carries there what that
+    call's buffer held, which a burst read's 239-byte calls need not match."""
+    length = mission_length(data)
+    if length is None or len(data) != length:
+        return [crc32(data)]
+    header = data[: HEADER.size]
+    raws = [data[HEADER.size + k * ITEM.size : HEADER.size + (k + 1) * ITEM.size]
+            for k in range((len(data) - HEADER.size) // ITEM.size)]  # fmt: skip
+    commands = [ITEM.unpack_from(raw)[8] for raw in raws]
+    # Home (item 0) is a Location: all of its x, y, z are written.
+    rendered = [(raw, "xyz" if k == 0 else xyz_written(cmd))
+                for k, (raw, cmd) in enumerate(zip(raws, commands, strict=True))]  # fmt: skip
+    served = bytearray(read_whole(header, rendered, CRC_READ))
+    out = [crc32(bytes(served))]
+    for nav in (None, *sorted(set(commands))):
+        for k, cmd in enumerate(commands):
+            served[HEADER.size + k * ITEM.size + _CURRENT_AT] = int(cmd == nav)
+        out.append(crc32(bytes(served)))
+    return out

@@ -34,6 +34,7 @@ from typing import Any
 STALE_S = 5.0  # GCS_MAVLINK::last_txbuf_is_greater: an older report is no radio
 GATE_TXBUF = 33  # percent free at or below which nothing optional is sent
 SLOWDOWN_MAX_S = 2.0
+RADIO_REPORTS = ("RADIO_STATUS", "RADIO")
 
 
 class RadioFlow:
@@ -49,8 +50,9 @@ class RadioFlow:
         self.slowdown_s = 0.0
 
     def observe(self, msg: Any) -> bool:
-        """Take ``msg`` if it is a RADIO_STATUS (True), else leave it (False)."""
-        if msg.get_type() != "RADIO_STATUS":
+        """Take ``msg`` if it is a RADIO_STATUS, or the older RADIO of the same fields, as
+        ArduPilot's handle_radio_status takes both (True); else leave it (False)."""
+        if msg.get_type() not in RADIO_REPORTS:
             return False
         txbuf = int(msg.txbuf)
         self.txbuf = txbuf

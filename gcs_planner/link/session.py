@@ -42,6 +42,13 @@ VERIFIES = ("crc", "read")
 ProgressFactory = Callable[[str, int], Progress]
 
 
+def serves_mission_file(firmware: str | None) -> bool:
+    """Whether the autopilot named ``firmware`` serves its mission as @MISSION/mission.dat;
+    False for one without a record (a generic autopilot, or none heard yet)."""
+    ap = AUTOPILOTS.get(firmware or "")
+    return ap is not None and ap.protocol is not None and ap.protocol.serves_mission_file
+
+
 @dataclass(frozen=True)
 class Vehicle:
     """Who answered: system and component ids, and the firmware its heartbeat names."""
@@ -81,7 +88,9 @@ class VehicleSession:
             raise LinkError(f"unknown verification {verify!r}: expected one of {VERIFIES}")
         self.transfer = transfer
         self.verify = verify
-        self.capabilities: int | None = None  # AUTOPILOT_VERSION's, once asked
+        self.capabilities: int | None = None  # AUTOPILOT_VERSION's, once answered
+        self._capabilities_asked: float | None = None  # when they were first asked
+        self._capabilities_asked_last = 0.0
         self.transfer_used = "mission"  # how the last upload or download went
         if firmware is not None and firmware not in AUTOPILOTS:
             known = tuple(AUTOPILOTS)
@@ -118,6 +127,9 @@ class VehicleSession:
         self._last_count: int | None = None  # the count the last download read
         self.vehicle: Vehicle | None = None
         self._last_gcs_heartbeat = 0.0
+        # Whoever reads the link (a parameter read too) hands the vehicle's AUTOPILOT_VERSION
+        # here, so the answer to the question asked at connect is not lost to another reader.
+        link.watchers.append(self._watch)
 
     # Who answered -----------------------------------------------------------------------------
     def _send_heartbeat(self) -> None:
@@ -146,6 +158,9 @@ class VehicleSession:
             self.vehicle = Vehicle(
                 self.target_system, self.target_component, msg.autopilot, self.firmware
             )
+            if self._wants_capabilities():
+                # Asked now, answered while the command does what it does before the transfer.
+                self._ask_capabilities()
             return self.vehicle
         raise self._no_heartbeat(timeout)
 
@@ -184,30 +199,65 @@ class VehicleSession:
         name = self.firmware if self.firmware in AUTOPILOTS else DEFAULT_AUTOPILOT
         return autopilot_for(name)
 
+    def requests_in_sequence(self) -> bool:
+        """Whether a download keeps one request out at a time: the autopilot's record says
+        (PX4 ends a transfer asked out of order, ArduPilot answers any request); an autopilot
+        without a record is asked one item at a time, as the specification's sequence shows."""
+        ap = AUTOPILOTS.get(self.firmware or "")
+        if ap is None or ap.protocol is None:
+            return True
+        return ap.protocol.requests_in_sequence
+
+    def _wants_capabilities(self) -> bool:
+        """Whether the transfer's choice needs AUTOPILOT_VERSION (``auto`` with an autopilot
+        that serves its mission as a file); any other vehicle is not asked at all."""
+        return self.transfer == "auto" and serves_mission_file(self.firmware)
+
+    def _ask_capabilities(self) -> None:
+        """Ask for AUTOPILOT_VERSION with MAV_CMD_REQUEST_MESSAGE and the older
+        MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES at once: both autopilots answer either, so one
+        answer lost on the way is not a silence."""
+        ts, tc = self._target()
+        self.link.send(self.mav.command_long_encode(ts, tc, mavlink.MAV_CMD_REQUEST_MESSAGE, 0,
+                                                    mavlink.MAVLINK_MSG_ID_AUTOPILOT_VERSION,
+                                                    0, 0, 0, 0, 0, 0))  # fmt: skip
+        self.link.send(self.mav.command_long_encode(ts, tc,
+                                                    mavlink.MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES,
+                                                    0, 1, 0, 0, 0, 0, 0, 0))  # fmt: skip
+        now = time.monotonic()
+        if self._capabilities_asked is None:
+            self._capabilities_asked = now
+        self._capabilities_asked_last = now
+
+    def _watch(self, msg: Any) -> None:
+        if msg.get_type() == "AUTOPILOT_VERSION" and self._from_target(msg):
+            self.capabilities = int(msg.capabilities)
+
+    def _await_capabilities(self, until: float) -> bool:
+        """Wait for the answer until ``until``, asking again each third of the protocol
+        timeout (a lossy link loses questions and answers, a silent vehicle costs no more)."""
+        while self.capabilities is None and (remaining := until - time.monotonic()) > 0:
+            if time.monotonic() - self._capabilities_asked_last >= self.timeout / 3:
+                self._ask_capabilities()
+            self._recv(min(remaining, 0.1), {"AUTOPILOT_VERSION"}, None)
+        return self.capabilities is not None
+
     def autopilot_capabilities(self) -> int:
-        """AUTOPILOT_VERSION.capabilities: asked with MAV_CMD_REQUEST_MESSAGE, then the older
-        MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES (both autopilots answer either); 0 when the
-        vehicle says nothing (it offers no optional protocol then)."""
+        """AUTOPILOT_VERSION.capabilities, 0 when the vehicle says nothing (it offers no
+        optional protocol then). Asked once a session, at connect when the transfer's choice
+        needs it, so that the answer comes while the command does what it does first; the
+        wait runs to the protocol timeout from when the question first went out, not from when
+        the answer is needed, and is not repeated: a vehicle that never answers costs what is
+        left of one timeout, and one whose every answer was lost only goes by the mission
+        protocol."""
         if self.capabilities is not None:
             return self.capabilities
-        ts, tc = self._target()
-        asks = [
-            self.mav.command_long_encode(ts, tc, mavlink.MAV_CMD_REQUEST_MESSAGE, 0,
-                                         mavlink.MAVLINK_MSG_ID_AUTOPILOT_VERSION,
-                                         0, 0, 0, 0, 0, 0),
-            self.mav.command_long_encode(ts, tc, mavlink.MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES,
-                                         0, 1, 0, 0, 0, 0, 0, 0),
-        ]  # fmt: skip
-        for attempt in range(min(self.retries, 2) + 1):
-            self.link.send(asks[attempt % 2])
-            deadline = time.monotonic() + self.timeout
-            while (remaining := deadline - time.monotonic()) > 0:
-                msg = self._recv(remaining, {"AUTOPILOT_VERSION"}, None)
-                if msg is not None:
-                    self.capabilities = int(msg.capabilities)
-                    return self.capabilities
-        self.capabilities = 0
-        return 0
+        if self._capabilities_asked is None:
+            self._ask_capabilities()
+        assert self._capabilities_asked is not None
+        if not self._await_capabilities(self._capabilities_asked + self.timeout):
+            self.capabilities = 0
+        return int(self.capabilities)  # type: ignore[arg-type]
 
     # Its messages -----------------------------------------------------------------------------
     def _from_target(self, msg: Any) -> bool:
@@ -241,15 +291,20 @@ class VehicleSession:
             return msg
         return None
 
-    def _give_up(self, what: str) -> LinkError:
-        extra = ""
+    def signing_hint(self) -> str:
+        """What signing may have to do with a silence, in words ("" when nothing): a vehicle
+        heard signing while we do not, or frames of it refused for their signature."""
         if self.link.peer_signed and not self.link.signed:
-            extra = (
+            return (
                 " (the vehicle signs its messages and ignores unsigned ones: give its key "
                 "with --signing-key)"
             )
-        elif self.link.refused_signature:
-            extra = f" ({self.link.refused_signature} message(s) refused: unsigned or another key)"
+        if self.link.refused_signature:
+            return f" ({self.link.refused_signature} message(s) refused: unsigned or another key)"
+        return ""
+
+    def _give_up(self, what: str) -> LinkError:
+        extra = self.signing_hint()
         return LinkError(f"{what}: no answer after {self.retries + 1} attempts{extra}")
 
     def _cancel_transfer(self, mission_type: int) -> None:

@@ -1,8 +1,15 @@
 """MAVLink 2 message signing: a passphrase becomes the 32-byte secret key, and incoming frames
 are checked as the MAVLink specification ("Message signing") says.
 
-With signing on, every incoming frame that is unsigned or signed with another key is refused (no
-``allow_unsigned_callback``). The check itself is ours, not pymavlink's: pymavlink stores a
+With signing on, every incoming frame that is unsigned or signed with another key is refused, but
+for the telemetry radio's own reports: a SiK radio (system 51) writes RADIO_STATUS to its host
+unsigned, knowing no key, and both autopilots take it so (ArduPilot's ``accept_unsigned_callback``
+in libraries/GCS_MAVLink/GCS_Signing.cpp accepts RADIO_STATUS and the older RADIO; PX4's
+``MavlinkSignControl::accept_unsigned`` in src/modules/mavlink/mavlink_sign_control.cpp accepts
+RADIO_STATUS whatever the signing mode), so the pacing that reads them
+(:mod:`gcs_planner.link.pacing`) runs on a signed link too. Like the autopilots, the sender's ids
+are not asked: pymavlink's callback is given the message id only, and a forged report can only
+slow a transfer down. The check itself is ours, not pymavlink's: pymavlink stores a
 stream's timestamp *before* it has verified the signature, so one wrong-key frame stamped far in
 the future makes every later frame of the rightful peer "too old" and locks it out until restart.
 Here a frame advances its stream's timestamp (and our own sending clock) only after its signature
@@ -21,6 +28,15 @@ from typing import Any
 # units of 10 microseconds), so an old recording cannot open a stream.
 NEW_STREAM_WINDOW = 6_000_000
 _STAMP = struct.Struct("<IH")
+# Messages taken unsigned on a signed link: RADIO_STATUS (109) and RADIO (166, ardupilotmega.xml),
+# ArduPilot's accept list.
+UNSIGNED_ACCEPTED = frozenset({109, 166})
+
+
+def accept_unsigned(mav: Any, msg_id: int) -> bool:
+    """pymavlink's ``allow_unsigned_callback``: only the radio's reports pass unsigned."""
+    del mav
+    return msg_id in UNSIGNED_ACCEPTED
 
 
 def key_from_passphrase(passphrase: str) -> bytes:
@@ -64,11 +80,12 @@ def check_signature(mav: Any, msgbuf: bytes, src_system: int, src_component: int
 
 
 def enable_signing(conn: Any, key: bytes) -> None:
-    """Sign every outgoing frame of the pymavlink connection ``conn``, refuse unsigned ones and
-    check incoming signatures with :func:`check_signature`."""
+    """Sign every outgoing frame of the pymavlink connection ``conn``, refuse unsigned ones (but
+    the radio's reports, :func:`accept_unsigned`) and check incoming signatures with
+    :func:`check_signature`."""
     if len(key) != 32:
         raise ValueError("a MAVLink 2 signing key is 32 bytes")
-    conn.setup_signing(key, sign_outgoing=True, allow_unsigned_callback=None)
+    conn.setup_signing(key, sign_outgoing=True, allow_unsigned_callback=accept_unsigned)
     # pymavlink looks the check up on the MAVLink object at each frame: ours replaces its own for
     # this connection only.
     conn.mav.check_signature = partial(check_signature, conn.mav)

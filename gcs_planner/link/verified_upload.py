@@ -25,7 +25,7 @@ from gcs_planner.link.mission_by_ftp import (
     upload_file,
     use_ftp,
 )
-from gcs_planner.link.mission_download import read_back
+from gcs_planner.link.mission_read_back import read_back
 from gcs_planner.link.mission_upload import MissionUpload, numbered
 from gcs_planner.link.outcome import Outcome, UploadReport
 from gcs_planner.link.params import set_loiter_radius
