@@ -10,7 +10,7 @@ import pytest
 from helpers import corridor_scenario, mixed_scenario
 
 from gcs_planner.baselines.brute import brute_force_front
-from gcs_planner.core import search
+from gcs_planner.core import straight_search
 from gcs_planner.core.kernel import fewest_corrections
 from gcs_planner.core.reach import arrival_limits_m, build_reach_graph
 from gcs_planner.core.route import evaluate_route
@@ -85,7 +85,7 @@ def test_focused_front_equals_the_search_over_all_points(
     """Both ways of focusing: bounded by the fewest-corrections walk where it is a route, and
     by ellipsoids of growing slack (what runs where it is not, made to run everywhere here)."""
     if not walk_bound:
-        monkeypatch.setattr(search, "bounds_are_chords", lambda scenario: False)
+        monkeypatch.setattr(straight_search, "bounds_are_chords", lambda scenario: False)
     focused = grown = revisits = 0
     for seed in range(seeds):
         scenario = make(seed)

@@ -34,8 +34,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from gcs_planner.core.kernel_records import ToGo
+from gcs_planner.core.label_dominance import not_dominated, staircase, summarise
 from gcs_planner.core.reach import ReachGraph, use_compiled
-from gcs_planner.core.search import _summarise, not_dominated, staircase
 from gcs_planner.scenario.model import Kind, Scenario
 
 # The fewest labels a thread is given: below, starting threads costs more than it saves.
@@ -127,53 +127,25 @@ def cost_to_go(
     src = np.repeat(np.arange(n), graph.degree())
     tgt = graph.target.astype(np.int64)
     dist = graph.length
-    lim_b = graph.lim_v[end]
-    into_b = (tgt == end) & (src != graph.start)
-    # Base: j -> B. Own component arrives with d, the carried one with e + d; both <= θ/δ.
-    node = src[into_b]
-    R = dist[into_b]
-    E = lim_b - R
-    ok = (E >= 0) & (R + own[node] <= lim_b)
-    node, R, E = node[ok], R[ok], E[ok]
-    # Archive for dominance: "e" of the generic filter is -E (smaller is better).
-    keep = not_dominated(
-        node,
-        R,
-        -E,
-        np.zeros((len(node), 0), np.uint64),
-        np.zeros(0, np.int64),
-        np.zeros(0),
-        np.zeros(0),
-        np.zeros((0, 0), np.uint64),
-    )
-    node, R, E = node[keep], R[keep], E[keep]
+    node, R, E = _base_labels(graph, src, tgt, dist, own)
     lim_v, lim_h = graph.lim_v, graph.lim_h
-    if compiled:
-        # The compiled layers run over the nodes renumbered by distance to B: a label's
-        # predecessors are then near it in memory too, and the per-node arrays the fan reads
-        # at each of tens of millions of arcs stay in cache (15 % of the layers' time on a
-        # 350 km corridor). Only this function sees the numbering; the table is mapped back.
-        by_end = np.argsort(graph.to_end, kind="stable")
-        renumber = np.empty(n, np.int64)
-        renumber[by_end] = np.arange(n)
+    if compiled:  # over the nodes renumbered by distance to B (mapped back at the end)
+        by_end, renumber = _by_distance_to_end(graph)
         node = renumber[node]
         is_v, own, lim_v, lim_h = is_v[by_end], own[by_end], lim_v[by_end], lim_h[by_end]
     # Every label kept, with its layer, makes the table; new candidates are filtered against
     # the Pareto frontier of the labels kept so far only (``_filter``).
     kept_node, kept_R, kept_E, kept_layer = [node], [R], [E], [np.zeros(len(node), np.int64)]
     front_node, front_R, front_E = node.copy(), R.copy(), E.copy()
-    if compiled:  # the frontier as rows per point, sorted by R (see ``merge_frontier``)
-        order = np.lexsort((front_R, front_node))
-        front_node, front_R, front_E = front_node[order], front_R[order], front_E[order]
-        f_ptr = np.zeros(n + 1, dtype=np.int64)
-        np.cumsum(np.bincount(front_node, minlength=n), out=f_ptr[1:])
+    if compiled:
+        front_node, front_R, front_E, f_ptr = _frontier_rows(front_node, front_R, front_E, n)
     # Per point, the kept label nearest B (largest E on a tie) and the one allowing the most
     # error (nearest B on a tie): most candidates are dominated by one of the two, and testing
     # that is one gather, where the full filter sorts every candidate. Both are kept labels,
     # so whatever they drop the full filter would drop too: the labels kept are the same.
     near_R, near_e, wide_R, wide_e = (np.full(n, np.inf) for _ in range(4))
     summary = (near_R, near_e, wide_R, wide_e)
-    _summarise(node, R, -E, near_R, near_e, wide_R, wide_e)
+    summarise(node, R, -E, near_R, near_e, wide_R, wide_e)
 
     # Reverse CSR over arcs between correction points (compiled: one counting pass, where
     # the sort of tens of millions of arcs takes seconds; the same arrays).
@@ -183,13 +155,7 @@ def cost_to_go(
             graph.indptr, graph.target, graph.length, graph.start, end, renumber
         )
     else:
-        inner = (tgt != end) & (src != graph.start)
-        r_src, r_tgt, r_len = src[inner], tgt[inner], dist[inner]
-        order = np.argsort(r_tgt, kind="stable")
-        r_src, r_tgt, r_len = r_src[order], r_tgt[order], r_len[order]
-        r_ptr = np.zeros(n + 1, dtype=np.int64)
-        np.add.at(r_ptr, r_tgt + 1, 1)
-        np.cumsum(r_ptr, out=r_ptr)
+        r_ptr, r_src, r_len = _reverse_csr(graph, src, tgt, dist)
 
     cut_at = None
     for layer in range(1, n):
@@ -215,7 +181,7 @@ def cost_to_go(
             front_R = np.concatenate([front_R[stays], newR[keep]])
             front_E = np.concatenate([front_E[stays], newE[keep]])
         node, R, E = j[keep], newR[keep], newE[keep]
-        _summarise(node, R, -E, near_R, near_e, wide_R, wide_e)
+        summarise(node, R, -E, near_R, near_e, wide_R, wide_e)
         kept_node.append(node)
         kept_R.append(R)
         kept_E.append(E)
@@ -223,6 +189,73 @@ def cost_to_go(
     if compiled:
         kept_node = [by_end[k] for k in kept_node]
     return _table(graph, kept_node, kept_R, kept_E, kept_layer, cut_at, compiled)
+
+
+def _by_distance_to_end(graph: ReachGraph) -> tuple[np.ndarray, np.ndarray]:
+    """(the nodes by distance to B, each node's rank in that order): the numbering the compiled
+    layers run over. A label's predecessors are then near it in memory too, and the per-node
+    arrays the fan reads at each of tens of millions of arcs stay in cache on long corridors.
+    Only ``cost_to_go`` sees the numbering; the table is mapped back."""
+    by_end = np.argsort(graph.to_end, kind="stable")
+    renumber = np.empty(graph.n, np.int64)
+    renumber[by_end] = np.arange(graph.n)
+    return by_end, renumber
+
+
+def _frontier_rows(
+    front_node: np.ndarray, front_R: np.ndarray, front_E: np.ndarray, n: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The frontier as the compiled layers keep it: rows per point, sorted by R (see
+    ``cost_to_go_kernel.merge_frontier``), and each point's first row."""
+    order = np.lexsort((front_R, front_node))
+    front_node, front_R, front_E = front_node[order], front_R[order], front_E[order]
+    f_ptr = np.zeros(n + 1, dtype=np.int64)
+    np.cumsum(np.bincount(front_node, minlength=n), out=f_ptr[1:])
+    return front_node, front_R, front_E, f_ptr
+
+
+def _base_labels(
+    graph: ReachGraph, src: np.ndarray, tgt: np.ndarray, dist: np.ndarray, own: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The labels (node, R, E) of layer 0, the legs j -> B over the arcs (``src``, ``tgt``,
+    ``dist``), Pareto-minimal per point. Not out of A: A is no correction."""
+    end = graph.end
+    lim_b = graph.lim_v[end]
+    into_b = (tgt == end) & (src != graph.start)
+    # Base: j -> B. Own component arrives with d, the carried one with e + d; both <= θ/δ.
+    node = src[into_b]
+    R = dist[into_b]
+    E = lim_b - R
+    ok = (E >= 0) & (R + own[node] <= lim_b)
+    node, R, E = node[ok], R[ok], E[ok]
+    # Archive for dominance: "e" of the generic filter is -E (smaller is better).
+    keep = not_dominated(
+        node,
+        R,
+        -E,
+        np.zeros((len(node), 0), np.uint64),
+        np.zeros(0, np.int64),
+        np.zeros(0),
+        np.zeros(0),
+        np.zeros((0, 0), np.uint64),
+    )
+    return node[keep], R[keep], E[keep]
+
+
+def _reverse_csr(
+    graph: ReachGraph, src: np.ndarray, tgt: np.ndarray, dist: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The arcs between correction points (not into B, not out of A) by target, as CSR:
+    (row pointers per target, sources, lengths), in numpy (``cost_to_go_kernel.reverse_arcs``
+    groups them compiled, over the renumbered nodes)."""
+    inner = (tgt != graph.end) & (src != graph.start)
+    r_src, r_tgt, r_len = src[inner], tgt[inner], dist[inner]
+    order = np.argsort(r_tgt, kind="stable")
+    r_src, r_tgt, r_len = r_src[order], r_tgt[order], r_len[order]
+    r_ptr = np.zeros(graph.n + 1, dtype=np.int64)
+    np.add.at(r_ptr, r_tgt + 1, 1)
+    np.cumsum(r_ptr, out=r_ptr)
+    return r_ptr, r_src, r_len
 
 
 def _table(

@@ -29,7 +29,9 @@ from collections.abc import Sequence
 import numpy as np
 from scipy.spatial import cKDTree
 
+from gcs_planner.core.bnb.flown import flown_route
 from gcs_planner.core.reach import ReachGraph, build_reach_graph
+from gcs_planner.core.straight_search import search_front
 from gcs_planner.geometry.legs import LegModel, scenario_leg_model
 from gcs_planner.scenario.model import Kind, Scenario
 
@@ -82,11 +84,9 @@ def why_infeasible(
         binding = _binding(scenario, kmax)
         return f"{binding}; as it is, {detail}" if binding else f"no route from A to B: {detail}"
     # Walks with heading-free legs reach B. Routes are simple: do any of them?
-    from gcs_planner.core.search import straight_front
-
-    relaxed = () if simple_infeasible else straight_front(scenario, graph, max_corrections).front
+    relaxed = () if simple_infeasible else search_front(scenario, graph, max_corrections).front
     if not relaxed:
-        walk = straight_front(scenario, graph, max_corrections, max_rounds=1).front[0].points
+        walk = search_front(scenario, graph, max_corrections, max_rounds=1).front[0].points
         twice = sorted({scenario.ids[q] for q in walk if walk.count(q) > 1})
         return (
             "every chain of corrections that reaches B within the limits visits a point twice "
@@ -331,10 +331,9 @@ def _around_b(scenario: Scenario, graph: ReachGraph, carried: np.ndarray) -> str
 
 
 def _turns(scenario: Scenario, graph: ReachGraph, model: LegModel, relaxed: Sequence) -> str:
-    """Heading-free routes (``relaxed``, the front of ``search.straight_front``) reach B but no
-    route flown with turns does: the legs that cannot be flown, from the first ones out of A."""
-    from gcs_planner.core.bnb import flown_route
-
+    """Heading-free routes (``relaxed``, the front of ``straight_search.search_front``) reach B
+    but no route flown with turns does: the legs that cannot be flown, from the first ones out
+    of A."""
     R = scenario.params.turn_radius
     xyz, kind_v = scenario.xyz, scenario.kind == Kind.V
     start, end = graph.start, graph.end

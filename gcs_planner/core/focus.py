@@ -1,8 +1,8 @@
 """The points a front route can pass, for the branch and bound on large maps.
 
 The straight search focuses on the ellipsoid with foci A and B that its own bound allows
-(``search._focused``). The branch and bound (turns, the probability objective) can do the same
-once it knows a route s that no front route is longer than:
+(``straight_search._focused``). The branch and bound (turns, the probability objective) can do
+the same once it knows a route s that no front route is longer than:
 
 * s has the fewest corrections any route can have, k: the two-objective front over walks with
   the heading-free lower bounds of the legs (``seeding.certain_front``) has no point with fewer,

@@ -1,14 +1,15 @@
 """Compiled kernels (numba) for dense maps: the reach graph and the straight-leg layered search.
 
-The numpy search in ``search`` materialises every candidate of a layer and sorts them to filter
-dominance; on dense maps (20,000 points: 31 M arcs, over 100 M candidates) that is most of its
-time and memory. Here the same search streams: each candidate is tested at once against the
-labels already kept at its point (a handful on average), so nothing is materialised. The graph
-is built from a uniform grid of cells one reach radius wide instead of a KD-tree pair list.
+The numpy search in ``straight_layers`` materialises every candidate of a layer and sorts them
+to filter dominance; on dense maps (20,000 points: 31 M arcs, over 100 M candidates) that is
+most of its time and memory. Here the same search streams: each candidate is tested at once
+against the labels already kept at its point (a handful on average), so nothing is
+materialised. The graph is built from a uniform grid of cells one reach radius wide instead of a
+KD-tree pair list.
 
-Same model, same answers: ``search.straight_front`` uses these kernels for large scenarios (the
-first round of the decremental relaxation, which has no critical points) and the numpy code
-otherwise; the tests hold both equal to brute force and to each other.
+Same model, same answers: ``straight_search.search_front`` uses these kernels for large
+scenarios (the first round of the decremental relaxation, which has no critical points) and the
+numpy code otherwise; the tests hold both equal to brute force and to each other.
 """
 
 from __future__ import annotations
@@ -278,8 +279,8 @@ def layered_search(
     kmax: int,
     bound: float,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, int, int, int]:
-    """The layered label search of ``search._layered_search`` without critical points; labels
-    that cannot stay below ``bound`` (inf: none known) are dropped. ``to_end`` bounds the
+    """The layered label search of ``straight_layers.layered_round`` without critical points;
+    labels that cannot stay below ``bound`` (inf: none known) are dropped. ``to_end`` bounds the
     length to B from each point; ``into_end`` is its arc into B (inf: none), the completion.
 
     Returns, per improvement of the best complete length at layer k: (k, length, last label);

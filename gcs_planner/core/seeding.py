@@ -65,8 +65,8 @@ def certain_front(
     Not the straight-leg front of a copy with R = 0: airplane legs with R = 0 cannot fly a leg
     too steep for its length, which a helix flies with R > 0, so that front is no floor.
     ``graph``: the scenario's reach graph, when the caller has it already; without one, large
-    maps search only the points that can lie on a front route (``search._focused``) and the
-    graph over every point is made only where that cannot be proven (then returned)."""
+    maps search only the points that can lie on a front route (``straight_search._focused``)
+    and the graph over every point is made only where that cannot be proven (then returned)."""
     res = straight_front(
         scenario,
         graph,

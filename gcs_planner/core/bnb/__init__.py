@@ -19,10 +19,12 @@ dominated by a route already found, so is every flown completion, and the partia
 dropped. The states such a probe expanded are covered too and prune later probes (nogoods).
 
 The parts: ``front`` (``bnb_front``: the floors, the guide, the search over simple routes),
-``search`` (one best-first search, in Python or compiled, and its ending), ``probes``,
-``context`` (what the rounds share, and the ``Options`` they run with), ``incumbents`` (the
-routes found, ``Ceiling``), ``dominance`` (between partial routes at a point) and ``flown``
-(routes flown again under the leg model, independently of the search).
+``search`` (one best-first search, in Python or compiled), ``best_first`` (the Python search's
+steps), ``ending`` (what a search says when it ends), ``probes``, ``open_routes`` (the partial
+routes on a search's heap, and what the search asks a prober), ``context`` (what the rounds
+share, and the ``Options`` they run with), ``incumbents`` (the routes found, ``Ceiling``),
+``dominance`` (between partial routes at a point) and ``flown`` (routes flown again under the
+leg model, independently of the search).
 """
 
 from gcs_planner.core.bnb.context import Options

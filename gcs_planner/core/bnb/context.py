@@ -9,12 +9,12 @@ import os
 import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from gcs_planner.core.bnb.flown import _compiled_flight, flown_route
 from gcs_planner.core.bnb.incumbents import Ceiling, Found
+from gcs_planner.core.bnb.open_routes import Probe
 from gcs_planner.core.budget import Budget
 from gcs_planner.core.cost_to_go import cost_to_go
 from gcs_planner.core.failure_bounds import FailureBounds, failure_bounds
@@ -25,9 +25,6 @@ from gcs_planner.core.route import Leg, evaluate_route
 from gcs_planner.geometry.legs import LegModel, scenario_leg_model
 from gcs_planner.runtime.compile_notice import kernel_cached
 from gcs_planner.scenario.model import Kind, Scenario
-
-if TYPE_CHECKING:
-    from gcs_planner.core.bnb.probes import _Prober
 
 
 @dataclass(frozen=True)
@@ -72,7 +69,7 @@ class Options:
     uncached_trial: int = 20_000
     probes_after_search: bool = False
     # Seconds past the time limit a stopped search may spend telling which of its open partial
-    # routes a found route covers (``_search``'s ending).
+    # routes a found route covers (``best_first._BestFirst.still_open``).
     ending_grace: float = 2.0
 
 
@@ -155,8 +152,9 @@ class _Context:
         self.ceiling: Ceiling | None = None
         # Set on the copy that searches the pair relaxation (``pair_relaxed``).
         self.pair_floor: PairBounds | None = None
-        # Set once the floor is proven: the search over simple routes probes with it.
-        self.prober: _Prober | None = None
+        # Set once the floor is proven: the search over simple routes probes with it
+        # (``probes._Prober``).
+        self.prober: Probe | None = None
         # Queue partial routes by their least open continuation (``_search``): set for the
         # straight-leg search, whose floors and probes (turns) keep the plain order.
         self.open_order = False

@@ -10,7 +10,8 @@ from typing import TYPE_CHECKING
 from gcs_planner.core.bnb.context import _Context
 from gcs_planner.core.bnb.dominance import _dominated_by, _kept, _key
 from gcs_planner.core.bnb.incumbents import _Incumbents
-from gcs_planner.core.bnb.search import MAX_COMPILED_CRITICAL, _Open, _search
+from gcs_planner.core.bnb.open_routes import _Open
+from gcs_planner.core.bnb.search import MAX_COMPILED_CRITICAL, _search
 from gcs_planner.core.budget import Budget
 from gcs_planner.core.failure_bounds import FailureBounds
 
