@@ -72,7 +72,7 @@ def new_labels(route: Partial, f: float) -> Labels:
     vmin = np.inf
     hmin = np.inf
     # The states copied element by element: numba compiles a slice assignment with its
-    # shape-mismatch message, some 2 s of string formatting on the first plan.
+    # shape-mismatch message, string formatting that slows the first plan's compiling.
     for i in range(n0):
         sv[i] = route.sv[i]
         sh[i] = route.sh[i]

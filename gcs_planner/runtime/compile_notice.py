@@ -26,18 +26,18 @@ from typing import Any, TextIO
 
 from gcs_planner.runtime.terminal import on_terminal
 
-# The kernels a plan compiles at its first use, with their compile time in seconds measured
-# from an empty cache (the package's __pycache__ emptied, 2 shared cores, numba 0.68, numba's
-# compile events, which include the kernels each one calls): dataset 2's three-objective plan
-# compiles the search (with the expansion it shares with the probes, ``expand_kernel``, and the
-# airplane legs) and then the probes (17 and 6 s of CPU in that order), a 20,000-point plan
-# fewest_corrections. The airplane legs alone, as a plan flying a route compiles them: 0.5 s.
+# The kernels a command compiles at its first use, with the seconds of CPU their compiling is
+# expected to take (from an empty cache, each with the kernels it calls; how they are measured:
+# docs/benchmarks.md, "The first plan after installing"): the notice tells the user how long a
+# first plan or dry run will be busy. A three-objective plan compiles the search (with the
+# expansion it shares with the probes and the airplane legs), then the probes; a large
+# straight plan fewest_corrections; a plan flying a route the airplane legs alone.
 KERNELS: dict[tuple[str, str], float] = {
     ("gcs_planner.core.probe_kernel", "probe"): 6.0,
     ("gcs_planner.core.kernel", "fewest_corrections"): 11.0,
     ("gcs_planner.geometry.airplane_kernel", "airplane_lengths"): 0.5,
     ("gcs_planner.core.search_kernel", "search"): 17.0,
-    # The compiled flight of the dry run (measured 12.6 s and 2.0 s on the 2-core machine).
+    # The compiled flight of the dry run.
     ("gcs_planner.sim.flight_kernel", "fly_plain"): 12.0,
     ("gcs_planner.sim.flight_kernel", "closest_approach"): 2.0,
 }

@@ -52,8 +52,8 @@ IN_FLIGHT = 10_000
 DEFAULT_WORKERS = 2
 # At most 1/SAVE_BUDGET of the sweep's wall time goes to rewriting the result table.
 SAVE_BUDGET = 50
-# Dask settings of the local cluster the sweep starts (see the module's docstring); measured
-# on 2 cores, an idle cluster's CPU fell from about 14 % of one core to about 5 %.
+# Dask settings of the local cluster the sweep starts (see the module's docstring): an idle
+# cluster's own housekeeping is a share of a small machine's CPU (docs/sweeps.md, "Speed").
 LEAN_CLUSTER = {
     "distributed.worker.profile.interval": "100ms",  # default 10ms
     "distributed.admin.tick.interval": "1s",  # default 20ms; a stall is still reported at 3s
@@ -65,7 +65,7 @@ LEAN_CLUSTER = {
     # Dask starts its workers with MALLOC_TRIM_THRESHOLD_=65536 so that freed memory goes back
     # to the system at once; fixing it also stops glibc from raising its mmap threshold, so
     # every array of the planner above 128 kB is mapped and unmapped afresh: 6-10 % more CPU
-    # per cell (measured: 15 contest-like scenarios, 6.8 s against 7.3 s). Its cells are small;
+    # per cell (docs/sweeps.md). Its cells are small;
     # glibc's own adaptive thresholds serve. (None: Dask leaves the variable out.)
     "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,
 }

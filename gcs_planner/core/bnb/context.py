@@ -37,17 +37,14 @@ class Options:
     # Labels a search over simple routes and its probes spend, per arc of the reach graph,
     # before the failure bounds are made (over the reach graph: their cost-to-go has a copy of
     # each arc per forced failure). A search that proves its front in fewer never pays for
-    # them: dataset 2 with turns proves in about 17,600 probe labels with them, 21,500 without,
-    # and made over the pairs at the first probe they cost a quarter of its time; on random
-    # 1,500 points they cost 0.7 s to save 50 labels.
+    # them, and on large maps their making costs more than the labels they save.
     failure_bounds_per_arc: float = 1.0
     # How many times the heading-free floor's labels the pair floor is expected to need at most.
     pair_floor_cost: int = 4
     # A probe (``_Prober``) gives up after this many labels: the partial route then stays open.
     probe_labels: int = 1000
     # Labels a search over simple routes expands before it probes: a search that proves its
-    # front in fewer never pays for the probes (random 5,000 points, default mode: 4 s, 14 s
-    # probing).
+    # front in fewer never pays for the probes, which on large maps cost more than the search.
     probe_from: int = 200
     # Probes run compiled (``probe_kernel``; False: the Python search), where the critical
     # points fit the kernel's bit masks.
@@ -62,9 +59,8 @@ class Options:
     trial: int = 300
     # The trial when numba has not compiled the search kernel yet (a fresh install): a search
     # that Python proves within this many labels never compiles it, and the probes stay in
-    # Python until the search has compiled. Dataset 2's default plan proves in Python in about
-    # 7 s (6,100 labels and 13,300 probe labels); compiling the search and the probes takes
-    # about 22 s of CPU before it can start (docs/benchmarks.md, "The first plan after
+    # Python until the search has compiled: a first plan that Python proves sooner than numba
+    # compiles does not wait for the compiler (docs/benchmarks.md, "The first plan after
     # installing"). Chosen by ``Options.first_run``.
     uncached_trial: int = 20_000
     probes_after_search: bool = False
