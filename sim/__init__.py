@@ -3,7 +3,8 @@ the flight of the stored mission with INS drift and corrections against its own 
 database.
 
 * ``aircraft``: the point-mass fixed wing, at its true airspeed through the air mass;
-* ``atmosphere``: ISA, EAS to TAS; ``wind``: steady wind and seeded gusts;
+* ``atmosphere``: ISA, EAS to TAS; ``wind``: steady wind, seeded gusts and vertical
+  turbulence (``turbulence``: the Dryden vertical gust of MIL-F-8785C);
 * ``navigators``: one per autopilot (ArduPlane, PX4) on one base, with their parameters;
 * ``guidance``: mode AUTO as ArduPlane or PX4 flies the mission items;
 * ``ins``: the INS estimate the autopilot steers, corrections in the truth;

@@ -10,7 +10,9 @@ ROLL_LIMIT_DEG, PX4 FW_R_LIM), and rolls towards it as a first-order lag of ROLL
 ROLL_RATE_DEG_S (the bank is part of the state, carried from step to step); the bank reached
 turns its heading at g tan(bank) / TAS. The climb rate is clipped to the autopilot's climb and
 sink rates (ArduPlane TECS_CLMB_MAX / TECS_SINK_MAX, PX4 in missions FW_T_CLMB_R_SP /
-FW_T_SINK_R_SP) and flown at once: no pitch dynamics.
+FW_T_SINK_R_SP) and to its pitch limit (TAS sin(TECS_PITCH_MAX / FW_P_LIM_MAX): ``Envelope``)
+and flown at once: no pitch dynamics. Rising or sinking air (sim/turbulence.py) carries the
+aircraft up or down with it.
 
 A step is flown in substeps of at most ROLL_SUBSTEP_S while the bank moves, each integrating the
 air-relative motion exactly on the arc of constant heading rate at the bank reached there, and
@@ -71,6 +73,19 @@ class Envelope:
     bank_limit_deg: float  # >= 90: turns on the spot (straight-leg plans, R = 0)
     climb_rate: float  # m/s, > 0
     sink_rate: float  # m/s, > 0
+    # The pitch limit of auto flight (ArduPlane TECS_PITCH_MAX, PX4 FW_P_LIM_MAX): TECS asks
+    # for a pitch of the climb rate over the TAS and clips it there, so the aircraft climbs
+    # at most TAS sin(limit) (the point mass has no angle of attack: the pitch is its flight
+    # path). >= 90: none.
+    pitch_limit_deg: float = 90.0
+
+    def climb_through_air(self, climb_rate: float, tas: float) -> float:
+        """``climb_rate`` (m/s) within the autopilot's climb and sink rates and its pitch
+        limit at ``tas``."""
+        vz = min(max(climb_rate, -self.sink_rate), self.climb_rate)
+        if self.pitch_limit_deg < 90.0:
+            vz = min(vz, tas * math.sin(math.radians(self.pitch_limit_deg)))
+        return vz
 
     @property
     def free_turn(self) -> bool:
@@ -116,16 +131,18 @@ def arc_step(
     lateral_accel: float,
     climb_rate: float,
     dt: float,
-    wind: tuple[float, float] = (0.0, 0.0),
+    wind: Sequence[float] = (0.0, 0.0),
     eas2tas: float = 1.0,
     heading: float | None = None,
 ) -> AircraftState:
     """Fly ``dt`` seconds at the bank of ``lateral_accel`` taken at once (m/s^2, positive to the
     left: a counter-clockwise turn) and ``climb_rate`` (m/s), both clipped to the envelope,
-    through air moving at ``wind`` (east, north m/s) at EAS2TAS ``eas2tas``: one exact arc. An
-    aircraft without a turn limit (``env.free_turn``) takes ``heading`` as given instead."""
+    through air moving at ``wind`` (east, north m/s, and up when given: the aircraft rises and
+    sinks with the air, its climb rate over the sea the sum) at EAS2TAS ``eas2tas``: one exact
+    arc. An aircraft without a turn limit (``env.free_turn``) takes ``heading`` as given
+    instead."""
     v = env.airspeed * eas2tas
-    vz = min(max(climb_rate, -env.sink_rate), env.climb_rate)
+    vz = env.climb_through_air(climb_rate, v)
     vh = math.sqrt(max(v * v - vz * vz, 0.0))
     psi0 = s.heading if s.heading is not None else s.course
     if env.free_turn:
@@ -136,7 +153,8 @@ def arc_step(
         limit = env.max_lateral_accel
         a = min(max(lateral_accel, -limit), limit)
         w = a / v  # g tan(bank) / TAS with tan(bank) = a / g
-    wx, wy = wind
+    wx, wy = wind[0], wind[1]
+    wz = wind[2] if len(wind) > 2 else 0.0
     if abs(w) < 1e-9:
         psi1 = psi0
         dx = vh * dt * math.cos(psi0)
@@ -150,11 +168,11 @@ def arc_step(
     return AircraftState(
         s.x + dx + wx * dt,
         s.y + dy + wy * dt,
-        s.z + vz * dt,
+        s.z + vz * dt + wz * dt,
         math.atan2(gy, gx),
         s.t + dt,
         bank,
-        vz,
+        vz + wz,
         _wrap(psi1),
         v,
         math.hypot(gx, gy),
@@ -171,16 +189,17 @@ def step(
     lateral_accel: float,
     climb_rate: float,
     dt: float,
-    wind: tuple[float, float] = (0.0, 0.0),
+    wind: Sequence[float] = (0.0, 0.0),
     eas2tas: float = 1.0,
     heading: float | None = None,
 ) -> AircraftState:
     """Fly ``dt`` seconds asking for ``lateral_accel`` (m/s^2, positive to the left: a
     counter-clockwise turn) and ``climb_rate`` (m/s), both clipped to the envelope, through air
-    moving at ``wind`` (east, north m/s) at EAS2TAS ``eas2tas``, the bank rolling from the
-    state's towards the one asked (module docstring). The bank is in the state, so a step can be
-    flown again from any state it returned, shorter (cut at a finish line) or longer. An
-    aircraft without a turn limit (``env.free_turn``) turns on the spot to ``heading``."""
+    moving at ``wind`` (east, north m/s, and up when given) at EAS2TAS ``eas2tas``, the bank
+    rolling from the state's towards the one asked (module docstring). The bank is in the
+    state, so a step can be flown again from any state it returned, shorter (cut at a finish
+    line) or longer. An aircraft without a turn limit (``env.free_turn``) turns on the spot to
+    ``heading``."""
     if env.free_turn:
         return arc_step(s, env, lateral_accel, climb_rate, dt, wind, eas2tas, heading)
     limit = env.bank_limit_deg

@@ -59,8 +59,11 @@ from gcs_planner.sim.flight_records import (
     S_MIN_DIST,
     S_SETTLED,
     S_T,
+    S_TAS,
     S_UX,
     S_UY,
+    S_W1,
+    S_W2,
     S_X,
     S_Y,
     S_Z,
@@ -91,6 +94,7 @@ from gcs_planner.sim.navigator_kernel import (
     record_event,
     track_decision,
     track_demand,
+    vertical_gust,
     waypoint_altitude_ok,
 )
 from gcs_planner.sim.navigators.base import Navigator
@@ -108,17 +112,19 @@ from numba import njit
 
 @njit(cache=True)
 def fly_plain(state: np.ndarray, flight: Flight, cmds: Commands, cmd: int, prev: np.ndarray,
-              mode: int, gusts: Gusts, k: int, ins: Ins, samples: np.ndarray,
-              events: np.ndarray) -> tuple[int, int, int, int, int, int]:  # fmt: skip
+              mode: int, gusts: Gusts, k: int, kv: int, ins: Ins, samples: np.ndarray,
+              events: np.ndarray) -> tuple[int, int, int, int, int, int, int]:  # fmt: skip
     """Fly the steps of command ``cmd`` of ``cmds`` and of the plain waypoints after it (module
     docstring) from ``state`` (updated in place) and the leg's start ``prev`` (updated when a
-    waypoint is reached), in ``mode``, through ``gusts`` from draw ``k``, writing one row per
-    step into ``samples`` and one per decision into ``events`` (time, sample row, seq, EVENT_*,
-    the distance or altitude error its text gives); (steps, next gust draw index, why it
-    stopped: STOP_EVENT, STOP_FULL or STOP_TIME, the active command, its mode, events)."""
+    waypoint is reached), in ``mode``, through ``gusts`` from draw ``k`` (the vertical
+    turbulence's from ``kv``), writing one row per step into ``samples`` and one per decision
+    into ``events`` (time, sample row, seq, EVENT_*, the distance or altitude error its text
+    gives); (steps, next gust draw index, why it stopped: STOP_EVENT, STOP_FULL or STOP_TIME,
+    the active command, its mode, events, next turbulence draw index)."""
     new = np.empty(STATE_SIZE)
     aircraft, rules = flight.aircraft, flight.rules
-    gusty = gusts.sigma > 0
+    # The air changes from step to step (no coarse steps).
+    gusty = gusts.sigma > 0 or gusts.turbulent
     n = 0
     ne = 0
     e2t_z, e2t = math.nan, 1.0
@@ -130,11 +136,14 @@ def fly_plain(state: np.ndarray, flight: Flight, cmds: Commands, cmd: int, prev:
     ox, oy, oz = 0.0, 0.0, 0.0
     while True:
         if n >= samples.shape[0] or ne >= events.shape[0]:
-            return n, k, STOP_FULL, cmd, mode, ne
+            return n, k, STOP_FULL, cmd, mode, ne, kv
         if state[S_T] >= flight.time_limit:
-            return n, k, STOP_TIME, cmd, mode, ne
-        if gusty and k + 2 > gusts.normals.shape[0]:
-            return n, k, STOP_EVENT, cmd, mode, ne  # the Python wind field draws the next batch
+            return n, k, STOP_TIME, cmd, mode, ne, kv
+        # The Python wind field draws the next batch.
+        if gusts.sigma > 0 and k + 2 > gusts.normals.shape[0]:
+            return n, k, STOP_EVENT, cmd, mode, ne, kv
+        if gusts.turbulent and kv + 2 > gusts.vnormals.shape[0]:
+            return n, k, STOP_EVENT, cmd, mode, ne, kv
         cx, cy, cz = cmds.x[cmd], cmds.y[cmd], cmds.z[cmd]
         ax, ay = prev[0], prev[1]
         # Navigator.advance flies on to the next command only when it is a plain waypoint;
@@ -158,7 +167,7 @@ def fly_plain(state: np.ndarray, flight: Flight, cmds: Commands, cmd: int, prev:
             if dist <= acc and waypoint_altitude_ok(rules, abs(ez - cz)):
                 # Navigator.tick: already there, reached at once without a step.
                 if not advances:
-                    return n, k, STOP_EVENT, cmd, mode, ne
+                    return n, k, STOP_EVENT, cmd, mode, ne, kv
                 record_event(events, ne, state[S_T], n - 1, cmds.seq[cmd], EVENT_WITHIN, dist)
                 ne += 1
                 cmd = advance(state, cmds, cmd, prev, ex, ey, ez)
@@ -170,7 +179,9 @@ def fly_plain(state: np.ndarray, flight: Flight, cmds: Commands, cmd: int, prev:
             lateral, climb = altitude_loiter_demand(state, flight, cmds, cmd, ex, ey, ez, max_lat)
         ux, uy, kn = gust(state[S_UX], state[S_UY], gusts, dt, k)
         wx, wy = gusts.wx + ux, gusts.wy + uy
-        step(state, aircraft, lateral, climb, dt, wx, wy, e2t, max_lat, new)
+        w1, w2, wz, kvn = vertical_gust(state[S_W1], state[S_W2], gusts, dt, kv,
+                                        state[S_Z] + flight.alt_offset, state[S_TAS])  # fmt: skip
+        step(state, aircraft, lateral, climb, dt, wx, wy, wz, e2t, max_lat, new)
         crossed = False
         if mode == MODE_TRACK:
             # Navigator.finish_line before and after, on the estimate's offset of the start.
@@ -179,13 +190,13 @@ def fly_plain(state: np.ndarray, flight: Flight, cmds: Commands, cmd: int, prev:
             fx1 = finish_line(nx, ny, cx, cy, ax, ay)
             if fx0 < 0 <= fx1:
                 if not decides:
-                    return n, k, STOP_EVENT, cmd, mode, ne
+                    return n, k, STOP_EVENT, cmd, mode, ne, kv
                 # Navigator.tick stops the step on the finish line.
                 crossed = True
                 cut = dt * fx0 / (fx0 - fx1)
-                step(state, aircraft, lateral, climb, cut, wx, wy, e2t, max_lat, new)
+                step(state, aircraft, lateral, climb, cut, wx, wy, wz, e2t, max_lat, new)
         if ins.present and near_landmark(state, new, ins.landmarks, ins.capture):
-            return n, k, STOP_EVENT, cmd, mode, ne
+            return n, k, STOP_EVENT, cmd, mode, ne, kv
         distance = flown(state, new)
         off_d = distance
         ox, oy, oz = offset(ins, off_d, cos_h, sin_h)
@@ -196,11 +207,12 @@ def fly_plain(state: np.ndarray, flight: Flight, cmds: Commands, cmd: int, prev:
             event = altitude_loiter_decision(new, rules, cmds, cmd, ex, ey, ez, max_lat)
             value = 0.0
         if event != EVENT_NONE and not (advances or (event == EVENT_ALTITUDE and decides)):
-            return n, k, STOP_EVENT, cmd, mode, ne
+            return n, k, STOP_EVENT, cmd, mode, ne, kv
         # The step is kept.
-        keep_step(state, new, min_dist, alt_error, settled, ux, uy, distance, samples[n],
+        keep_step(state, new, min_dist, alt_error, settled, ux, uy, w1, w2, distance, samples[n],
                   aircraft.airspeed, cmds.seq[cmd])  # fmt: skip
         k = kn
+        kv = kvn
         n += 1
         if event != EVENT_NONE:
             record_event(events, ne, state[S_T], n - 1, cmds.seq[cmd], event, value)
@@ -251,12 +263,13 @@ def fly_plain_steps(pilot: Navigator, time_limit: float, cache: dict) -> None:
     if cmds is None:
         cmds = cache["commands"] = commands_record(nav)
     flight = flight_record(nav, time_limit)
-    gusts, k = gusts_record(wind)
+    gusts, k, kv = gusts_record(wind)
     ins_now = ins_record(ins, cache)
     state = state_vector(
         nav,
         (0.0, 0.0) if wind is None else (wind.ux, wind.uy),
         0.0 if ins is None else ins.distance,
+        (0.0, 0.0) if wind is None else (wind.w1, wind.w2),
     )
     prev = np.array(nav.prev, dtype=float)
     events = cache.get("events")
@@ -269,8 +282,8 @@ def fly_plain_steps(pilot: Navigator, time_limit: float, cache: dict) -> None:
         nav.reserve(_BUFFER_STEPS)
         start = nav.n_samples
         rows = nav.track[start : start + _BUFFER_STEPS]
-        n, k, why, k_cmd, mode, ne = fly_plain(
-            state, flight, cmds, k_cmd, prev, mode, gusts, k, ins_now, rows, events
+        n, k, why, k_cmd, mode, ne, kv = fly_plain(
+            state, flight, cmds, k_cmd, prev, mode, gusts, k, kv, ins_now, rows, events
         )
         for e in events[:ne].tolist():
             kind = int(e[E_KIND])
@@ -286,7 +299,7 @@ def fly_plain_steps(pilot: Navigator, time_limit: float, cache: dict) -> None:
     if total == 0 and decided == 0:
         return
     if wind is not None:
-        resume_gusts(wind, float(state[S_UX]), float(state[S_UY]), int(k))
+        resume_gusts(wind, state, int(k), int(kv))
     if ins is not None:
         ins.distance = float(state[S_DISTANCE])
     resume(nav, state, k_cmd, prev, mode, decided > 0)

@@ -40,10 +40,12 @@ MODE_ALTITUDE_LOITER = 1  # circling the waypoint for its altitude
 
 # The flight's state (in and out): the aircraft's (sim/aircraft.py AircraftState, in its
 # order), the navigator's glide slope and track (min_dist, alt_error, settled), the gusts' (the
-# wind field's ux, uy) and the metres flown (the INS's distance).
+# wind field's ux, uy), the metres flown (the INS's distance) and the vertical turbulence's
+# filter (the wind field's w1, w2: sim/turbulence.py).
 S_X, S_Y, S_Z, S_COURSE, S_T, S_BANK, S_CLIMB, S_HEADING, S_TAS, S_GS = range(10)
 S_MIN_DIST, S_ALT_ERROR, S_SETTLED, S_UX, S_UY, S_DISTANCE = range(10, 16)
-STATE_SIZE = 16
+S_W1, S_W2 = range(16, 18)
+STATE_SIZE = 18
 AIRCRAFT_SIZE = 10  # the aircraft's fields, first
 
 # The decisions the kernel made (out), one row each: when, the sample row, the item's seq,
@@ -64,6 +66,7 @@ class Aircraft(NamedTuple):
     bank_limit: float  # deg
     climb_rate: float  # m/s
     sink_rate: float  # m/s
+    pitch_limit: float  # deg (>= 90: none)
     roll_tau: float  # s
     roll_rate: float  # deg/s
     roll_substep: float  # s
@@ -78,6 +81,7 @@ def aircraft_record(env: Envelope) -> Aircraft:
         float(env.bank_limit_deg),
         float(env.climb_rate),
         float(env.sink_rate),
+        float(env.pitch_limit_deg),
         float(ROLL_TAU_S),
         float(ROLL_RATE_DEG_S),
         float(ROLL_SUBSTEP_S),
@@ -106,6 +110,7 @@ class Rules(NamedTuple):
     npfg_period: float  # s
     npfg_damping: float
     npfg_switch_multiplier: float
+    altitude_time_constant: float  # s: TECS_TIME_CONST / FW_T_ALT_TC
 
 
 class Flight(NamedTuple):
@@ -139,13 +144,19 @@ class Commands(NamedTuple):
 
 class Gusts(NamedTuple):
     """The wind field (sim/wind.py ``WindField``): the steady wind (east, north m/s), the gusts'
-    time constant and strength (``sigma`` 0: none) and the batch of normal draws they take."""
+    time constant and strength (``sigma`` 0: none) and the batch of normal draws they take; the
+    vertical turbulence (``turbulent``, sim/turbulence.py): its intensity against altitude
+    (``w_alt`` m, ``w_sigma`` m/s) and its own batch of draws."""
 
     tau: float
     sigma: float
     wx: float
     wy: float
     normals: np.ndarray
+    turbulent: bool
+    w_alt: np.ndarray
+    w_sigma: np.ndarray
+    vnormals: np.ndarray
 
 
 class Ins(NamedTuple):
@@ -166,21 +177,30 @@ class Ins(NamedTuple):
 
 _EMPTY = np.empty(0)
 _EMPTY_XYZ = np.empty((0, 3))
-NO_GUSTS = Gusts(0.0, 0.0, 0.0, 0.0, _EMPTY)
+NO_GUSTS = Gusts(0.0, 0.0, 0.0, 0.0, _EMPTY, False, _EMPTY, _EMPTY, _EMPTY)
 NO_INS = Ins(False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, _EMPTY_XYZ)
 
 
-def gusts_record(wind: WindField | None) -> tuple[Gusts, int]:
-    """The wind field as the kernel reads it, and the index of its next normal draw."""
+def gusts_record(wind: WindField | None) -> tuple[Gusts, int, int]:
+    """The wind field as the kernel reads it, and the indices of its next normal draws: the
+    gusts' and the vertical turbulence's."""
     if wind is None:
-        return NO_GUSTS, 0
-    gusts = Gusts(float(wind.tau), float(wind.sigma), float(wind.wx), float(wind.wy), wind._normals)
-    return gusts, int(wind._k)
+        return NO_GUSTS, 0, 0
+    if wind.turbulent:
+        vertical = (True, wind.w_alt, wind.w_sigma, wind._vnormals)
+    else:
+        vertical = (False, _EMPTY, _EMPTY, _EMPTY)
+    gusts = Gusts(float(wind.tau), float(wind.sigma), float(wind.wx), float(wind.wy),
+                  wind._normals, *vertical)  # fmt: skip
+    return gusts, int(wind._k), int(wind._kv)
 
 
-def resume_gusts(wind: WindField, ux: float, uy: float, k: int) -> None:
-    """The wind field after the kernel flew its gusts to (ux, uy), its next draw ``k``."""
-    wind.ux, wind.uy, wind._k = ux, uy, k
+def resume_gusts(wind: WindField, state: np.ndarray, k: int, kv: int) -> None:
+    """The wind field after the kernel flew its gusts and its turbulence to ``state``'s, their
+    next draws ``k`` and ``kv``."""
+    wind.ux, wind.uy, wind._k = float(state[S_UX]), float(state[S_UY]), k
+    if wind.turbulent:
+        wind.w1, wind.w2, wind._kv = float(state[S_W1]), float(state[S_W2]), kv
 
 
 def ins_busy(ins: InsEstimate) -> bool:

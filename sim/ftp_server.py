@@ -21,8 +21,10 @@ AP_Filesystem_Mission.cpp:
   radio's last RADIO_STATUS has 33 % or less free (``last_txbuf_is_greater(33)``), and a
   session whose reply cannot go for 3 s is closed;
 * CreateFile of mission.dat opens an empty buffer (one upload at a time: another is NAK
-  FailErrno, the errno one the open did not set), WriteFile writes at
-  its offset and is acknowledged with it, and TerminateSession closes the file, which stores
+  FailErrno, the errno one the open did not set), WriteFile writes at its offset and is
+  acknowledged with it, a write past the room the vehicle has is NAK FailErrno ENOSPC
+  (``AP_Filesystem_Mission::write``: the buffer cannot grow; the room here is the largest
+  mission the vehicle stores), and TerminateSession closes the file, which stores
   the mission (``finish_upload``): the header's magic and count must match the bytes, no item
   may be all zeros, every item must be one this vehicle stores, a DO_JUMP target must be
   inside the mission; a failure is NAK FailErrno EINVAL and the mission is left as it was;
@@ -74,6 +76,7 @@ STAT_SIZE = 1024 * 1024  # AP_Filesystem_Mission::stat's fixed size
 BURST_PACKETS = 2000  # GCS_FTP BurstReadFile: transfer_size
 SEND_TIMEOUT_S = 3.0  # FTP_SESSION_TIMEOUT: a reply that cannot go closes the session
 EINVAL = 22
+ENOSPC = 28
 ERRNO_LEFT = 0  # errno as an earlier call left it: a failed open that does not set it
 MAV_CMD_DO_JUMP = 177
 FRAME_BYTES = 12 + 254  # a MAVLink 2 FILE_TRANSFER_PROTOCOL frame (PAYLOAD_SIZE)
@@ -275,6 +278,11 @@ class FtpServer:
                 self._nak(peer, p, ftp.FILE_NOT_FOUND if not s.mode else 1)
                 return
             end = p.offset + len(p.data)
+            if end > self._file_room():
+                # AP_Filesystem_Mission::write grows its buffer to the write's end or fails for
+                # want of memory, errno ENOSPC, which GCS_FTP's WriteFile answers FailErrno.
+                self._nak(peer, p, ftp.FAIL_ERRNO, ENOSPC)
+                return
             if end > len(s.buf):
                 s.buf.extend(bytes(end - len(s.buf)))
             s.buf[p.offset : end] = p.data
@@ -315,6 +323,12 @@ class FtpServer:
             self._serve()
 
     # The mission file -------------------------------------------------------------------------
+    def _file_room(self) -> int:
+        """The most bytes a mission file being written may hold: ArduPilot's bound is its free
+        memory; this vehicle's is the largest mission it stores (its capacity of items), past
+        which the file could not be stored anyway."""
+        return HEADER.size + self.missions.capacity * ITEM.size
+
     def _file(self) -> Reader:
         """The file a read or a CRC sees now: built from the stored mission."""
         return mission_reader(self.missions.mission, self.missions.current)

@@ -9,9 +9,11 @@ equivalent airspeed through the ISA atmosphere (sim/atmosphere.py) and the wind 
 sim/wind.py, steering its INS estimate when an INS is given (sim/ins.py).
 
 Both: DO_CHANGE_SPEED (param2 > 0) changes the airspeed from the next leg on; RTL and LAND end
-the flight (the route is over); unknown items are skipped. Not modelled: roll and pitch
-dynamics, TECS energy exchange (the aircraft climbs at its rate as soon as asked), vertical
-gusts, terrain.
+the flight (the route is over); unknown items are skipped. The altitude is TECS's: the climb
+rate asked is the demand's own plus the height error over the autopilot's time constant
+(TECS_TIME_CONST, FW_T_ALT_TC), within its rates and pitch limit, and the vertical turbulence of
+sim/wind.py moves the aircraft off it. Not modelled: roll and pitch dynamics, TECS's energy
+exchange (the aircraft climbs at the rate asked as soon as asked), terrain.
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ from gcs_planner.sim.aircraft import AircraftState, FlightModelFace
 from gcs_planner.sim.ins import InsEstimate
 from gcs_planner.sim.jsbsim_airframe import AirframeLimit, LegNeed
 from gcs_planner.sim.navigators import NAVIGATORS
+from gcs_planner.sim.navigators.base import Navigator
 from gcs_planner.sim.navigators.commands import (
     DO_CHANGE_SPEED,
     LOITERS,
@@ -54,9 +57,13 @@ from gcs_planner.scenario.georef import LocalFrame
 __all__ = [
     "COARSE_STEPS", "DEFAULT_STEP_S", "DO_CHANGE_SPEED", "L1_DAMPING", "L1_PERIOD_S", "LOITERS",
     "NAV_LAND", "NAV_LOITER_TIME", "NAV_LOITER_TO_ALT", "NAV_LOITER_TURNS", "NAV_LOITER_UNLIM",
-    "NAV_RETURN_TO_LAUNCH", "NAV_TAKEOFF", "NAV_WAYPOINT", "AutopilotParams", "Event", "Flight",
-    "NavCommand", "WindModel", "fly", "nav_commands", "turn_radius_flown",
+    "NAV_RETURN_TO_LAUNCH", "NAV_TAKEOFF", "NAV_WAYPOINT", "ENDURANCE_ENDED", "AutopilotParams",
+    "Event", "Flight", "NavCommand", "WindModel", "fly", "nav_commands", "turn_radius_flown",
 ]  # fmt: skip
+
+
+# Why a flight ended when its endurance ran out (``fly``'s ``endurance``).
+ENDURANCE_ENDED = "endurance"
 
 
 @dataclass(frozen=True)
@@ -71,7 +78,9 @@ class Flight:
     airspeed: np.ndarray  # m/s, equivalent (what the autopilot holds)
     current: np.ndarray  # seq of the active item at each sample
     events: tuple[Event, ...]
-    ended: str  # why the flight ended: "mission end", "loiter at end", "landing", "time limit"
+    # why the flight ended: "mission end", "loiter at end", "landing", "time limit", "lost",
+    # ENDURANCE_ENDED
+    ended: str
     notes: tuple[str, ...] = field(default=())
     heading: np.ndarray | None = None  # rad: through the air (differs from course in wind)
     tas: np.ndarray | None = None  # m/s, true airspeed
@@ -175,6 +184,7 @@ def fly(
     compiled: bool = True,
     commands: Sequence[NavCommand] | None = None,
     flight_model: FlightModelFace | None = None,
+    endurance: float | None = None,
 ) -> Flight:
     """Fly the stored ``items`` in mode AUTO from ``start`` (local frame) at ``profile``'s cruise
     airspeed (EAS) under ``flavour``'s navigator with the autopilot ``params`` (by default its
@@ -200,6 +210,10 @@ def fly(
     point mass (compiled as without a model). The legs are checked against the airframe first
     (``Flight.limits``), and an airframe that cannot be trimmed at the start is not flown
     (``ended`` "cannot be flown").
+
+    ``endurance`` (s): the flight the aircraft's battery or fuel gives from the start; past it
+    the low-battery failsafe (ArduPlane BATT_FS_LOW_ACT, PX4 COM_LOW_BAT_ACT) ends the mission
+    where the aircraft is (``ended`` ENDURANCE_ENDED).
     """
     ap = params or AutopilotParams(flavour=flavour, loiter_radius=profile.turn_radius)
     if commands is None:
@@ -244,21 +258,7 @@ def fly(
         ins=ins,
         airframe=airframe,
     )
-    pilot.record()
-    going = pilot.advance()
-    cache: dict = {}
-    while going:
-        if compiled:
-            flight_kernel.fly_plain_steps(pilot, time_limit, cache)
-        if ins is not None and getattr(ins, "lost", False):
-            # Lost on arrival at a correction landmark: nothing after it counts.
-            pilot.ended = "lost"
-            break
-        if pilot.s.t >= time_limit:
-            pilot.ended = "time limit"
-            pilot.event(pilot.cmds[pilot.k].seq, "end", f"still flying after {time_limit:.0f} s")
-            break
-        going = pilot.tick()
+    _fly_mission(pilot, ins, compiled, time_limit, endurance)
     arr = np.asarray(pilot.samples, float)
     return Flight(
         t=arr[:, 0],
@@ -280,6 +280,40 @@ def fly(
         limits=tuple(limits),
         shortfalls=_shortfalls(airframe, arr),
     )
+
+
+def _fly_mission(
+    pilot: Navigator,
+    ins: InsEstimate | None,
+    compiled: bool,
+    time_limit: float,
+    endurance: float | None,
+) -> None:
+    """Fly ``pilot``'s mission from its first item until it ends, is lost on arrival at a
+    landmark, runs out of ``endurance`` (s) or reaches ``time_limit`` (s); the plain steps in
+    the compiled flight when ``compiled``."""
+    pilot.record()
+    going = pilot.advance()
+    cache: dict = {}
+    stop_at = time_limit if endurance is None else min(time_limit, endurance)
+    while going:
+        if compiled:
+            flight_kernel.fly_plain_steps(pilot, stop_at, cache)
+        if ins is not None and getattr(ins, "lost", False):
+            # Lost on arrival at a correction landmark: nothing after it counts.
+            pilot.ended = "lost"
+            break
+        if endurance is not None and pilot.s.t >= endurance:
+            pilot.ended = ENDURANCE_ENDED
+            pilot.event(pilot.cmds[pilot.k].seq, "end",
+                        f"out of endurance after {endurance / 60:g} min: the low-battery "
+                        "failsafe ends the mission")  # fmt: skip
+            break
+        if pilot.s.t >= time_limit:
+            pilot.ended = "time limit"
+            pilot.event(pilot.cmds[pilot.k].seq, "end", f"still flying after {time_limit:.0f} s")
+            break
+        going = pilot.tick()
 
 
 def _shortfalls(airframe: object, samples: np.ndarray) -> tuple[str, ...]:

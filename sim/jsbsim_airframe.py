@@ -4,9 +4,9 @@ The point mass (sim/aircraft.py) banks and climbs the instant its guidance asks.
 navigators (sim/navigators/: L1 / npfg lateral acceleration, the climb-rate target of the glide
 slope) fly a JSBSim airframe (``pip install '.[jsbsim]'``; the aircraft shipped with the
 ``jsbsim`` package, the c172x by default) through the ISA atmosphere (JSBSim's own standard
-atmosphere) and the dry run's wind and gusts (sim/wind.py, set as JSBSim's wind every outer
-step). Between the navigator's steps an autopilot of the usual shape runs at the FDM's rate
-(``RATE_HZ``):
+atmosphere) and the dry run's wind, gusts and vertical turbulence (sim/wind.py, set as
+JSBSim's wind every outer step). Between the navigator's steps an autopilot of the usual shape
+runs at the FDM's rate (``RATE_HZ``):
 
 * lateral: the lateral acceleration a becomes a bank command -atan(a / g) within the roll limit
   (ArduPlane ROLL_LIMIT_DEG, PX4 FW_R_LIM); a PD loop on the roll angle drives the ailerons, a
@@ -69,8 +69,8 @@ THR_KP, THR_KI = 2.0, 0.5  # throttle per unit of specific energy rate error (ra
 PITCH_B_KP, PITCH_B_KI = 2.0, 0.3  # pitch (rad) per unit of balance rate error
 # The airspeed rate the energy loops read, low-passed (s): gusts make it jump every step.
 VDOT_TAU_S = 1.0
-CLIMB_SLEW = 3.0  # m/s^2: how fast the climb demand may change (slower oscillates with the
-# navigators' 1 s altitude loop at their 0.5 s step)
+CLIMB_SLEW = 3.0  # m/s^2: how fast the climb demand may change (slower oscillated with the
+# navigators' altitude loop when it was 1 s, at their 0.5 s step)
 # In flight, a shortfall held this long is reported (seconds), and how far off counts.
 SHORTFALL_S = 10.0
 AIRSPEED_SHORT_MPS = 3.0
@@ -244,7 +244,7 @@ class JSBSimAirframe:
         self._node = {key: pm.get_node(name) for key, name in _NODES.items()}
         self.i_roll = 0.0
         self.phi_demand = 0.0
-        self.wind = wind
+        self.wind = (float(wind[0]), float(wind[1]), 0.0)
         self.x, self.y, self.t = start.x, start.y, start.t
         self.vz_demand = 0.0
         self.i_thr = 0.0
@@ -302,6 +302,10 @@ class JSBSimAirframe:
         # A banked wing needs more lift: a little more pitch in the turn.
         turn = (1.0 / max(math.cos(phi), 0.3) - 1.0) * max(self.trim.theta, 0.03)
         theta_c = self.trim.theta + w_h * gamma_c + PITCH_B_KP * e_bal + self.i_pitch + turn
+        if env.pitch_limit_deg < 90.0:
+            # TECS clips its pitch demand at the limit of auto flight (TECS_PITCH_MAX,
+            # FW_P_LIM_MAX).
+            theta_c = min(theta_c, math.radians(env.pitch_limit_deg))
         q = n["q"].get_double_value()
         n["elevator"].set_double_value(_clip(-(PITCH_KP * (theta_c - theta) - PITCH_KD * q)))
 
@@ -312,12 +316,13 @@ class JSBSimAirframe:
         lateral_accel: float,
         climb_rate: float,
         dt: float,
-        wind: tuple[float, float] = (0.0, 0.0),
+        wind: Sequence[float] = (0.0, 0.0),
         eas2tas: float = 1.0,
         heading: float | None = None,
     ) -> AircraftState:
-        """Fly ``dt`` seconds (whole FDM steps) towards the navigator's demands; ``s`` is the
-        state returned last (JSBSim holds the truth)."""
+        """Fly ``dt`` seconds (whole FDM steps) towards the navigator's demands through
+        ``wind`` (east, north, and up in turbulence, m/s); ``s`` is the state returned last
+        (JSBSim holds the truth)."""
         f = self.fdm
         limit = math.radians(min(env.bank_limit_deg, 89.0))
         phi_c = min(max(-math.atan(lateral_accel / G), -limit), limit)
@@ -328,11 +333,15 @@ class JSBSimAirframe:
         # The wind moves from the last step's to this one's over the step's FDM steps: set
         # at once, a gust's change would be a jump in airspeed that the energy loops (which
         # differentiate it) read as a violent deceleration.
-        (w0x, w0y), self.wind = self.wind, wind
+        # The vertical air (sim/turbulence.py) reaches the airframe as JSBSim's wind down: it
+        # changes the angle of attack and the lift, and the inner loops fly it out.
+        w1 = (float(wind[0]), float(wind[1]), float(wind[2]) if len(wind) > 2 else 0.0)
+        (w0x, w0y, w0z), self.wind = self.wind, w1
         for i in range(n):
             u = (i + 1) / n
-            f["atmosphere/wind-east-fps"] = (w0x + (wind[0] - w0x) * u) / FT
-            f["atmosphere/wind-north-fps"] = (w0y + (wind[1] - w0y) * u) / FT
+            f["atmosphere/wind-east-fps"] = (w0x + (w1[0] - w0x) * u) / FT
+            f["atmosphere/wind-north-fps"] = (w0y + (w1[1] - w0y) * u) / FT
+            f["atmosphere/wind-down-fps"] = -(w0z + (w1[2] - w0z) * u) / FT
             self._control(env, phi_c, vz_c, h)
             f.run()
             self.x += east.get_double_value() * FT * h
@@ -510,7 +519,8 @@ class CheckedPointMass:
 
     def describe(self) -> str:
         return (
-            f"point mass (rolls into its turns; climbs at the autopilot's rates at once), each "
+            f"point mass (rolls into its turns; climbs at the autopilot's rates within its pitch "
+            f"limit), each "
             f"leg checked before the flight against JSBSim {self.checker.aircraft}'s trims at "
             "its altitude (engine power, speed range, ceiling)"
         )

@@ -184,6 +184,23 @@ def _announce(
             r[1], r[2] = now + REPORT_REPEAT_S, r[2] - 1
 
 
+def start_flight(vehicle: Any, seed: int) -> LiveFlight:
+    """The flight of ``vehicle``'s stored mission (a sim.vehicle.MockVehicle with a scenario)
+    from A, with its parameters, wind and landmark database."""
+    scenario = vehicle.scenario
+    return LiveFlight(
+        vehicle.mission,
+        scenario,
+        flavour=vehicle.flavour,
+        autopilot=AutopilotParams.from_parameters(vehicle.flavour, vehicle.parameters),
+        profile=replace(scenario.vehicle, cruise_airspeed=vehicle.cruise_speed),
+        capture_radius=vehicle.capture_radius,
+        rng=np.random.default_rng(seed),
+        navigate_on_estimate=vehicle.navigate_on_estimate,
+        wind=vehicle.wind,
+    )
+
+
 def fly_live(vehicle: Any, *, seed: int = 0, time_scale: float | None = None) -> LiveReport:
     """Fly ``vehicle``'s stored mission (a sim.vehicle.MockVehicle with a scenario), taking the
     uploads and set-current commands that arrive meanwhile."""
@@ -191,18 +208,7 @@ def fly_live(vehicle: Any, *, seed: int = 0, time_scale: float | None = None) ->
     scale = float(time_scale or vehicle.speedup or DEFAULT_TIME_SCALE)
     server = vehicle.missions
     changes: queue.SimpleQueue = queue.SimpleQueue()
-    profile = replace(scenario.vehicle, cruise_airspeed=vehicle.cruise_speed)
-    flight = LiveFlight(
-        vehicle.mission,
-        scenario,
-        flavour=vehicle.flavour,
-        autopilot=AutopilotParams.from_parameters(vehicle.flavour, vehicle.parameters),
-        profile=profile,
-        capture_radius=vehicle.capture_radius,
-        rng=np.random.default_rng(seed),
-        navigate_on_estimate=vehicle.navigate_on_estimate,
-        wind=vehicle.wind,
-    )
+    flight = start_flight(vehicle, seed)
     frame = scenario_frame(scenario)
     delta = flight.params.delta
     met: list[str] = []

@@ -1,7 +1,8 @@
 """The navigators' formulas compiled (numba), for the compiled flight (sim/flight_kernel.py): the
-acceptance radius, the glide slope, L1 on the line and on the circle, the gusts, the INS
-estimate's offset, and the decisions between plain waypoints, each with the same formulas in the
-same order as the Python navigator it names (sim/navigators/), so the flights are the same.
+acceptance radius, the glide slope, L1 on the line and on the circle, the gusts and the vertical
+turbulence, the INS estimate's offset, and the decisions between plain waypoints, each with the
+same formulas in the same order as the Python navigator it names (sim/navigators/), so the
+flights are the same.
 
 The autopilot's rules are read from its record's traits (sim/flight_records.py ``Rules``), the
 mission's commands from ``Commands``, the flight's state from its vector (``S_*``).
@@ -44,6 +45,8 @@ from gcs_planner.sim.flight_records import (
     S_TAS,
     S_UX,
     S_UY,
+    S_W1,
+    S_W2,
     S_X,
     S_Y,
     S_Z,
@@ -53,7 +56,7 @@ from gcs_planner.sim.flight_records import (
     Ins,
     Rules,
 )
-from gcs_planner.sim.navigators.base import ALTITUDE_TIME_CONSTANT_S, COARSE_STEPS
+from gcs_planner.sim.navigators.base import COARSE_STEPS
 from gcs_planner.sim.navigators.px4 import (
     ALTITUDE_ACCEPTANCE_M,
     EXIT_COURSE_DEG,
@@ -62,13 +65,21 @@ from gcs_planner.sim.navigators.px4 import (
 )
 from gcs_planner.sim.navigators.steering import L1_DAMPING, L1_PERIOD_S
 from gcs_planner.sim.point_mass_kernel import wrap
+from gcs_planner.sim.turbulence import (
+    FT,
+    LOW_ALTITUDE_FT,
+    LOWEST_HEIGHT_FT,
+    MEDIUM_ALTITUDE_FT,
+    SCALE_LENGTH_HIGH_FT,
+    SQRT3,
+)
 from numba import njit
 
 
 @njit(cache=True, inline="always")
 def altitude_gain_dt(flight: Flight) -> float:
     """Navigator._altitude_gain_dt: the time over which an altitude error is flown out."""
-    return max(ALTITUDE_TIME_CONSTANT_S * 0.2, flight.dt)
+    return max(flight.rules.altitude_time_constant, flight.dt)
 
 
 @njit(cache=True, inline="always")
@@ -164,7 +175,7 @@ def track_demand(state: np.ndarray, flight: Flight, cmds: Commands, j: int, prev
     ):
         dt = coarse
         # Navigator.tick: the altitude error flown out over the coarse step.
-        climb += alt_error * (1.0 / coarse - 1.0 / gain)
+        climb += alt_error * (-math.expm1(-coarse / gain) / coarse - 1.0 / gain)
     return lateral, climb, dt, min_dist, alt_error, settled
 
 
@@ -208,6 +219,51 @@ def gust(ux: float, uy: float, gusts: Gusts, dt: float, k: int) -> tuple[float, 
         uy = uy * a + b * gusts.normals[k + 1]
         k += 2
     return ux, uy, k
+
+
+@njit(cache=True, inline="always")
+def scale_length_w(altitude_m: float) -> float:
+    """sim/turbulence.py scale_length_w."""
+    h = max(altitude_m / FT, LOWEST_HEIGHT_FT)
+    if h <= LOW_ALTITUDE_FT:
+        length = h
+    elif h <= MEDIUM_ALTITUDE_FT:
+        share = (h - LOW_ALTITUDE_FT) / (MEDIUM_ALTITUDE_FT - LOW_ALTITUDE_FT)
+        length = LOW_ALTITUDE_FT + share * (SCALE_LENGTH_HIGH_FT - LOW_ALTITUDE_FT)
+    else:
+        length = SCALE_LENGTH_HIGH_FT
+    return length * FT
+
+
+@njit(cache=True, inline="always")
+def dryden_step(x1: float, x2: float, du: float, n1: float, n2: float) -> tuple[float, float]:
+    """sim/turbulence.py dryden_step."""
+    if du <= 0.0:
+        return x1, x2
+    e = math.exp(-du)
+    y = 2.0 * du
+    e2 = math.exp(-y)
+    grown = -math.expm1(-y)
+    q11 = 0.5 * grown
+    q12 = 0.25 * (grown - y * e2)
+    q22 = 0.25 * (grown - e2 * (y + 0.5 * y * y))
+    l11 = math.sqrt(q11)
+    l21 = q12 / l11
+    l22 = math.sqrt(max(q22 - l21 * l21, 0.0))
+    return e * x1 + l11 * n1, e * (du * x1 + x2) + l21 * n1 + l22 * n2
+
+
+@njit(cache=True, inline="always")
+def vertical_gust(w1: float, w2: float, gusts: Gusts, dt: float, kv: int, altitude_msl: float,
+                  tas: float) -> tuple[float, float, float, int]:  # fmt: skip
+    """WindField.vertical over ``dt`` at ``altitude_msl`` and ``tas`` from the filter's state
+    (w1, w2), drawing from ``kv`` on: (w1, w2, the vertical gust m/s up, next draw)."""
+    if not gusts.turbulent:
+        return w1, w2, 0.0, kv
+    du = dt * max(tas, 1.0) / scale_length_w(altitude_msl)
+    w1, w2 = dryden_step(w1, w2, du, gusts.vnormals[kv], gusts.vnormals[kv + 1])
+    sigma = np.interp(altitude_msl, gusts.w_alt, gusts.w_sigma)
+    return w1, w2, sigma * (SQRT3 * w1 + (1.0 - SQRT3) * w2), kv + 2
 
 
 @njit(cache=True, inline="always")
@@ -302,14 +358,15 @@ def altitude_loiter_decision(new: np.ndarray, rules: Rules, cmds: Commands, j: i
 
 @njit(cache=True, inline="always")
 def keep_step(state: np.ndarray, new: np.ndarray, min_dist: float, alt_error: float,
-              settled: float, ux: float, uy: float, distance: float, row: np.ndarray,
-              airspeed: float, seq: int) -> None:  # fmt: skip
+              settled: float, ux: float, uy: float, w1: float, w2: float, distance: float,
+              row: np.ndarray, airspeed: float, seq: int) -> None:  # fmt: skip
     """The step to ``new`` kept: the state moves on, and its sample (Navigator.record: t, x, y,
     z, course, bank, climb, EAS, seq, heading, TAS, ground speed) is written into ``row``."""
     for i in range(AIRCRAFT_SIZE):
         state[i] = new[i]
     state[S_MIN_DIST], state[S_ALT_ERROR], state[S_SETTLED] = min_dist, alt_error, settled
     state[S_UX], state[S_UY], state[S_DISTANCE] = ux, uy, distance
+    state[S_W1], state[S_W2] = w1, w2
     row[0], row[1], row[2], row[3] = state[S_T], state[S_X], state[S_Y], state[S_Z]
     row[4], row[5], row[6] = state[S_COURSE], state[S_BANK], state[S_CLIMB]
     row[7] = airspeed

@@ -61,12 +61,16 @@ def max_lateral(bank_deg: float) -> float:
 
 @njit(cache=True)
 def arc_step(s: np.ndarray, aircraft: Aircraft, lateral: float, climb: float, dt: float,
-             wx: float, wy: float, e2t: float, limit: float, out: np.ndarray) -> None:  # fmt: skip
+             wx: float, wy: float, wz: float, e2t: float, limit: float,
+             out: np.ndarray) -> None:  # fmt: skip
     """sim/aircraft.py arc_step, for an aircraft with a turn limit (``limit``: its largest
-    lateral acceleration, max_lateral of its roll limit); writes the new state's aircraft fields
-    into ``out``, which may be ``s`` (each field is read before it is written)."""
+    lateral acceleration, max_lateral of its roll limit), through air moving at (wx, wy, wz)
+    (east, north, up); writes the new state's aircraft fields into ``out``, which may be ``s``
+    (each field is read before it is written)."""
     v = aircraft.airspeed * e2t
     vz = min(max(climb, -aircraft.sink_rate), aircraft.climb_rate)
+    if aircraft.pitch_limit < 90.0:
+        vz = min(vz, v * math.sin(math.radians(aircraft.pitch_limit)))
     vh = math.sqrt(max(v * v - vz * vz, 0.0))
     psi0 = s[S_HEADING]
     a = min(max(lateral, -limit), limit)
@@ -82,11 +86,11 @@ def arc_step(s: np.ndarray, aircraft: Aircraft, lateral: float, climb: float, dt
     gx, gy = vh * math.cos(psi1) + wx, vh * math.sin(psi1) + wy
     out[S_X] = s[S_X] + dx + wx * dt
     out[S_Y] = s[S_Y] + dy + wy * dt
-    out[S_Z] = s[S_Z] + vz * dt
+    out[S_Z] = s[S_Z] + vz * dt + wz * dt
     out[S_COURSE] = math.atan2(gy, gx)
     out[S_T] = s[S_T] + dt
     out[S_BANK] = -math.degrees(math.atan(a / G))
-    out[S_CLIMB] = vz
+    out[S_CLIMB] = vz + wz
     out[S_HEADING] = wrap(psi1)
     out[S_TAS] = v
     out[S_GS] = math.hypot(gx, gy)
@@ -94,9 +98,10 @@ def arc_step(s: np.ndarray, aircraft: Aircraft, lateral: float, climb: float, dt
 
 @njit(cache=True)
 def step(s: np.ndarray, aircraft: Aircraft, lateral: float, climb: float, dt: float, wx: float,
-         wy: float, e2t: float, limit: float, out: np.ndarray) -> None:  # fmt: skip
+         wy: float, wz: float, e2t: float, limit: float, out: np.ndarray) -> None:  # fmt: skip
     """sim/aircraft.py step (the bank rolling towards the one asked, in substeps), for an
-    aircraft with a turn limit; writes the new state's aircraft fields into ``out``."""
+    aircraft with a turn limit, through air moving at (wx, wy, wz); writes the new state's
+    aircraft fields into ``out``."""
     bank_limit = aircraft.bank_limit
     tau = aircraft.roll_tau
     asked = min(max(-math.degrees(math.atan(lateral / G)), -bank_limit), bank_limit)
@@ -110,16 +115,16 @@ def step(s: np.ndarray, aircraft: Aircraft, lateral: float, climb: float, dt: fl
             and abs(gap) * dt <= aircraft.roll_one_arc):  # fmt: skip
         decay = math.exp(-dt / tau)
         mean = asked + gap * tau * (1.0 - decay) / dt
-        arc_step(s, aircraft, -G * math.tan(math.radians(mean)), climb, dt, wx, wy, e2t, limit,
-                 out)  # fmt: skip
+        arc_step(s, aircraft, -G * math.tan(math.radians(mean)), climb, dt, wx, wy, wz, e2t,
+                 limit, out)  # fmt: skip
         out[S_BANK] = asked + gap * decay
         return
     src = s
     for i in range(n):
         if abs(asked - bank) <= aircraft.roll_settled:
-            arc_step(src, aircraft, lateral, climb, dt - i * h, wx, wy, e2t, limit, out)
+            arc_step(src, aircraft, lateral, climb, dt - i * h, wx, wy, wz, e2t, limit, out)
             return
         bank += min(max((asked - bank) * keep, -most), most)
-        arc_step(src, aircraft, -G * math.tan(math.radians(bank)), climb, h, wx, wy, e2t, limit,
-                 out)  # fmt: skip
+        arc_step(src, aircraft, -G * math.tan(math.radians(bank)), climb, h, wx, wy, wz, e2t,
+                 limit, out)  # fmt: skip
         src = out

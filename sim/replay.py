@@ -156,9 +156,11 @@ def _monte_carlo(
     runs: int,
     seed: int,
     confidence: float,
+    spent: str = "",
 ) -> MonteCarloSummary:
     """The Monte Carlo of ``runs`` replays: over the one flight ``path`` when every flight is
-    the same (still air, the truth flown), else each run flown on its own."""
+    the same (still air, the truth flown), else each run flown on its own. ``spent``: why the
+    one flight was lost when its endurance ran out before B (every run is, by the flight)."""
     if not (wind.still and not setup.navigate_on_estimate):
         return monte_carlo_flights(setup, wind, runs, seed, confidence)
     mc = monte_carlo(
@@ -172,6 +174,13 @@ def _monte_carlo(
             lost_runs=tuple(
                 replace(r, missed=True, missed_ids=tuple(m.id for m in missed))
                 for r in mc.lost_runs
+            ),
+        )  # fmt: skip
+    if spent:  # one flight for every run: out of endurance before B, every run is lost by it
+        mc = replace(
+            mc, flight_losses=runs - mc.successes, correction_losses=0,
+            lost_runs=tuple(
+                replace(r, reason=spent, out_of_endurance=True) for r in mc.lost_runs
             ),
         )  # fmt: skip
     return mc
@@ -198,6 +207,7 @@ def replay(
     error_unit: float = DEFAULT_ERROR_UNIT_M,
     compiled: bool = True,
     flight_model: object | None = None,
+    endurance: float | None = None,
 ) -> ReplayReport:
     """Fly the stored ``items`` and replay the INS against the landmark database ``scenario``.
 
@@ -218,6 +228,8 @@ def replay(
     False flies all of them in the Python navigators, the reference the kernel is tested on.
     ``flight_model`` (sim/jsbsim_airframe.py ``FlightModel``) flies JSBSim instead of the point
     mass (as deterministic: a still-air flight on the truth is flown once for every run).
+    ``endurance`` (s from A): past it the aircraft's low-battery failsafe ends the mission; a
+    flight that has not come to B by then is lost, by the flight.
     """
     # The aircraft is held to the true limits: the planner's reserve is its own margin.
     params = (params or scenario.params).flown()
@@ -240,7 +252,7 @@ def replay(
         tuple(items), scenario, params, profile, flavour,
         autopilot or guidance.AutopilotParams(flavour, loiter_radius=profile.turn_radius),
         frame, home_at_seq0, home_alt, _course_at_a(scenario), capture_radius, dt,
-        navigate_on_estimate, error_unit, nominal, compiled, flight_model,
+        navigate_on_estimate, error_unit, nominal, compiled, flight_model, endurance,
     )  # fmt: skip
     rng = np.random.default_rng(seed)
     model = None if wind.still else wind.draw(np.random.default_rng([seed, 2**31]))
@@ -249,7 +261,8 @@ def replay(
     k = min(int(np.searchsorted(track.cumulative, path.length, side="right")), len(flight.t) - 1)
     mc = None
     if runs > 0:
-        mc = _monte_carlo(setup, wind, path, encounters, missed, runs, seed + 1, confidence)
+        spent = run.lost_reason if run.out_of_endurance else ""
+        mc = _monte_carlo(setup, wind, path, encounters, missed, runs, seed + 1, confidence, spent)
     return ReplayReport(
         run=run,
         mission_length=nominal.length,

@@ -59,6 +59,9 @@ class FlightSetup:
     compiled: bool = True  # plain steps in sim/flight_kernel.py; False: the Python reference
     # Another flight model than the point mass (sim/jsbsim_airframe.py FlightModel), or None.
     flight_model: object | None = None
+    # The aircraft's endurance (s from A), past which its low-battery failsafe ends the
+    # mission (sim/guidance.py fly); None: unlimited.
+    endurance: float | None = None
 
     @cached_property
     def mission_landmarks(self) -> list[tuple[int, int]]:
@@ -94,12 +97,14 @@ class FlightSetup:
             home_alt=self.home_alt, course=self.course, dt=self.dt, wind=wind, ins=ins,
             compiled=self.compiled, commands=self.commands,
             flight_model=self.flight_model,  # type: ignore[arg-type]
+            endurance=self.endurance,
         )  # fmt: skip
         track = flown_path(flight)
         b_distance, b_miss = closest_approach(
             track, sc.xyz[sc.end], self.capture_radius, compiled=self.compiled
         )
-        if flight.ended == "lost" and b_miss > self.capture_radius:
+        ended_early = flight.ended in ("lost", guidance.ENDURANCE_ENDED)
+        if ended_early and b_miss > self.capture_radius:
             # Lost on arrival at a landmark before it came to B: the run is the flight up to
             # its loss. Its closest approach to B so far can lie kilometres back (a route that
             # turns away from B), and cutting there would drop the corrections after it (the
@@ -118,14 +123,26 @@ class FlightSetup:
             self.nominal, path, encounters, sc, self.capture_radius, compiled=self.compiled,
             landmarks=self.mission_landmarks,
         )  # fmt: skip
-        if flight.ended == "lost":
-            # The flight ended where it was lost: a landmark whose mission item it had not
-            # reached yet was not missed, just not reached.
+        if ended_early:
+            # The flight ended where it was lost (or out of endurance): a landmark whose
+            # mission item it had not reached yet was not missed, just not reached.
             done = max((e.seq for e in flight.events if e.kind == "reached"), default=-1)
             missed = [m for m in missed if m.seq <= done]
         if any(m.distance <= run.flown_length for m in missed):
             run = replace(run, missed_before_loss=True)
+        if flight.ended == guidance.ENDURANCE_ENDED and not run.reached_b and not run.lost:
+            run = replace(run, out_of_endurance=True, lost_reason=self.spent(path))
         return run, flight, path, encounters, missed
+
+    def spent(self, path: FlightPath) -> str:
+        """Why a flight whose endurance ran out at the end of ``path`` was lost."""
+        left = float(np.linalg.norm(path.points[-1] - self.scenario.xyz[self.scenario.end]))
+        minutes = (self.endurance or 0.0) / 60.0
+        return (
+            f"out of endurance: the {minutes:g} min the aircraft can fly ran out {left:,.0f} m "
+            "from B (the low-battery failsafe, ArduPlane BATT_FS_LOW_ACT / PX4 "
+            "COM_LOW_BAT_ACT, ends the mission)"
+        )
 
 
 def monte_carlo_flights(
@@ -146,7 +163,8 @@ def monte_carlo_flights(
         if not run.arrived:
             failed = tuple(c.id for c in run.corrections if c.succeeded is False)
             before = tuple(m.id for m in missed if m.distance <= run.flown_length)
-            lost.append(LostRun(run.missed_before_loss, failed, k, run.lost_reason, before))
+            lost.append(LostRun(run.missed_before_loss, failed, k, run.lost_reason, before,
+                                run.out_of_endurance))  # fmt: skip
     low, high = wilson_interval(successes, runs, confidence)
     return MonteCarloSummary(
         runs, successes, successes / runs, low, high, confidence, flight_losses,

@@ -125,17 +125,21 @@ class ReplayRun:
     reached_b: bool
     miss_b: float
     missed_before_loss: bool = False  # the flight missed a landmark of the mission before
+    # The aircraft's endurance ran out before it came to B (sim/guidance.py ENDURANCE_ENDED).
+    out_of_endurance: bool = False
 
     @property
     def flight_lost(self) -> bool:
-        """Lost by the flight: a landmark of the mission missed on the way, or a limit passed
-        (or B missed) with no failed correction before it; not chance at unreliable points.
-        The vehicle's own coarse rule: the ground station, which knows the plan, refines it
-        from ``MonteCarloSummary.lost_runs`` (a plan certain to arrive is never lost by its
-        corrections)."""
+        """Lost by the flight: a landmark of the mission missed on the way, the endurance run
+        out before B, or a limit passed (or B missed) with no failed correction before it; not
+        chance at unreliable points. The vehicle's own coarse rule: the ground station, which
+        knows the plan, refines it from ``MonteCarloSummary.lost_runs`` (a plan certain to
+        arrive is never lost by its corrections)."""
         if self.arrived:
             return False
-        return self.missed_before_loss or not any(c.succeeded is False for c in self.corrections)
+        if self.missed_before_loss or self.out_of_endurance:
+            return True
+        return not any(c.succeeded is False for c in self.corrections)
 
 
 @dataclass(frozen=True)
@@ -150,6 +154,7 @@ class LostRun:
     run: int = -1  # its index among the runs (its draws: (seed, run))
     reason: str = ""  # where it was lost and why (ReplayRun.lost_reason)
     missed_ids: tuple[str, ...] = ()  # the landmarks it missed before its loss
+    out_of_endurance: bool = False  # its endurance ran out before B (ReplayRun)
 
 
 @dataclass(frozen=True)

@@ -83,6 +83,13 @@ class SikRadio:
         host, port = self.ground_address
         return f"udpout:{'127.0.0.1' if host == '0.0.0.0' else host}:{port}"
 
+    @property
+    def vehicle_connection(self) -> str:
+        """The connection string a vehicle uses to reach the air radio when the air end listens
+        (``udpin``): it sends to it, as an autopilot writes to its radio's serial port."""
+        host, port = self.air.sock.getsockname()[:2]
+        return f"udpout:{'127.0.0.1' if host == '0.0.0.0' else host}:{port}"
+
     # Lifecycle --------------------------------------------------------------------------------
     def start(self) -> SikRadio:
         if self._thread is None:

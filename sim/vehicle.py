@@ -59,6 +59,9 @@ FLAVOURS = tuple(AUTOPILOTS)  # the autopilots it can be (imported by the CLI an
 # resending on a timeout does so after its timeout (the link's: 1 s) with a new sequence number.
 # Half a second tells the two apart on a busy machine.
 DUPLICATE_WINDOW_S = 0.5
+# A flight switched on board waits this long (wall seconds) for the ground station to cut the
+# link once it has the start's acknowledgement, and is then cut off anyway.
+CUT_WAIT_S = 5.0
 
 
 class _FaultyWriter:
@@ -93,8 +96,8 @@ class MockVehicle:
         faults_in: FaultRates | None = None,
         fault_seed: int = 0,
         signing_key: bytes | None = None,
-        request_timeout: float = 1.0,
-        upload_timeout: float = 8.0,
+        request_timeout: float | None = None,
+        upload_timeout: float | None = None,
         heartbeat_period: float = 1.0,
         capture_radius: float = replay_mod.DEFAULT_CAPTURE_RADIUS_M,
         drop_link_duplicates: bool = True,
@@ -133,6 +136,11 @@ class MockVehicle:
         self.navigate_on_estimate = navigate_on_estimate
         self.wind = wind
         self.last_live: Any = None  # the last live flight's sim.live_vehicle.LiveReport
+        # Live, with an autopilot that runs Lua applets: the applet on its SD card (policy.lua's
+        # text), which then switches the policy on board (sim/onboard_flight.py); and whether
+        # its ground link is cut (nothing sent, nothing heard), as it is from that take-off on.
+        self.applet: str | None = None
+        self.link_cut = False
         self.link = Link(
             connection,
             baud=baud,
@@ -159,6 +167,7 @@ class MockVehicle:
         self._thread: threading.Thread | None = None
         self._fly_thread: threading.Thread | None = None
         self._stop = threading.Event()
+        self._cut = threading.Event()  # the ground link was cut (cut_link)
         self.statustexts: list[str] = []  # what it announced, for tests and logs
         self.acks_sent = self.missions.acks_sent  # MAV_MISSION_RESULT of every MISSION_ACK
         self.last_report: replay_mod.ReplayReport | None = None
@@ -184,8 +193,8 @@ class MockVehicle:
         self,
         flavour: str,
         capacity: int,
-        request_timeout: float,
-        upload_timeout: float,
+        request_timeout: float | None,
+        upload_timeout: float | None,
         baud: int,
     ) -> None:
         """The parts that serve its messages: missions, parameters, MAVLink FTP."""
@@ -231,6 +240,11 @@ class MockVehicle:
 
     def __exit__(self, *exc: object) -> None:
         self.stop()
+
+    def cut_link(self) -> None:
+        """Cut the ground link: from now on the vehicle sends nothing and hears nothing."""
+        self.link_cut = True
+        self._cut.set()
 
     def request_stop(self) -> None:
         """Ask the loop to end at its next turn; safe from a signal handler."""
@@ -283,7 +297,8 @@ class MockVehicle:
 
     # Sending ----------------------------------------------------------------------------------
     def _send(self, msg: Any) -> None:
-        self.link.send(msg)
+        if not self.link_cut:
+            self.link.send(msg)
 
     def _statustext(self, text: str, severity: int = mavlink.MAV_SEVERITY_INFO) -> None:
         self.statustexts.append(text)
@@ -374,7 +389,7 @@ class MockVehicle:
         the vehicle: it is counted and the loop goes on."""
         try:
             kind = msg.get_type()
-            if not self._for_me(msg):
+            if self.link_cut or not self._for_me(msg):
                 return
             peer = (msg.get_srcSystem(), msg.get_srcComponent())
             if kind in MissionServer.HANDLED:
@@ -488,7 +503,14 @@ class MockVehicle:
         """The flight thread: whatever the flight model raises ends this flight with a
         STATUSTEXT, never the vehicle (which goes on answering and can fly again)."""
         try:
-            if self.live:
+            if self.live and self.applet is not None and self.autopilot.runs_lua_applets:
+                from gcs_planner.sim.onboard_flight import fly_onboard
+
+                # Take-off is when the ground station, its start acknowledged, cuts the link
+                # (or, if it never does, after CUT_WAIT_S): the simulated clock starts there.
+                self._cut.wait(CUT_WAIT_S)
+                fly_onboard(self, seed=self.flight_seed)
+            elif self.live:
                 from gcs_planner.sim.live_vehicle import fly_live
 
                 fly_live(self, seed=self.flight_seed, time_scale=self.speedup)

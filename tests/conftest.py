@@ -3,10 +3,10 @@ from pathlib import Path
 
 import pytest
 
+# The tests' folder on the path, so that a test in any folder under it imports ``support``.
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-SHARED = Path(__file__).resolve().parents[2] / "shared"
-DATA = SHARED / "data" / "gmcm2019f"
+from support.paths import DATA  # noqa: E402 - found through the path set above
 
 
 @pytest.fixture(scope="session")

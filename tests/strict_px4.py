@@ -1,7 +1,11 @@
 """A small vehicle whose mission protocol follows PX4's ``MavlinkMissionManager`` rule by rule
 (src/modules/mavlink/mavlink_mission.cpp, PX4 main), speaking MAVLink 2 over UDP on 127.0.0.1
-with pymavlink, losing a share of the frames each way. For the client's tests: the project's
-mock answers any request in any order, PX4 does not.
+with pymavlink, losing a share of the frames each way. For the client's tests, and kept apart
+from the mock vehicle's PX4 flavour (sim/mission_server.py and its parts, which follow the same
+source) as a second reading of it: tests/test_mock_px4.py runs one script of exchanges against
+both and requires the same answers, so a rule misread in one shows as a difference. This one is
+small enough to read in one sitting and has nothing but the mission manager (no address binding,
+no capacity, no flight), which is why it is not made a thin use of the mock.
 
 The rules kept (each method names the one it follows):
 

@@ -11,7 +11,7 @@ import pytest
 from gcs_planner.sim.aircraft import AircraftState, Envelope, step
 from gcs_planner.sim.guidance import AutopilotParams, fly
 from gcs_planner.sim.wind import WindField, WindModel
-from test_guidance import FRAME, PROFILE, mission
+from support.flights import FRAME, PROFILE, mission
 
 ENV = Envelope(25.0, 45.0, 5.0, 5.0)
 

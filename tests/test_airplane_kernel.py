@@ -5,7 +5,8 @@ them from its first label."""
 from __future__ import annotations
 
 import numpy as np
-from test_probes import assert_same_front, front_of, probed_front, probed_scenario
+from support.enumeration import assert_same_front, front_of, probed_front
+from support.scenarios import probed_scenario
 
 from gcs_planner.core import bnb
 from gcs_planner.core.bnb import Options, flown

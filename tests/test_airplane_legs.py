@@ -3,19 +3,22 @@ geometry, and the search under them against enumeration of every simple route.""
 
 from __future__ import annotations
 
-import dataclasses
 import math
 
 import numpy as np
 import pytest
-from helpers import contest_params
-from test_bnb import assert_front_equals_enumeration, enumerate_front, pareto
+from support.enumeration import (
+    all_routes,
+    assert_front_equals_enumeration,
+    enumerate_front,
+    pareto,
+)
+from support.scenarios import climbing_scenario
 
 from gcs_planner.core.bnb import flown_route
 from gcs_planner.core.planner import plan
 from gcs_planner.geometry.airplane import airplane_leg, airplane_legs, lower_bounds
 from gcs_planner.geometry.trajectory import scenario_trajectory
-from gcs_planner.scenario.generate import random_scenario
 
 
 def fly(leg, step: float = 0.25) -> dict:
@@ -103,29 +106,6 @@ def test_without_a_turning_radius_a_steep_leg_cannot_be_flown() -> None:
     )
     assert legs.length[0] == pytest.approx(math.hypot(1000, 100))
     assert math.isinf(legs.length[1])
-
-
-def climbing_scenario(seed: int):
-    rng = np.random.default_rng(seed)
-    params = contest_params(
-        turn_radius=float(rng.choice([0.0, 200.0, 800.0])),
-        fail_residual=float(rng.uniform(2, 15)),
-        max_climb_angle=float(rng.choice([8.0, 15.0, 25.0])),
-        max_descent_angle=float(rng.choice([8.0, 15.0, 30.0])),
-    )
-    # large altitude differences for the distances, so that helices (or with R = 0,
-    # infeasible legs) occur
-    scenario = random_scenario(
-        int(rng.integers(2, 6)),
-        seed,
-        params=params,
-        box=(16_000, 4_000, 6_000),
-        unreliable_fraction=0.5,
-    )
-    # B well above or below A: the direct leg, and often the whole route, needs a helix
-    xyz = scenario.xyz.copy()
-    xyz[scenario.end, 2] = xyz[scenario.start, 2] + rng.choice([-1, 1]) * rng.uniform(2_500, 5_000)
-    return dataclasses.replace(scenario, xyz=xyz)
 
 
 @pytest.mark.parametrize("probability", [False, True])
@@ -282,8 +262,6 @@ def test_planned_three_objective_front_with_helices_equals_enumeration() -> None
 def test_the_certain_front_floors_every_route_flown_with_helices() -> None:
     """The floor the three-objective search uses bounds every feasible route from below, helix
     legs included (a straight-leg floor made with R = 0 would not: it drops too-steep legs)."""
-    from test_bnb import all_routes
-
     from gcs_planner.core.seeding import certain_front
 
     below = 0

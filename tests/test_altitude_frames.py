@@ -7,7 +7,7 @@ import json
 
 import pytest
 from pymavlink import mavwp
-from test_mission_builder import HOME, make_plan
+from support.missions import HOME, make_plan
 
 from gcs_planner.cli import main
 from gcs_planner.errors import InputError

@@ -11,9 +11,9 @@ import math
 from pathlib import Path
 
 import pytest
-from helpers import corridor_scenario, mixed_scenario
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from support.scenarios import corridor_scenario, mixed_scenario
 
 from benchmarks.fronts import compare
 from benchmarks.paper import check_mapping, map_rows

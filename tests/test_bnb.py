@@ -6,75 +6,12 @@ import itertools
 
 import numpy as np
 import pytest
-from helpers import contest_params, mixed_scenario
+from support.enumeration import assert_front_equals_enumeration, enumerate_straight_front
+from support.scenarios import mixed_scenario, turning_scenario, uncertain_straight_scenario
 
 from gcs_planner.core.bnb import Options, bnb_front, flown_route
 from gcs_planner.core.probability import success_probability
 from gcs_planner.core.search import straight_front
-from gcs_planner.scenario.generate import random_scenario
-from gcs_planner.scenario.model import Parameters
-
-
-def all_routes(scenario):
-    inner = [i for i in range(scenario.n) if i not in (scenario.start, scenario.end)]
-    for k in range(len(inner) + 1):
-        for chain in itertools.permutations(inner, k):
-            yield (scenario.start, *chain, scenario.end)
-
-
-def pareto(points):
-    """Non-dominated (length, corrections, -probability) tuples, by plain pairwise comparison."""
-    keep = []
-    for a in points:
-        dominated = any(
-            all(x <= y for x, y in zip(b, a)) and any(x < y for x, y in zip(b, a)) for b in points
-        )
-        if not dominated and a not in keep:
-            keep.append(a)
-    return sorted(keep, key=lambda t: (t[1], t[0], t[2]))
-
-
-def enumerate_front(scenario, probability: bool):
-    values = []
-    for pts in all_routes(scenario):
-        route = flown_route(scenario, pts)
-        if probability:
-            legs = [s.leg for s in route.stops[1:]]
-            p = success_probability(scenario, pts, legs).probability
-            if p > 0:
-                values.append((round(route.length, 6), route.corrections, round(-p, 12)))
-        elif route.feasible:
-            values.append((round(route.length, 6), route.corrections, 0.0))
-    return pareto(values)
-
-
-def assert_front_equals_enumeration(
-    scenario, probability: bool, seed: int, options: Options | None = None
-):
-    """The branch and bound's front, proven, equal to enumeration of every simple route; returns
-    (the search's result, the enumerated front)."""
-    result = bnb_front(scenario, probability=probability, max_labels=10**6, options=options)
-    assert result.optimal
-    got = [
-        (round(f.length, 6), f.corrections, round(-f.probability, 12) if probability else 0.0)
-        for f in result.front
-    ]
-    want = enumerate_front(scenario, probability)
-    assert [g[1:] for g in got] == [w[1:] for w in want], seed
-    np.testing.assert_allclose([g[0] for g in got], [w[0] for w in want], atol=1e-6)
-    return result, want
-
-
-def turning_scenario(seed: int, radius: float):
-    rng = np.random.default_rng(seed)
-    params = contest_params(turn_radius=radius, fail_residual=float(rng.uniform(2, 15)))
-    return random_scenario(
-        int(rng.integers(2, 6)),
-        seed,
-        params=params,
-        box=(30_000, 8_000, 1_500),
-        unreliable_fraction=0.5,
-    )
 
 
 @pytest.mark.parametrize("probability", [False, True])
@@ -134,46 +71,6 @@ def test_budget_reports_gaps_instead_of_claiming_optimality(dataset_paths) -> No
         assert lb <= exact + 1e-6
         again = flown_route(scenario, f.points)
         assert again.feasible and again.length == pytest.approx(f.length, abs=1e-6)
-
-
-def uncertain_straight_scenario(seed: int):
-    """Small straight-leg scenarios with many unreliable points, dense or corridor-sparse."""
-    rng = np.random.default_rng(10_000 + seed)
-    n = int(rng.integers(1, 6))
-    a1, a2, b1, b2 = rng.uniform(6, 30, 4)
-    params = Parameters(
-        a1,
-        a2,
-        b1,
-        b2,
-        rng.uniform(6, 30),
-        0.001,
-        turn_radius=0.0,
-        p_success=float(rng.choice([0.0, 0.5, 0.8, 0.95])),
-        fail_residual=float(rng.uniform(1, 12)),
-    )
-    length = rng.uniform(8_000, 45_000)
-    width = rng.uniform(0.1, 1.0) if seed % 2 else 0.3
-    return random_scenario(
-        n,
-        seed,
-        params=params,
-        box=(length, length * width, length * 0.05),
-        unreliable_fraction=float(rng.uniform(0.3, 1.0)),
-    )
-
-
-def enumerate_straight_front(scenario):
-    """Every simple route with straight legs: length from the coordinates, probability from the
-    exact chain (0 when the route cannot arrive)."""
-    xyz = scenario.xyz
-    values = []
-    for pts in all_routes(scenario):
-        p = success_probability(scenario, pts).probability
-        if p > 0:
-            length = float(np.linalg.norm(np.diff(xyz[list(pts)], axis=0), axis=1).sum())
-            values.append((round(length, 6), len(pts) - 2, round(-p, 12)))
-    return pareto(values)
 
 
 def test_straight_three_objective_front_equals_enumeration() -> None:

@@ -8,7 +8,8 @@ from __future__ import annotations
 import collections
 import dataclasses
 
-from test_probes import assert_same_front, front_of, probed_front, probed_scenario
+from support.enumeration import assert_same_front, front_of, probed_front
+from support.scenarios import probed_scenario
 
 from gcs_planner.core import probe_kernel
 from gcs_planner.core.bnb import Options, bnb_front

@@ -15,7 +15,8 @@ import io
 import math
 
 import pytest
-from test_bnb import enumerate_front, turning_scenario
+from support.enumeration import enumerate_front
+from support.scenarios import long_corridor_scenario, turning_scenario
 
 from gcs_planner.cli import main
 from gcs_planner.core.bnb import bnb_front
@@ -29,14 +30,6 @@ from gcs_planner.scenario.model import Parameters
 
 THREE = ("length", "corrections", "probability")
 EPS = 1e-9
-
-
-def corridor(seed: int, n: int = 60):
-    """A long narrow corridor: routes of many corrections, several front points."""
-    params = Parameters(25, 15, 20, 25, 30, 0.001, turn_radius=0.0, fail_residual=5.0)
-    return random_scenario(
-        n, seed, params=params, box=(90_000, 6_000, 1_000), unreliable_fraction=0.4
-    )
 
 
 def claims_hold(front, proven, lower_bounds, exact, probability: bool) -> bool:
@@ -85,7 +78,7 @@ def test_a_search_cut_short_never_marks_a_route_optimal_while_the_front_misses_o
 ) -> None:
     hidden = cut = 0
     for seed in range(8):
-        scenario = corridor(seed)
+        scenario = long_corridor_scenario(seed)
         full = bnb_front(scenario, probability=probability, max_labels=None)
         assert full.optimal and all(full.proven)
         for budget in sorted({1, 2, 3, 5, 8, full.labels // 4, full.labels // 2}):
@@ -124,7 +117,7 @@ def test_plan_json_flags_follow_the_settled_rule() -> None:
     """The user-facing flag: plan() cut short, its JSON's "optimal" against the exact front."""
     checked = 0
     for seed in range(6):
-        scenario = corridor(seed)
+        scenario = long_corridor_scenario(seed)
         try:
             full = plan(scenario, objectives=THREE, max_labels=None)
         except InfeasibleError:
@@ -142,7 +135,7 @@ def test_three_objective_front_holds_the_two_objective_fewest_corrections_end() 
     """Seeded by the two-objective front, even a search cut short at once keeps its fewest-
     corrections route (flown, with its probability) or one that dominates it."""
     for seed in range(6):
-        scenario = corridor(seed, n=80)
+        scenario = long_corridor_scenario(seed, n=80)
         try:
             two = plan(scenario, objectives=("length", "corrections"))
         except InfeasibleError:
@@ -162,7 +155,7 @@ def test_three_objective_front_holds_the_two_objective_fewest_corrections_end() 
 
 
 def test_time_limit_zero_stops_before_the_first_label_and_names_the_flag() -> None:
-    scenario = corridor(1)
+    scenario = long_corridor_scenario(1)
     result = plan(scenario, objectives=THREE, max_labels=None, time_limit=0)
     assert not result.optimal
     assert "--time-limit" in result.statement
@@ -189,7 +182,7 @@ def test_time_limit_cuts_the_set_up_short_and_what_it_claims_still_holds() -> No
 
 
 def test_infeasibility_not_proven_names_the_flag_to_raise() -> None:
-    scenario = corridor(2).with_params(turn_radius=200.0)
+    scenario = long_corridor_scenario(2).with_params(turn_radius=200.0)
     with pytest.raises(InfeasibleError, match="not proven.*--max-labels"):
         plan(scenario, objectives=("length", "corrections"), max_labels=0)
     with pytest.raises(InfeasibleError, match="not proven.*--time-limit"):
@@ -198,7 +191,7 @@ def test_infeasibility_not_proven_names_the_flag_to_raise() -> None:
 
 def test_progress_reports_bound_open_routes_and_routes_found() -> None:
     seen: list[Progress] = []
-    scenario = corridor(3)
+    scenario = long_corridor_scenario(3)
     budget = Budget(max_labels=None, progress=seen.append, every=0.0)
     res = bnb_front(scenario, probability=True, budget=budget)
     seen = [p for p in seen if not p.setup]  # the set-up's own reports: see the next test

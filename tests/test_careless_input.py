@@ -14,13 +14,13 @@ from pathlib import Path
 
 import pytest
 from gcs_planner.sim.vehicle import free_udp_port
+from support.paths import MISSIONS
 
 from gcs_planner.cli import main
 from gcs_planner.errors import InputError
 from gcs_planner.scenario.readers import load_scenario
 
-REPO = Path(__file__).resolve().parents[1]
-COAST = REPO / "missions" / "coast" / "scenario.toml"  # plans in about 3 s
+COAST = MISSIONS / "coast" / "scenario.toml"  # plans in about 3 s
 LIMITS = {"alpha1": 25, "alpha2": 15, "beta1": 20, "beta2": 25, "theta": 30, "delta": 0.001}
 FLAGS = [f for k, v in LIMITS.items() for f in (f"--{k}", str(v))]
 TOML = "\n".join(['name = "same"', 'points = "points.csv"', "[parameters]"]) + "\n"

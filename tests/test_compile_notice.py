@@ -12,7 +12,7 @@ import time
 from pathlib import Path
 
 import pytest
-from helpers import write_scenario_csv
+from support.scenarios import write_scenario_csv
 
 from gcs_planner.runtime import compile_notice
 from gcs_planner.scenario.generate import DATASET1, random_scenario

@@ -8,6 +8,8 @@ import math
 
 import numpy as np
 import pytest
+from support.policies import can_fail_at, random_policy
+from support.scenarios import contingency_scenario
 
 from gcs_planner.core.bnb import flown_route, flown_route_legs
 from gcs_planner.core.contingency import Policy, evaluate
@@ -16,48 +18,6 @@ from gcs_planner.core.replan import brute_continuation, replan_on_failure, searc
 from gcs_planner.errors import GcsPlannerError
 from gcs_planner.scenario.generate import random_scenario
 from gcs_planner.scenario.model import Kind, Parameters, Scenario
-
-
-def _scenario(seed: int, radius: float = 0.0, n_max: int = 6, lenient: bool = False) -> Scenario:
-    """Tiny random scenarios with many unreliable points and random limits (mixed_scenario's
-    shapes, but with unreliable_fraction 0.5 so that failures matter). ``lenient`` limits make
-    random policies arrive more often, so that exact probabilities strictly between 0 and 1 are
-    compared, not only 0 and 1."""
-    rng = np.random.default_rng(seed)
-    n = int(rng.integers(2, n_max + 1))
-    low, high = (15, 40) if lenient else (8, 30)
-    a1, a2, b1, b2 = rng.uniform(low, high, 4)
-    params = Parameters(
-        a1, a2, b1, b2, rng.uniform(low, high), 0.001, turn_radius=radius,
-        p_success=float(rng.uniform(0.3, 0.9)), fail_residual=float(rng.uniform(1, 10)),
-    )  # fmt: skip
-    length = rng.uniform(10_000, 40_000)
-    box = (length, length * rng.uniform(0.1, 1.0), length * rng.uniform(0.01, 0.3))
-    return random_scenario(n, seed, params=params, box=box, unreliable_fraction=0.5)
-
-
-def _unreliable(sc: Scenario, j: int) -> bool:
-    return bool(sc.unreliable[j]) and int(sc.kind[j]) in (Kind.V, Kind.H)
-
-
-def _random_policy(sc: Scenario, rng: np.random.Generator) -> Policy:
-    """A random well-formed policy: random simple segments, branching at unreliable points."""
-    corr = [j for j in range(sc.n) if int(sc.kind[j]) in (Kind.V, Kind.H)]
-
-    def node(at: int, visited: set[int]) -> Policy:
-        pts = [at]
-        while True:
-            free = [j for j in corr if j not in visited]
-            if not free or rng.random() < 0.3:
-                pts.append(sc.end)
-                return Policy(tuple(pts))
-            j = int(rng.choice(free))
-            pts.append(j)
-            visited = visited | {j}
-            if _unreliable(sc, j):
-                return Policy(tuple(pts), node(j, visited), node(j, visited))
-
-    return node(sc.start, {sc.start})
 
 
 def _paths(policy: Policy):
@@ -85,7 +45,7 @@ def _fly_reference(sc: Scenario, points, outcomes):
         v_lim, h_lim = p.limits_m(kind)
         if not (v <= v_lim and h <= h_lim):
             return False, flown
-        ok = next(it) if _unreliable(sc, j) else True
+        ok = next(it) if can_fail_at(sc, j) else True
         if kind == Kind.V:
             v = 0.0 if ok else min(v, p.residual_m)
         elif kind == Kind.H:
@@ -124,8 +84,8 @@ def test_evaluate_matches_enumeration(radius: float) -> None:
     rng = np.random.default_rng(7)
     fractional = arrived = 0
     for seed in range(100):
-        sc = _scenario(seed, radius, lenient=True)
-        pol = _random_policy(sc, rng)
+        sc = contingency_scenario(seed, radius, lenient=True)
+        pol = random_policy(sc, rng)
         val = evaluate(sc, pol)
         prob, e_arr, e_flown, longest, corr = _enumerate(sc, pol)
         assert val.probability == pytest.approx(prob, abs=1e-12)
@@ -148,8 +108,8 @@ def test_evaluate_matches_monte_carlo() -> None:
     draws = 20_000
     tested = 0
     for seed in range(200):
-        sc = _scenario(seed, lenient=True)
-        pol = _random_policy(sc, rng)
+        sc = contingency_scenario(seed, lenient=True)
+        pol = random_policy(sc, rng)
         val = evaluate(sc, pol)
         if not 0.05 < val.probability < 0.95 or pol.leaf:
             continue
@@ -187,7 +147,7 @@ def test_evaluate_matches_monte_carlo() -> None:
 def test_from_route_probability_is_the_routes(radius: float) -> None:
     rng = np.random.default_rng(11)
     for seed in range(40):
-        sc = _scenario(seed, radius)
+        sc = contingency_scenario(seed, radius)
         corr = [j for j in range(sc.n) if int(sc.kind[j]) in (Kind.V, Kind.H)]
         k = int(rng.integers(0, len(corr) + 1))
         points = (sc.start, *[int(j) for j in rng.permutation(corr)[:k]], sc.end)
@@ -205,7 +165,7 @@ def test_replan_never_worse(radius: float) -> None:
     rng = np.random.default_rng(5)
     better = 0
     for seed in range(60):
-        sc = _scenario(seed, radius, n_max=6)
+        sc = contingency_scenario(seed, radius, n_max=6)
         corr = [j for j in range(sc.n) if int(sc.kind[j]) in (Kind.V, Kind.H)]
         k = int(rng.integers(0, len(corr) + 1))
         points = (sc.start, *[int(j) for j in rng.permutation(corr)[:k]], sc.end)

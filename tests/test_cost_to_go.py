@@ -5,7 +5,7 @@ from __future__ import annotations
 import itertools
 
 import numpy as np
-from helpers import mixed_scenario
+from support.scenarios import mixed_scenario
 
 from gcs_planner.core.cost_to_go import _suffix_minima, cost_to_go
 from gcs_planner.core.reach import build_reach_graph

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numba
 import numpy as np
-from helpers import mixed_scenario
+from support.scenarios import mixed_scenario
 
 from gcs_planner.core.cost_to_go import cost_to_go
 from gcs_planner.core.reach import build_reach_graph
@@ -35,7 +35,7 @@ def test_compiled_layers_make_the_same_table_over_expanded_graphs(monkeypatch) -
     """The graphs whose nodes are not the points (the pairs of ``pair_bounds``, the copies per
     forced failure of ``failure_bounds``, with their own V flags and start errors), which the
     compiled layers serve on large maps."""
-    from test_probes import probed_scenario
+    from support.scenarios import probed_scenario
 
     from gcs_planner.core import cost_to_go as module
     from gcs_planner.core.failure_bounds import failure_bounds

@@ -10,7 +10,7 @@ import math
 from dataclasses import replace
 
 import pytest
-from conftest import DATA
+from support.paths import DATA, MISSIONS
 
 from benchmarks.reserve import SHIPPED, TABLE2, flown_at, fly, planned
 from gcs_planner.aircraft.profile import DRYDEN_SCALE_LENGTH_M, ROLL_RESPONSE_S
@@ -171,9 +171,8 @@ def test_each_autopilot_enters_its_turns_as_late_as_its_guidance() -> None:
 
 
 def _scenario_toml(tmp_path, environment: str) -> str:
-    from pathlib import Path
 
-    points = Path(__file__).resolve().parents[1] / "missions" / "example" / "points.csv"
+    points = MISSIONS / "example" / "points.csv"
     text = (
         f'name = "gusty"\npoints = "{points}"\n[parameters]\nalpha1 = 25\nalpha2 = 15\n'
         "beta1 = 20\nbeta2 = 25\ntheta = 30\ndelta = 0.001\n[vehicle]\ncruise_airspeed = 20\n"

@@ -10,10 +10,10 @@ import sys
 from pathlib import Path
 
 import pytest
+from support.paths import REPO
 
 from gcs_planner.cli import main
 
-ROOT = Path(__file__).resolve().parents[1]
 SCRIPT = Path(sys.executable).parent / "gcs-planner"
 DATASET1 = ["--alpha1", "25", "--alpha2", "15", "--beta1", "20", "--beta2", "25",
             "--theta", "30", "--delta", "0.001"]  # fmt: skip
@@ -26,7 +26,7 @@ def blocks(path: Path, language: str) -> list[str]:
 
 def in_repo_copy(tmp_path: Path, monkeypatch) -> Path:
     """A working directory where the README's relative paths resolve and outputs land in tmp."""
-    (tmp_path / "missions").symlink_to(ROOT / "missions")
+    (tmp_path / "missions").symlink_to(REPO / "missions")
     monkeypatch.chdir(tmp_path)
     return tmp_path
 
@@ -38,7 +38,7 @@ def run_script(*args: str, cwd: Path) -> subprocess.CompletedProcess:
 
 
 def test_readme_python_example_runs(tmp_path, monkeypatch):
-    (code,) = [b for b in blocks(ROOT / "README.md", "python") if "write_mission" in b]
+    (code,) = [b for b in blocks(REPO / "README.md", "python") if "write_mission" in b]
     assert len([line for line in code.splitlines() if line.strip()]) <= 5 + 1  # + the import
     in_repo_copy(tmp_path, monkeypatch)
     namespace: dict = {}
@@ -56,10 +56,10 @@ def test_readme_python_example_runs(tmp_path, monkeypatch):
 
 
 def test_readme_first_command_plans_the_example_as_installed(tmp_path):
-    (setup,) = [b for b in blocks(ROOT / "README.md", "sh") if "pip install . &&" in b]
+    (setup,) = [b for b in blocks(REPO / "README.md", "sh") if "pip install . &&" in b]
     command = setup.strip().split(" && ")[-1].split()
     assert command[:2] == ["gcs-planner", "plan"]
-    (tmp_path / "missions").symlink_to(ROOT / "missions")
+    (tmp_path / "missions").symlink_to(REPO / "missions")
     done = run_script(*command[1:], cwd=tmp_path)
     assert done.returncode == 0, done.stderr
     out = tmp_path / command[command.index("--out") + 1]
@@ -73,7 +73,7 @@ def test_readme_first_command_plans_the_example_as_installed(tmp_path):
     assert any(leg["helix_turns"] > 0 for r in plan["front"] for leg in r["legs"])
     assert "P lost" in done.stdout and "warning: no origin" not in done.stderr
     # README's export line reads that plan.json.
-    (using,) = [b for b in blocks(ROOT / "README.md", "sh") if "gcs-planner export" in b]
+    (using,) = [b for b in blocks(REPO / "README.md", "sh") if "gcs-planner export" in b]
     (export,) = [line for line in using.splitlines() if line.startswith("gcs-planner export")]
     done = run_script(*export.split()[1:], cwd=tmp_path)
     assert done.returncode == 0, done.stderr
@@ -81,7 +81,7 @@ def test_readme_first_command_plans_the_example_as_installed(tmp_path):
 
 
 def test_readme_dataset1_command_as_installed(tmp_path, dataset_paths):
-    (using,) = [b for b in blocks(ROOT / "README.md", "sh") if "the contest workbooks carry" in b]
+    (using,) = [b for b in blocks(REPO / "README.md", "sh") if "the contest workbooks carry" in b]
     first = using.split("\n# ")[0] if using.startswith("#") else using
     command = " ".join(line.rstrip("\\") for line in first.splitlines()[1:3]).split()
     assert command[:2] == ["gcs-planner", "plan"]
@@ -106,7 +106,7 @@ def test_help_as_installed_lists_every_command(tmp_path):
 
 
 def missions_snippets(tmp_path: Path) -> dict[str, Path]:
-    md = ROOT / "missions" / "README.md"
+    md = REPO / "missions" / "README.md"
     csvs = blocks(md, "csv")
     (geojson,) = blocks(md, "json")
     (toml,) = blocks(md, "toml")
@@ -176,8 +176,8 @@ def test_a_likely_lost_route_is_not_exported_unasked(tmp_path, capsys):
 
 # --- links, the model's sections, and nothing cited from outside the repository -------------
 
-DOCS = [ROOT / "README.md", ROOT / "missions" / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
-MODEL_DOC = ROOT / "docs" / "model.md"
+DOCS = [REPO / "README.md", REPO / "missions" / "README.md", *sorted((REPO / "docs").glob("*.md"))]
+MODEL_DOC = REPO / "docs" / "model.md"
 # Where the code and the documents cite the model (and where nothing may cite outside files).
 CITING = ["gcs_planner", "sim", "tests", "missions", "docs", "benchmarks"]
 # Built, not written out, so that a grep of the repository for them finds only what it should.
@@ -203,19 +203,19 @@ def headings(path: Path) -> list[str]:
 def source_files() -> list[Path]:
     files = []
     for folder in CITING:
-        for path in sorted((ROOT / folder).rglob("*")):
+        for path in sorted((REPO / folder).rglob("*")):
             if path.suffix in (".py", ".md", ".toml") and "results" not in path.parts:
                 files.append(path)
     return files
 
 
-@pytest.mark.parametrize("doc", DOCS, ids=lambda p: str(p.relative_to(ROOT)))
+@pytest.mark.parametrize("doc", DOCS, ids=lambda p: str(p.relative_to(REPO)))
 def test_relative_links_resolve_inside_the_repository(doc):
     links = [t for t in LINK.findall(prose(doc)) if not re.match(r"[a-z]+:", t)]
     for target in links:
         file, _, anchor = target.partition("#")
         path = (doc.parent / file).resolve() if file else doc
-        assert path.is_relative_to(ROOT), f"{doc.name}: {target} leaves the repository"
+        assert path.is_relative_to(REPO), f"{doc.name}: {target} leaves the repository"
         assert path.exists(), f"{doc.name}: {target} does not exist"
         if anchor and path.suffix == ".md":
             anchors = {slug(h) for h in headings(path)}
@@ -231,10 +231,10 @@ def test_every_citation_of_the_model_names_one_of_its_sections():
         # The file, a comma and a quoted heading, across a line break and a comment marker too.
         for m in re.finditer(r'docs/model\.md,\s*(?:#\s*)?"([^"]+)"', text):
             name = " ".join(m.group(1).replace("#", " ").split())  # a name broken over lines
-            assert name.lower() in names, f"{path.relative_to(ROOT)} cites {name!r}"
+            assert name.lower() in names, f"{path.relative_to(REPO)} cites {name!r}"
             cited += 1
         for m in re.finditer(r"docs/model\.md,\s*(Table \d+)", text):
-            assert any(m.group(1) in h for h in sections), f"{path.relative_to(ROOT)}: {m[1]}"
+            assert any(m.group(1) in h for h in sections), f"{path.relative_to(REPO)}: {m[1]}"
             cited += 1
     assert cited >= 15  # the code does cite it: a broken pattern would pass vacuously
 
@@ -249,24 +249,24 @@ def test_the_model_has_the_sections_the_code_relies_on():
 
 
 def test_nothing_cites_a_document_outside_the_repository():
-    for path in [*source_files(), ROOT / "README.md"]:
+    for path in [*source_files(), REPO / "README.md"]:
         text = path.read_text(encoding="utf-8")
         for outside in OUTSIDE:
-            assert outside not in text, f"{path.relative_to(ROOT)} cites {outside}"
+            assert outside not in text, f"{path.relative_to(REPO)} cites {outside}"
 
 
 def test_readme_is_a_users_guide():
-    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    text = (REPO / "README.md").read_text(encoding="utf-8")
     first_screen = "\n".join(text.splitlines()[:40])
     assert "GMCM" in first_screen and "../shared/data/gmcm2019f/" in first_screen
-    found = headings(ROOT / "README.md")
+    found = headings(REPO / "README.md")
     for section in ("Set-up", "Planning", "Export", "Upload", "Dry run", "Library use",
                     "Scenario formats", "Exit codes", "Speed"):  # fmt: skip
         assert found.count(section) == 1, section
     # No lab notebook: commit hashes and "the run before" belong in CHANGELOG.md.
     commit = r"\b(?=[0-9a-f]*\d)(?=[0-9a-f]*[a-f])[0-9a-f]{7,40}\b"
-    assert not re.search(commit, prose(ROOT / "README.md"))
+    assert not re.search(commit, prose(REPO / "README.md"))
     assert "run before" not in text and "this session" not in text
     # The benchmark's command and its main table stay in README.
-    assert any("python -m benchmarks" in b for b in blocks(ROOT / "README.md", "sh"))
+    assert any("python -m benchmarks" in b for b in blocks(REPO / "README.md", "sh"))
     assert "| dataset 1 | " in text and "plain label search" in text

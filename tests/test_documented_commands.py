@@ -44,10 +44,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import pytest
+from support.paths import REPO, SHARED, TESTS
 
-ROOT = Path(__file__).resolve().parents[1]
-SHARED = ROOT.parent / "shared"
-DOCS = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md")), ROOT / "missions" / "README.md"]
+DOCS = [REPO / "README.md", *sorted((REPO / "docs").glob("*.md")), REPO / "missions" / "README.md"]
 RUNS = int(os.environ.setdefault("GCS_PLANNER_DOCS_RUNS", "5"))
 SEEDS = int(os.environ.setdefault("GCS_PLANNER_DOCS_SEEDS", "1"))  # a sweep spec's seeds count
 BIN = Path(sys.executable).parent  # the installed environment's scripts: gcs-planner, dask
@@ -145,7 +144,7 @@ def strip_comment(command: str) -> str:
 def documented_commands() -> list[Command]:
     commands = []
     for path in DOCS:
-        doc = str(path.relative_to(ROOT))
+        doc = str(path.relative_to(REPO))
         text = path.read_text(encoding="utf-8")
         for m in re.finditer(r"^```sh\n(.*?)^```", text, re.S | re.M):
             first = text.count("\n", 0, m.start(1)) + 1
@@ -269,11 +268,11 @@ def workspace(tmp_path_factory) -> Workspace:
     (base / "shared").symlink_to(SHARED)
     repo = base / "repo"
     (repo / "missions").mkdir(parents=True)
-    (repo / "benchmarks").symlink_to(ROOT / "benchmarks")
-    for entry in sorted((ROOT / "missions").iterdir()):
+    (repo / "benchmarks").symlink_to(REPO / "benchmarks")
+    for entry in sorted((REPO / "missions").iterdir()):
         if entry.name != "sweep-example.toml":
             (repo / "missions" / entry.name).symlink_to(entry)
-    spec = (ROOT / "missions" / "sweep-example.toml").read_text(encoding="utf-8")
+    spec = (REPO / "missions" / "sweep-example.toml").read_text(encoding="utf-8")
     capped = re.sub(r"(?m)^runs = (\d+)", lambda m: f"runs = {min(int(m[1]), RUNS)}", spec)
     capped = re.sub(r"count = (\d+)", lambda m: f"count = {min(int(m[1]), SEEDS)}", capped)
     (repo / "missions" / "sweep-example.toml").write_text(capped, encoding="utf-8")
@@ -303,7 +302,7 @@ def test_documented_command(command: Command, workspace: Workspace):
         installed(setup["what"])
         assert shutil.which("gcs-planner", path=str(BIN)), "gcs-planner is not installed"
         if setup["rest"] in EXCLUDED:
-            assert "pytest" in setup["rest"] and Path(__file__).parent == ROOT / "tests"
+            assert "pytest" in setup["rest"] and Path(__file__).resolve().is_relative_to(TESTS)
             return  # EXCLUDED says why: it is the suite running this test
     elif not command.script and (pip := PIP_ONLY.match(strip_comment(command.text))):
         installed(pip["what"])

@@ -3,6 +3,8 @@ vehicle of both flavours over UDP on 127.0.0.1, as it would with ArduPilot or PX
 
 from __future__ import annotations
 
+import time
+
 import dronekit
 import pytest
 from gcs_planner.sim.vehicle import MockVehicle, free_udp_port
@@ -11,6 +13,18 @@ from pymavlink import mavutil
 from gcs_planner.mission.items import MissionItem
 
 WAYPOINTS = [(30.5 + 0.001 * i, 123.5 + 0.002 * i, 100.0 + i) for i in range(5)]
+
+
+def _wait_until_idle(vehicle: MockVehicle) -> None:
+    """dronekit sends no MISSION_ACK after a download and does not count again when refused.
+    PX4 keeps sending its list until that ACK or its 5 s operation timeout, and meanwhile
+    refuses a clear and an upload ("IGN CLEAR CMD: Busy", "IGN MISSION_COUNT: Busy";
+    mavlink_mission.cpp), so with PX4 a dronekit script must wait that out; ArduPilot keeps no
+    download state."""
+    deadline = time.monotonic() + 30.0
+    while vehicle.missions.download is not None and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert vehicle.missions.download is None
 
 
 @pytest.mark.parametrize("flavour", ["ardupilot", "px4"])
@@ -29,6 +43,7 @@ def test_dronekit_uploads_and_downloads_a_mission(flavour):
             cmds.wait_ready(timeout=60)
             # dronekit keeps item 0 as home, the ArduPilot way: ArduPilot gave it its home.
             assert drone._wploader.count() == (1 if flavour == "ardupilot" else 2)
+            _wait_until_idle(vehicle)
             cmds.clear()
             for lat, lon, alt in WAYPOINTS:
                 cmds.add(

@@ -8,33 +8,13 @@ import sys
 from pathlib import Path
 
 import pytest
+from support.dry_run_line import LINE, LINE_FLAGS, LINE_P, PARAMS, write_line, write_points
 
 from gcs_planner.cli import main
 from gcs_planner.core.planner import plan
 from gcs_planner.dryrun.run import EXIT_LOST, dry_run
 from gcs_planner.errors import LinkError
 from gcs_planner.scenario.readers import load_scenario
-
-# A straight chain A, V*, H, V*, H, V*, H, V, B, 12 km apart (* unreliable). Every point is needed
-# (a 24 km leg breaks a limit), and by hand: a failed V* leaves v = 5, so the next H sees 17 <= 20
-# but the V after it sees 29 > 25. The route arrives only if all three V* succeed: P = 0.8 ** 3.
-LINE = [
-    ("P0", 0, 0, "A", 0),
-    ("P1", 12_000, 300, "V", 1),
-    ("P2", 24_000, 0, "H", 0),
-    ("P3", 36_000, 300, "V", 1),
-    ("P4", 48_000, 0, "H", 0),
-    ("P5", 60_000, 300, "V", 1),
-    ("P6", 72_000, 0, "H", 0),
-    ("P7", 84_000, 300, "V", 0),
-    ("P8", 96_000, 0, "B", 0),
-]
-LINE_P = 0.8**3
-PARAMS = {"alpha1": 25, "alpha2": 15, "beta1": 20, "beta2": 25, "theta": 30, "delta": 0.001}
-# The line's route arrives with LINE_P < 0.99 on purpose: its dry runs accept the risk.
-LINE_FLAGS = [f for k, v in PARAMS.items() for f in (f"--{k}", str(v))] + [
-    "--turn-radius", "0", "--allow-risky",
-]  # fmt: skip
 
 DS1 = ["--alpha1", "25", "--alpha2", "15", "--beta1", "20", "--beta2", "25", "--theta", "30",
        "--delta", "0.001"]  # fmt: skip
@@ -57,17 +37,9 @@ KEYS = {
 ROW_KEYS = {"point", "kind", "v_before", "h_before", "v_margin", "h_margin", "outcome"}
 
 
-def write_points(path: Path, rows: list[tuple]) -> Path:
-    lines = ["id,x,y,z,kind,unreliable"]
-    # Altitude from the point's number, so that a file without some points keeps the others.
-    lines += [f"{i},{x},{y},{5000 + 10 * int(i[1:])},{k},{u}" for i, x, y, k, u in rows]
-    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
-    return path
-
-
 @pytest.fixture(scope="module")
 def line_csv(tmp_path_factory) -> Path:
-    return write_points(tmp_path_factory.mktemp("line") / "line.csv", LINE)
+    return write_line(tmp_path_factory.mktemp("line"))
 
 
 @pytest.fixture(scope="module")

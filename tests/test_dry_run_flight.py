@@ -100,18 +100,18 @@ def test_airplane_legs_within_15_degrees_need_arduplane_set_up_for_them(
         assert not report.flight_lost
 
 
-def test_airplane_legs_within_the_limits_are_lost_by_px4s_switch_distance(
+def test_airplane_legs_within_the_limits_are_flown_by_px4_on_its_altitude_loop(
     airplane_plan, dataset_paths
 ):
-    """The same mission on PX4: it accepts every waypoint ~56 m early (npfg's switch distance,
-    NAV_ACC_RAD 1 m notwithstanding) and turns there, passing the correction points it turns at
-    outside the 5 m capture radius: runs are lost by the flight, and the verdict says so. (Of
-    these 10 runs 5 miss a landmark; 5 more are lost by chance, as the plan would be with the
-    same outcomes: a failed correction at 163 or 114 and the next point over its limit.)"""
+    """The same mission on PX4, set up by the plan's setup: it accepts every waypoint ~56 m
+    early (npfg's switch distance, NAV_ACC_RAD 1 m notwithstanding), and TECS flies its height
+    errors out over FW_T_ALT_TC (5 s), so it comes over every correction point within the 5 m
+    capture radius: no run is lost by the flight. (With the mock's former 1 s height loop it
+    passed V point 163 about 8 m high, outside the capture radius, and every run was lost.)"""
     landmarks = load_scenario(dataset_paths[2], {**DS2, **LIMITS})
     report = dry_run(airplane_plan, landmarks, flavour="px4", runs=10)
-    assert report.verified and report.flight_losses >= 5 and not report.ok
-    assert report.missed and all(r.miss > 5.0 for r in report.missed)
+    assert report.verified and report.flight_losses == 0 and not report.missed
+    assert "FW_T_ALT_TC" in report.autopilot
 
 
 def test_the_certain_route_of_dataset_2_at_20_25_degrees_is_lost_by_the_flight(dataset_paths):
@@ -207,9 +207,9 @@ def test_px4_overflies_b_of_a_plan_without_run_outs(capsys):
     npfg's switch distance, ~100 m before B, and without the exporter's run-out beyond B it
     turned away and passed B 7.9 m off (lost, outside the 5 m capture radius). Now it arrives:
     every correction made and B passed within the capture radius."""
-    from pathlib import Path
+    from support.paths import MISSIONS
 
-    scenario = Path(__file__).resolve().parents[1] / "missions" / "jsbsim" / "scenario.toml"
+    scenario = MISSIONS / "jsbsim" / "scenario.toml"
     rc = main(["dry-run", str(scenario), "--autopilot", "px4", "--json", "--quiet"])
     d = json.loads(capsys.readouterr().out)
     assert rc == 0 and d["verified"] and d["arrived"] and d["ok"], (d["route"], d["why"])

@@ -5,11 +5,17 @@ from __future__ import annotations
 
 import json
 import xml.etree.ElementTree as ET
+from pathlib import Path
 
 import pytest
-from test_dry_run import LINE_FLAGS, line_csv  # noqa: F401  (fixture)
+from support.dry_run_line import LINE_FLAGS, write_line
 
 from gcs_planner.cli import main
+
+
+@pytest.fixture(scope="module")
+def line_csv(tmp_path_factory) -> Path:
+    return write_line(tmp_path_factory.mktemp("line"))
 
 
 def run(capsys, *argv: str) -> tuple[int, str, str]:
@@ -18,7 +24,7 @@ def run(capsys, *argv: str) -> tuple[int, str, str]:
     return rc, out, err
 
 
-def test_flown_track_is_written_as_geojson_beside_the_mission_path(capsys, tmp_path, line_csv):  # noqa: F811
+def test_flown_track_is_written_as_geojson_beside_the_mission_path(capsys, tmp_path, line_csv):
     dest = tmp_path / "track.geojson"
     rc, out, _ = run(capsys, str(line_csv), *LINE_FLAGS, "--track-out", str(dest), "--json")
     d = json.loads(out)
@@ -37,7 +43,7 @@ def test_flown_track_is_written_as_geojson_beside_the_mission_path(capsys, tmp_p
         assert -180 <= c[0] <= 180 and -90 <= c[1] <= 90
 
 
-def test_flown_track_as_kml(capsys, tmp_path, line_csv):  # noqa: F811
+def test_flown_track_as_kml(capsys, tmp_path, line_csv):
     dest = tmp_path / "track.kml"
     run(capsys, str(line_csv), *LINE_FLAGS, "--track-out", str(dest))
     root = ET.fromstring(dest.read_text())
@@ -46,7 +52,7 @@ def test_flown_track_as_kml(capsys, tmp_path, line_csv):  # noqa: F811
     assert names[:3] == ["planned path", "mission path", "flown track"]
 
 
-def test_the_report_names_the_acceptance_and_capture_radii(capsys, line_csv):  # noqa: F811
+def test_the_report_names_the_acceptance_and_capture_radii(capsys, line_csv):
     rc, out, _ = run(capsys, str(line_csv), *LINE_FLAGS, "--acceptance-radius", "3")
     assert "acceptance radius 3 m, capture radius 5 m" in out
     assert "largest deviation" in out
@@ -62,7 +68,7 @@ def test_the_report_names_the_acceptance_and_capture_radii(capsys, line_csv):  #
         (["--track-out", "__file__/x.geojson"], "--track-out"),
     ],
 )
-def test_bad_flight_flags_are_one_line_and_exit_2(capsys, tmp_path, line_csv, argv, field):  # noqa: F811
+def test_bad_flight_flags_are_one_line_and_exit_2(capsys, tmp_path, line_csv, argv, field):
     blocker = tmp_path / "__file__"
     blocker.write_text("")  # a file where the track's folder would be
     argv = [a.replace("__file__", str(blocker)) for a in argv]

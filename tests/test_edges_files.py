@@ -12,7 +12,7 @@ import sys
 from pathlib import Path
 
 import pytest
-from test_mission_builder import make_plan
+from support.missions import make_plan
 
 from gcs_planner.cli import main
 from gcs_planner.errors import InputError

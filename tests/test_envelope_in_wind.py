@@ -21,21 +21,15 @@ import math
 
 import numpy as np
 import pytest
+from support.envelope import scenario_in_wind
 
-from gcs_planner.aircraft.derive import derive_envelope
 from gcs_planner.aircraft.profile import DerivedEnvelope, G, tas_from_eas
-from gcs_planner.cli import build_parser
-from gcs_planner.cli.common import load_scenario_from_args
 from gcs_planner.core.planner import plan
 from gcs_planner.errors import InfeasibleError
 from gcs_planner.geometry.airplane import AirplaneLeg
 from gcs_planner.geometry.trajectory import scenario_trajectory
 from gcs_planner.scenario.model import Kind
 
-TABLE2 = {
-    1: ["--alpha1", "25", "--alpha2", "15", "--beta1", "20", "--beta2", "25", "--theta", "30"],
-    2: ["--alpha1", "20", "--alpha2", "10", "--beta1", "15", "--beta2", "20", "--theta", "20"],
-}
 # Where the wind blows towards (radians from east, counter-clockwise): 36 directions.
 DIRECTIONS = np.radians(np.arange(0.0, 360.0, 10.0))
 STEP_M = 1.0
@@ -50,13 +44,6 @@ OBJECTIVES = {"three": ("length", "corrections", "probability"),
 # highest point's: cli/vehicle_from.py says why); the planner proves it and says so (a direction
 # changes nothing: it is held from any).
 INFEASIBLE = {(2, "px4", 5.0), (2, "px4", 10.0)}
-
-
-def scenario_for(path, dataset: int, firmware: str, wind: str, per_leg: bool = False):
-    argv = ["plan", str(path), *TABLE2[dataset], "--delta", "0.001", "--firmware", firmware,
-            "--wind", str(wind), *(["--per-leg-envelope"] if per_leg else [])]  # fmt: skip
-    args = build_parser(argv).parse_args(argv)
-    return derive_envelope(args, load_scenario_from_args(args), wind_text=args.wind)
 
 
 def towards(env: DerivedEnvelope) -> np.ndarray:
@@ -161,7 +148,7 @@ def test_every_front_leg_flies_within_the_envelope_in_the_design_wind(
     dataset_paths, dataset, firmware, objectives, per_leg
 ):
     for wind in WINDS:
-        scenario = scenario_for(dataset_paths[dataset], dataset, firmware, wind, per_leg)
+        scenario = scenario_in_wind(dataset_paths[dataset], dataset, firmware, wind, per_leg)
         assert bool(scenario.envelope.per_leg) == per_leg
         env = scenario.envelope
         speed, _, direction = wind.partition("@")
@@ -196,8 +183,8 @@ def test_the_refly_in_one_wind_direction_catches_legs_planned_for_still_air(data
     """The re-fly is not blind in one direction: dataset 1's still-air legs (two objectives,
     ArduPlane), flown in exactly 10 m/s from 270 deg, need more bank or climb than the aircraft
     has on some leg; the legs planned for that wind do not."""
-    still = scenario_for(dataset_paths[1], 1, "ardupilot", "0")
-    windy = scenario_for(dataset_paths[1], 1, "ardupilot", "10@270")
+    still = scenario_in_wind(dataset_paths[1], 1, "ardupilot", "0")
+    windy = scenario_in_wind(dataset_paths[1], 1, "ardupilot", "10@270")
     env = windy.envelope
     assert env is not None and len(towards(env)) == 1
     alt0 = still.origin.alt if still.origin else 0.0

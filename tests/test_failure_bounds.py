@@ -9,13 +9,8 @@ import dataclasses
 
 import numpy as np
 import pytest
-from test_airplane_legs import climbing_scenario
-from test_bnb import (
-    all_routes,
-    assert_front_equals_enumeration,
-    turning_scenario,
-    uncertain_straight_scenario,
-)
+from support.enumeration import all_routes, assert_front_equals_enumeration
+from support.scenarios import climbing_scenario, turning_scenario, uncertain_straight_scenario
 
 from gcs_planner.core.bnb import PROB_EPS, Ceiling, Options, flown_route
 from gcs_planner.core.bnb.context import _Context

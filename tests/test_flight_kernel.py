@@ -28,9 +28,10 @@ from gcs_planner.sim.aircraft import ROLL_RATE_DEG_S
 from gcs_planner.sim.guidance import AutopilotParams
 from gcs_planner.sim.navigators.base import LOITERS
 from gcs_planner.sim.replay import replay
+from gcs_planner.sim.turbulence import Turbulence
 from gcs_planner.sim.wind import WindSpec
-from test_helix_flight import DS2, DS2_LIMITS, configured
-from test_mission_builder import make_plan, steep_scenario
+from support.flights import DS2, DS2_LIMITS, configured
+from support.missions import make_plan, steep_scenario
 
 from gcs_planner.aircraft.autopilot import ARDUPLANE, PX4, autopilot_for
 from gcs_planner.core.planner import plan
@@ -167,6 +168,20 @@ def test_truth_flown_and_monte_carlo_of_flights_are_the_same_compiled(flavour):
     ref, got = both(m.items, s, flavour, ap, WindSpec(4.0, None, 1.0), runs=4)
     assert_same_flight(ref, got)
     assert ref.monte_carlo is not None and ref.monte_carlo.flown
+
+
+@pytest.mark.parametrize("flavour", [ARDUPLANE.firmware, PX4.firmware])
+def test_turbulence_flies_the_same_compiled(kernel_steps, flavour):
+    """Vertical turbulence (sim/turbulence.py), a number and a level of the standard, with and
+    without gusts: the kernel draws the Dryden filter's steps as the Python wind field does."""
+    s = steep_scenario()
+    m = build_mission(make_plan(s, routes=([0, 1, 2, 3, 4, 5, 6],), probability=False),
+                      firmware=flavour)  # fmt: skip
+    ap = configured(s, flavour)
+    for wind in (WindSpec(turbulence=Turbulence(1.0)),
+                 WindSpec(5.0, 250.0, 1.0, Turbulence(level="moderate"))):  # fmt: skip
+        assert_same_flight(*both(m.items, s, flavour, ap, wind))
+    assert sum(kernel_steps) > 0
 
 
 @pytest.mark.parametrize("flavour", [ARDUPLANE.firmware, PX4.firmware])

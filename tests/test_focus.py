@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from helpers import corridor_scenario, mixed_scenario
+from support.scenarios import corridor_scenario, mixed_scenario
 
 from gcs_planner.baselines.brute import brute_force_front
 from gcs_planner.core import straight_search

@@ -3,31 +3,16 @@ bounds (``core.focus``, large maps) against the same search over every point."""
 
 from __future__ import annotations
 
-import numpy as np
 import pytest
-from helpers import contest_params
+from support.scenarios import sparse_scenario
 
 from gcs_planner.core import focus
 from gcs_planner.core.planner import plan
 from gcs_planner.core.seeding import certain_front
 from gcs_planner.errors import InfeasibleError
-from gcs_planner.scenario.generate import random_scenario
 
 TWO = ("length", "corrections")
 THREE = ("length", "corrections", "probability")
-
-
-def sparse_scenario(seed: int):
-    """A few dozen points in a wide box, turns of several radii or none, unreliable points."""
-    rng = np.random.default_rng(seed)
-    params = contest_params(
-        turn_radius=float(rng.choice([0.0, 200.0, 1500.0])),
-        fail_residual=float(rng.uniform(2, 15)),
-    )
-    n = int(rng.integers(15, 40))
-    return random_scenario(
-        n, seed, params=params, box=(40_000, 20_000, 1_500), unreliable_fraction=0.3
-    )
 
 
 def _front(result):

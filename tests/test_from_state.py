@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from test_bnb import all_routes, pareto
-from test_contingency import _scenario
+from support.enumeration import all_routes, pareto
+from support.scenarios import contingency_scenario
 
 from gcs_planner.core.bnb import Options, bnb_front, flown_route, flown_route_legs
 from gcs_planner.core.from_state import FlightState, original_points, state_scenario
@@ -62,7 +62,7 @@ def test_a_continuation_is_flown_as_the_whole_route_flies_it(radius: float) -> N
     after the state are the same."""
     compared = 0
     for seed in range(60):
-        sc = _scenario(seed, radius=radius)
+        sc = contingency_scenario(seed, radius=radius)
         rng = np.random.default_rng(seed)
         got = _failed_state(sc, rng)
         if got is None:
@@ -97,7 +97,7 @@ def test_front_from_a_state_equals_enumeration(
 ) -> None:
     nonempty = carried = 0
     for seed in range(120):
-        sc = _scenario(seed, radius=radius, lenient=True)
+        sc = contingency_scenario(seed, radius=radius, lenient=True)
         got = _failed_state(sc, np.random.default_rng(seed + 1000))
         if got is None:
             continue
@@ -122,7 +122,7 @@ def test_plan_from_a_state_starts_with_its_errors() -> None:
     A are the state's in the route table, and a state whose errors already pass every limit
     is infeasible with the reason."""
     for seed in range(40):
-        sc = _scenario(seed, lenient=True)
+        sc = contingency_scenario(seed, lenient=True)
         got = _failed_state(sc, np.random.default_rng(seed + 7))
         if got is None:
             continue
@@ -143,7 +143,7 @@ def test_plan_from_a_state_starts_with_its_errors() -> None:
 
 
 def test_bad_states_are_refused() -> None:
-    sc = _scenario(3)
+    sc = contingency_scenario(3)
     with pytest.raises(GcsPlannerError, match="at B"):
         state_scenario(sc, FlightState(sc.end, None, 0.0, 0.0, frozenset()))
     with pytest.raises(GcsPlannerError, match="error"):

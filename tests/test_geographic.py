@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from pyproj import Geod
+from support.paths import MISSIONS
 
 from gcs_planner import load_scenario, plan, write_mission
 from gcs_planner.cli import main
@@ -19,7 +20,7 @@ from gcs_planner.mission.qgc_plan import read_plan
 from gcs_planner.scenario.georef import LocalFrame
 from gcs_planner.scenario.model import Kind, Origin
 
-EXAMPLE = Path(__file__).resolve().parents[1] / "missions" / "example"
+EXAMPLE = MISSIONS / "example"
 LIMITS = dict(alpha1=25, alpha2=15, beta1=20, beta2=25, theta=30, delta=0.001)
 WGS84 = Geod(ellps="WGS84")
 # A survey somewhere else than the exporter's default origin, with an altitude datum of its own.

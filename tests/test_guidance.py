@@ -10,29 +10,9 @@ import numpy as np
 import pytest
 from gcs_planner.sim.atmosphere import eas2tas
 from gcs_planner.sim.guidance import AutopilotParams, fly
+from support.flights import FRAME, PROFILE, mission
 
 from gcs_planner.aircraft.autopilot import ARDUPLANE, PX4, autopilot_for
-from gcs_planner.aircraft.profile import VehicleProfile
-from gcs_planner.mission.items import MissionItem
-from gcs_planner.scenario.georef import LocalFrame
-from gcs_planner.scenario.model import Origin
-
-FRAME = LocalFrame(Origin(30.5, 123.5, 0.0))
-PROFILE = VehicleProfile(turn_radius=200.0, max_climb_angle=15.0, max_descent_angle=15.0)
-
-
-def item(seq: int, command: int, xyz=None, **params) -> MissionItem:
-    if xyz is None:
-        return MissionItem(seq, 2, command, **params)
-    lat, lon, alt = FRAME.to_geodetic(*xyz)
-    return MissionItem(seq, 0, command, x=round(lat * 1e7), y=round(lon * 1e7), z=float(alt),
-                       **params)  # fmt: skip
-
-
-def mission(*specs) -> list[MissionItem]:
-    return [
-        item(k, *spec[:2], **(spec[2] if len(spec) > 2 else {})) for k, spec in enumerate(specs)
-    ]
 
 
 def turn_radii(flight) -> np.ndarray:

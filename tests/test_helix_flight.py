@@ -16,10 +16,10 @@ import math
 
 import numpy as np
 import pytest
-from gcs_planner.sim.atmosphere import eas2tas
 from gcs_planner.sim.guidance import AutopilotParams
 from gcs_planner.sim.replay import replay
-from test_mission_builder import make_plan, steep_scenario
+from support.flights import DS2, DS2_LIMITS, configured
+from support.missions import make_plan, steep_scenario
 
 from gcs_planner.aircraft.autopilot import ARDUPLANE, PX4, autopilot_for
 from gcs_planner.aircraft.profile import DEFAULT_CAPTURE_RADIUS_M
@@ -35,21 +35,6 @@ from gcs_planner.scenario.readers import load_scenario
 # Turn entry: the aircraft banks at most to its turning radius, so a turn it starts late is
 # never caught up; a leg's arc is flown up to this much longer than planned (both autopilots).
 LEG_OVERRUN_M = 60.0
-DS2 = {"alpha1": 20, "alpha2": 10, "beta1": 15, "beta2": 20, "theta": 20, "delta": 0.001}
-DS2_LIMITS = {"turn_radius": 200.0, "max_climb_angle": 20.0, "max_descent_angle": 25.0}
-
-
-def configured(scenario, flavour: str, lim_bank: float = 45.0) -> AutopilotParams:
-    """The autopilot set up for the plan: climb and sink at the plan's path angles through the
-    air at the true airspeed of the route's highest point (the plan's angles are at cruise EAS;
-    TECS rates are vertical metres per second), loiters on the planned radius (ArduPlane
-    NAVL1_LIM_BANK = ``lim_bank``; 0 is the shipped default)."""
-    v = scenario.vehicle
-    top = float(scenario.xyz[:, 2].max()) + (scenario.origin.alt if scenario.origin else 0.0)
-    scale = eas2tas(top)
-    return AutopilotParams(flavour, loiter_radius=v.turn_radius, acceptance_radius=1.0,
-                           loiter_bank_limit=lim_bank).with_rates(
-        v.climb_rate * scale, v.sink_rate * scale)  # fmt: skip
 
 
 def flown_against_planned(

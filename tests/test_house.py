@@ -9,10 +9,10 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from support.paths import REPO
 
 from gcs_planner.aircraft.autopilot import AUTOPILOTS
 
-ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("gcs_planner", "sim")
 MAX_MODULE_LINES = 600
 MAX_FUNCTION_LINES = 150
@@ -27,8 +27,8 @@ INSTALLED_AS = {"gcs_planner": "gcs_planner", "sim": "gcs_planner.sim"}
 
 def _sources() -> Iterator[tuple[str, Path]]:
     for package in PACKAGES:
-        for path in sorted((ROOT / package).rglob("*.py")):
-            parts = path.relative_to(ROOT / package).with_suffix("").parts
+        for path in sorted((REPO / package).rglob("*.py")):
+            parts = path.relative_to(REPO / package).with_suffix("").parts
             parts = parts[:-1] if parts[-1] == "__init__" else parts
             yield ".".join((INSTALLED_AS[package], *parts)), path
 
@@ -112,9 +112,9 @@ def test_no_import_cycle_between_files() -> None:
 @pytest.mark.parametrize("package", PACKAGES)
 def test_no_module_too_long_to_read(package: str) -> None:
     long = {
-        str(p.relative_to(ROOT)): n
+        str(p.relative_to(REPO)): n
         for name, p in MODULES.items()
-        if p.relative_to(ROOT).parts[0] == package
+        if p.relative_to(REPO).parts[0] == package
         and (n := len(p.read_text().splitlines())) > MAX_MODULE_LINES
     }
     assert long == {}
@@ -124,13 +124,13 @@ def test_no_module_too_long_to_read(package: str) -> None:
 def test_no_function_too_long_to_read(package: str) -> None:
     long = {}
     for path in MODULES.values():
-        if path.relative_to(ROOT).parts[0] != package:
+        if path.relative_to(REPO).parts[0] != package:
             continue
         for node in ast.walk(ast.parse(path.read_text())):
             if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
                 lines = node.end_lineno - node.lineno + 1  # type: ignore[operator]
                 if lines > MAX_FUNCTION_LINES:
-                    long[f"{path.relative_to(ROOT)}:{node.name}"] = lines
+                    long[f"{path.relative_to(REPO)}:{node.name}"] = lines
     assert long == {}
 
 
@@ -157,14 +157,14 @@ def _name_strings(path: Path) -> list[int]:
 
 def test_the_autopilot_is_named_only_by_its_record() -> None:
     holders = {
-        str(p.relative_to(ROOT)): lines for p in MODULES.values() if (lines := _name_strings(p))
+        str(p.relative_to(REPO)): lines for p in MODULES.values() if (lines := _name_strings(p))
     }
     assert set(holders) <= NAME_HOLDERS, {k: v for k, v in holders.items() if k not in NAME_HOLDERS}
     assert holders  # the scan sees the record's own names
 
 
 def test_the_top_of_the_package_holds_only_its_entry_points() -> None:
-    top = {p.stem for p in (ROOT / "gcs_planner").glob("*.py")}
+    top = {p.stem for p in (REPO / "gcs_planner").glob("*.py")}
     assert top - TOP_MODULES == set() or len(top - TOP_MODULES) <= 4
     assert top >= TOP_MODULES
 
@@ -176,26 +176,26 @@ def test_the_distribution_installs_every_package_under_its_own_name() -> None:
         import tomllib
     except ModuleNotFoundError:  # Python 3.10
         import tomli as tomllib
-    config = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
+    config = tomllib.loads((REPO / "pyproject.toml").read_text())["tool"]["setuptools"]
     assert config["package-dir"] == {"gcs_planner.sim": "sim"}
     folders = {
         ".".join(
             (
-                INSTALLED_AS[p.relative_to(ROOT).parts[0]],
-                *p.parent.relative_to(ROOT / p.relative_to(ROOT).parts[0]).parts,
+                INSTALLED_AS[p.relative_to(REPO).parts[0]],
+                *p.parent.relative_to(REPO / p.relative_to(REPO).parts[0]).parts,
             )
         )
         for package in PACKAGES
-        for p in (ROOT / package).rglob("__init__.py")
+        for p in (REPO / package).rglob("__init__.py")
     }
     assert set(config["packages"]) == folders
     assert all(name.split(".")[0] == "gcs_planner" for name in config["packages"])
 
 
 def test_no_test_imports_another_test() -> None:
-    tests = {p.stem for p in (ROOT / "tests").rglob("test_*.py")}
+    tests = {p.stem for p in (REPO / "tests").rglob("test_*.py")}
     importing = {}
-    for path in (ROOT / "tests").rglob("*.py"):
+    for path in (REPO / "tests").rglob("*.py"):
         for node in ast.walk(ast.parse(path.read_text())):
             names = []
             if isinstance(node, ast.ImportFrom) and node.module:
@@ -204,5 +204,5 @@ def test_no_test_imports_another_test() -> None:
                 names = [a.name.rpartition(".")[2] for a in node.names]
             hits = [n for n in names if n in tests]
             if hits:
-                importing[str(path.relative_to(ROOT))] = hits
+                importing[str(path.relative_to(REPO))] = hits
     assert importing == {}

@@ -3,10 +3,9 @@ every route out, with its numbers (``core.diagnose``), through plan() and the co
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
+from support.paths import MISSIONS
 
 from gcs_planner.cli import main
 from gcs_planner.core.planner import plan
@@ -14,7 +13,7 @@ from gcs_planner.errors import InfeasibleError
 from gcs_planner.scenario.model import Kind, Parameters, Scenario
 from gcs_planner.scenario.readers import load_scenario
 
-EXAMPLE = Path(__file__).resolve().parents[1] / "missions" / "example" / "scenario.toml"
+EXAMPLE = MISSIONS / "example" / "scenario.toml"
 TWO = ("length", "corrections")
 THREE = ("length", "corrections", "probability")
 # (leg model, turning radius): every search mode the planner has.

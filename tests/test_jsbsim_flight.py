@@ -5,9 +5,9 @@ from __future__ import annotations
 
 import json
 import math
-from pathlib import Path
 
 import pytest
+from support.paths import MISSIONS
 
 pytest.importorskip("jsbsim", reason="the jsbsim extra is not installed (pip install '.[jsbsim]')")
 
@@ -21,8 +21,7 @@ from gcs_planner.cli import main  # noqa: E402
 from gcs_planner.dryrun.run import EXIT_LOST  # noqa: E402
 from gcs_planner.scenario.georef import DEFAULT_ORIGIN, LocalFrame  # noqa: E402
 
-ROOT = Path(__file__).resolve().parents[1]
-SCENARIO = ROOT / "missions" / "jsbsim" / "scenario.toml"
+SCENARIO = MISSIONS / "jsbsim" / "scenario.toml"
 
 
 @pytest.mark.parametrize("firmware", ["ardupilot", "px4"])

@@ -6,9 +6,9 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
+from support.paths import MISSIONS, REPO
 
 import gcs_planner
 from gcs_planner import (
@@ -25,8 +25,7 @@ from gcs_planner import (
 from gcs_planner.cli import main
 from gcs_planner.mission.qgc_plan import read_plan
 
-ROOT = Path(__file__).resolve().parents[1]
-COAST = ROOT / "missions" / "coast" / "scenario.toml"
+COAST = MISSIONS / "coast" / "scenario.toml"
 SNIPPET = "id,x,y,z,kind,unreliable\nA,0,0,1000,A,0\nV1,12000,800,1200,V,0\n" + (
     "H1,24000,-500,1500,H,1\nH2,23500,1500,1400,H,0\nV2,36000,0,1300,V,0\nB,48000,0,1100,B,0\n"
 )
@@ -109,7 +108,7 @@ def modules_after(code: str) -> set[str]:
         capture_output=True,
         text=True,
         check=True,
-        cwd=ROOT,
+        cwd=REPO,
         timeout=600,
     )
     return set(done.stdout.splitlines()[-1].split())
@@ -122,7 +121,7 @@ def test_import_is_light():
 
 def test_plan_json_imports_only_what_it_uses():
     # A scenario in local metres: no projection (pyproj), no workbook (openpyxl), no picture.
-    example = ROOT / "missions" / "example" / "scenario.toml"
+    example = MISSIONS / "example" / "scenario.toml"
     code = (
         "import contextlib, io\nfrom gcs_planner.cli import main\n"
         "with contextlib.redirect_stdout(io.StringIO()):\n"

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import pytest
 from gcs_planner.sim.vehicle import MockVehicle, free_udp_port
+from support.paths import DATA
 
 from gcs_planner.cli import main
 from gcs_planner.link.connection import open_link
@@ -19,7 +20,7 @@ from gcs_planner.mission.builder import Mission
 from gcs_planner.mission.qgc_plan import read_plan, write_plan
 from gcs_planner.scenario.model import Origin
 
-WORKBOOK = Path(__file__).resolve().parents[2] / "shared" / "data" / "gmcm2019f" / "dataset1.xlsx"
+WORKBOOK = DATA / "dataset1.xlsx"
 FLAGS = ["--alpha1", "25", "--alpha2", "15", "--beta1", "20", "--beta2", "25", "--theta", "30",
          "--delta", "0.001"]  # fmt: skip
 

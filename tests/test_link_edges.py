@@ -149,6 +149,9 @@ def test_an_early_acknowledgement_is_reported_with_its_result(monkeypatch):
             if msg.seq != 2 or vehicle.missions.upload is None:
                 return on_item(msg, peer, address)
             vehicle.missions.upload = None  # item 2 ends it: "accepted", of 6 items
+            # As PX4 ends a transfer: its _transfer_seq one past the item it took, so the same
+            # item again is acknowledged again (handle_mission_item_both while idle).
+            vehicle.missions.transfer_seq = 3
             vehicle.missions.ack(peer, mavlink.MAV_MISSION_ACCEPTED)
 
         monkeypatch.setattr(vehicle.missions, "on_item", ack_after_two)

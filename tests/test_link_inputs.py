@@ -9,13 +9,14 @@ from pathlib import Path
 
 import pytest
 from gcs_planner.sim.vehicle import MockVehicle, free_udp_port
+from support.paths import DATA
 
 from gcs_planner.cli import main
 from gcs_planner.errors import InputError
 from gcs_planner.link.connection import check_connection
 from gcs_planner.runtime.atomic import write_atomic
 
-WORKBOOK = Path(__file__).resolve().parents[2] / "shared" / "data" / "gmcm2019f" / "dataset1.xlsx"
+WORKBOOK = DATA / "dataset1.xlsx"
 FLAGS = ["--alpha1", "25", "--alpha2", "15", "--beta1", "20", "--beta2", "25", "--theta", "30",
          "--delta", "0.001"]  # fmt: skip
 UNWRITABLE = "/proc/gcs-planner-test/out"  # /proc refuses new files, even to root

@@ -11,8 +11,8 @@ import itertools
 
 import numpy as np
 import pytest
-from test_bnb import all_routes
-from test_plan_exact import tall_scenario
+from support.enumeration import all_routes
+from support.scenarios import tall_scenario
 
 from gcs_planner.core.bnb import flown_route
 from gcs_planner.core.probability import success_probability

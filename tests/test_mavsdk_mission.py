@@ -155,9 +155,9 @@ def test_project_client_uploads_to_mavsdk_mission_raw_server_and_reads_back():
 def test_mavsdk_start_mission_flies_the_mock(flavour):
     """Issue 26: MAVSDK's ``start_mission()`` sets the mission mode with MAV_CMD_DO_SET_MODE
     (ArduPlane AUTO; PX4 AUTO/MISSION), which the mock answered UNSUPPORTED (MAVSDK raised)."""
-    from test_mock_params import mission_items, scenario
+    from support.flights import line_scenario, waypoint_items
 
-    sc = scenario()
+    sc = line_scenario()
     port = free_udp_port()
     gcs = mavsdk_instance(ComponentType.GROUND_STATION)
     try:
@@ -168,7 +168,7 @@ def test_mavsdk_start_mission_flies_the_mock(flavour):
             system = gcs.first_autopilot(timeout_s=30.0)
             assert system is not None
             raw = MissionRaw(system)
-            raw.upload_mission(to_raw(mission_items(sc, flavour)))
+            raw.upload_mission(to_raw(waypoint_items(sc, flavour)))
             raw.start_mission()  # raises on a refusal
             assert vehicle._fly_thread is not None
             vehicle._fly_thread.join(60.0)

@@ -9,7 +9,7 @@ import math
 import xml.etree.ElementTree as ET
 
 import pytest
-from test_mission_builder import HOME, ORIGIN, make_plan, tiny_scenario, true_position
+from support.missions import HOME, ORIGIN, make_plan, tiny_scenario, true_position
 
 from gcs_planner.cli import main
 from gcs_planner.errors import InputError

@@ -9,49 +9,17 @@ import math
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from dataclasses import replace
 from typing import Any
 
-import numpy as np
 import pytest
 from gcs_planner.sim.vehicle import MockVehicle, free_udp_port
+from support.flights import line_scenario, waypoint_items
 
 from gcs_planner.aircraft.autopilot import AUTOPILOTS, effective
 from gcs_planner.link.connection import Link, mavlink, open_link
 from gcs_planner.link.mission_client import MissionClient
-from gcs_planner.mission.items import MissionItem
-from gcs_planner.scenario.generate import DATASET1
-from gcs_planner.scenario.georef import LocalFrame
-from gcs_planner.scenario.model import Kind, Origin, Scenario
 
-ORIGIN = Origin(30.5, 123.5, 0.0)
 WAIT_S = 30.0  # generous: every wait ends on the message it waits for
-
-
-def scenario(**params: Any) -> Scenario:
-    xyz = np.array([[i * 12_000.0, 0.0, 5000.0] for i in range(5)])
-    return Scenario(
-        ids=("A", "V1", "H1", "V2", "B"),
-        xyz=xyz,
-        kind=np.array([Kind.A, Kind.V, Kind.H, Kind.V, Kind.B], dtype=np.uint8),
-        unreliable=np.zeros(5, bool),
-        params=replace(DATASET1, **params),
-        origin=ORIGIN,
-    )
-
-
-def mission_items(sc: Scenario, flavour: str) -> list[MissionItem]:
-    """A waypoint on each point (ArduPilot: home first), 1 m acceptance."""
-    frame = LocalFrame(ORIGIN)
-    points = [sc.xyz[0], *sc.xyz] if flavour == "ardupilot" else list(sc.xyz)
-    items = []
-    for k, p in enumerate(points):
-        lat, lon, alt = frame.to_geodetic(*p)
-        items.append(
-            MissionItem(k, 0, 16, param2=1.0, x=round(lat * 1e7), y=round(lon * 1e7),
-                        z=float(alt))
-        )  # fmt: skip
-    return items
 
 
 def wait_for(link: Link, pred: Callable[[Any], bool], timeout: float = WAIT_S) -> Any | None:
@@ -131,14 +99,14 @@ SHIPPED = [
 
 @pytest.mark.parametrize(("flavour", "name", "value"), SHIPPED)
 def test_the_mock_serves_its_firmwares_shipped_defaults_not_the_plans_rates(flavour, name, value):
-    with vehicle_and_peer(flavour, scenario=scenario(**PLAN)) as (_, link):
+    with vehicle_and_peer(flavour, scenario=line_scenario(**PLAN)) as (_, link):
         assert read(link, name) == pytest.approx(value, rel=1e-6)
 
 
 @pytest.mark.parametrize("flavour", ["ardupilot", "px4"])
 def test_the_scenarios_aircraft_sets_cruise_loiter_radius_and_a_given_bank(flavour):
     ap = AUTOPILOTS[flavour]
-    given_bank = scenario(**PLAN).with_vehicle(
+    given_bank = line_scenario(**PLAN).with_vehicle(
         cruise_airspeed=30.0, radius_source="airspeed and bank"
     )
     with vehicle_and_peer(flavour, scenario=given_bank) as (vehicle, link):
@@ -157,7 +125,7 @@ HOSTILE = [3e38, math.nan, -25.0, 0.0]
 def test_an_airspeed_the_flight_cannot_use_is_refused_and_the_flight_still_runs(flavour, bad):
     """AIRSPEED_CRUISE / FW_AIRSPD_TRIM = 3e38 was stored, and MISSION_START then killed the
     flight thread: no telemetry, the vehicle stuck 'flying' nothing."""
-    sc = scenario()
+    sc = line_scenario()
     name = AUTOPILOTS[flavour].envelope["cruise_airspeed"]
     with vehicle_and_peer(flavour, scenario=sc, speedup=None) as (vehicle, link):
         before = read(link, name)
@@ -167,7 +135,7 @@ def test_an_airspeed_the_flight_cannot_use_is_refused_and_the_flight_still_runs(
         assert answer is not None and answer.param_value == pytest.approx(before)
         assert text is not None and text.severity == mavlink.MAV_SEVERITY_WARNING
         assert vehicle.parameters[name] == before and vehicle.params.refused == 1
-        MissionClient(link, target_system=1, target_component=1).upload(mission_items(sc, flavour))
+        MissionClient(link, target_system=1, target_component=1).upload(waypoint_items(sc, flavour))
         link.send(link.mav.command_long_encode(1, 1, mavlink.MAV_CMD_MISSION_START, 0, 0, 0, 0,
                                                0, 0, 0, 0))  # fmt: skip
         ack = wait_for(link, lambda m: m.get_type() == "COMMAND_ACK")

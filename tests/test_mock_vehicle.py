@@ -5,11 +5,13 @@ from __future__ import annotations
 
 import time
 
+import pytest
 from gcs_planner.sim.faults import FaultInjector, FaultRates
 from gcs_planner.sim.vehicle import MockVehicle, free_udp_port
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from gcs_planner.aircraft.autopilot import autopilot_for
 from gcs_planner.link.connection import mavlink, open_link
 from gcs_planner.link.mission_client import MissionClient
 from gcs_planner.mission.items import MissionItem
@@ -49,49 +51,73 @@ def test_heartbeat_and_mission_current_as_a_fixed_wing():
     assert any(m.get_type() == "MISSION_CURRENT" for m in msgs)
 
 
-def test_wrong_sequence_is_refused_and_the_item_asked_again():
+def _quiet(flavour):
+    return autopilot_for(flavour).protocol.refuses_quietly
+
+
+_REQUESTS = {"MISSION_REQUEST", "MISSION_REQUEST_INT"}
+
+
+@pytest.mark.parametrize("flavour", ["ardupilot", "px4"])
+def test_wrong_sequence_is_refused_and_the_item_asked_again(flavour):
+    """ArduPilot answers an item out of sequence MAV_MISSION_INVALID_SEQUENCE
+    (MissionItemProtocol::handle_mission_item); PX4 ignores it ("Item sequence not expected,
+    ignore item"). Both ask for the item they wait for again."""
     port = free_udp_port()
-    with MockVehicle(f"udpin:127.0.0.1:{port}", flavour="px4", request_timeout=0.2) as vehicle:
+    with MockVehicle(f"udpin:127.0.0.1:{port}", flavour=flavour, request_timeout=0.2) as vehicle:
         link = _raw_peer(port)
         try:
             link.send(link.mav.mission_count_encode(1, 1, 3, 0))
-            _collect(link, {"MISSION_REQUEST_INT"}, 0.1)
+            _collect(link, _REQUESTS, 0.1)
             wrong = ITEMS[2]
             link.send(
                 link.mav.mission_item_int_encode(
                     1, 1, 2, wrong.frame, wrong.command, 0, 1, 0, 0, 0, 0, wrong.x, wrong.y, 100.0
                 )
             )
-            msgs = _collect(link, {"MISSION_ACK", "MISSION_REQUEST_INT"}, 0.6)
+            msgs = _collect(link, {"MISSION_ACK", *_REQUESTS}, 0.6)
         finally:
             link.close()
     acks = [m.type for m in msgs if m.get_type() == "MISSION_ACK"]
-    assert mavlink.MAV_MISSION_INVALID_SEQUENCE in acks
-    assert [m.seq for m in msgs if m.get_type() == "MISSION_REQUEST_INT"][-1] == 0
-    assert vehicle.mission == []
+    assert acks == ([] if _quiet(flavour) else [mavlink.MAV_MISSION_INVALID_SEQUENCE])
+    assert [m.seq for m in msgs if m.get_type() in _REQUESTS][-1] == 0
+    assert vehicle.mission[1:] == []
 
 
-def test_silent_uploader_is_re_requested_then_cancelled():
+@pytest.mark.parametrize("flavour", ["ardupilot", "px4"])
+def test_silent_uploader_is_re_requested_then_cancelled(flavour):
+    """ArduPilot ends a silent upload with MISSION_ACK OPERATION_CANCELLED
+    (MissionItemProtocol::update); PX4 with the status text "Operation timeout" only
+    (MavlinkMissionManager::send)."""
     port = free_udp_port()
     with MockVehicle(
-        f"udpin:127.0.0.1:{port}", flavour="px4", request_timeout=0.1, upload_timeout=0.6
+        f"udpin:127.0.0.1:{port}", flavour=flavour, request_timeout=0.1, upload_timeout=0.6
     ) as vehicle:
         link = _raw_peer(port)
         try:
             link.send(link.mav.mission_count_encode(1, 1, 3, 0))
-            msgs = _collect(link, {"MISSION_ACK", "MISSION_REQUEST_INT"}, 1.2)
+            msgs = _collect(link, {"MISSION_ACK", *_REQUESTS}, 1.2)
         finally:
             link.close()
-    requests = [m for m in msgs if m.get_type() == "MISSION_REQUEST_INT"]
+        assert vehicle.missions.upload is None
+    requests = [m for m in msgs if m.get_type() in _REQUESTS]
     assert len(requests) >= 3 and all(m.seq == 0 for m in requests)
     acks = [m.type for m in msgs if m.get_type() == "MISSION_ACK"]
-    assert acks == [mavlink.MAV_MISSION_OPERATION_CANCELLED]
-    assert vehicle.mission == []
+    if _quiet(flavour):
+        assert acks == [] and "Operation timeout" in vehicle.statustexts
+    else:
+        assert acks == [mavlink.MAV_MISSION_OPERATION_CANCELLED]
+    assert vehicle.mission[1:] == []
 
 
-def test_download_needs_no_final_ack_and_busy_vehicle_denies():
+@pytest.mark.parametrize("flavour", ["ardupilot", "px4"])
+def test_download_needs_no_final_ack_and_busy_vehicle_refuses(flavour):
+    """A download whose final MISSION_ACK never comes: ArduPilot keeps no download state and
+    takes the next upload at once; PX4 is still sending its list and answers the count
+    MAV_MISSION_ERROR, which the client ends with a cancel and counts again. While receiving,
+    ArduPilot denies a download; PX4 ignores it with a status text."""
     port = free_udp_port()
-    with MockVehicle(f"udpin:127.0.0.1:{port}", flavour="px4") as vehicle:
+    with MockVehicle(f"udpin:127.0.0.1:{port}", flavour=flavour) as vehicle:
         link = open_link(f"udpout:127.0.0.1:{port}")
         try:
             client = MissionClient(link)
@@ -102,17 +128,21 @@ def test_download_needs_no_final_ack_and_busy_vehicle_denies():
             assert _collect(link, {"MISSION_COUNT"}, 0.3)[0].count == 4
             link.send(link.mav.mission_request_int_encode(1, 1, 0, 0))
             assert _collect(link, {"MISSION_ITEM_INT"}, 0.3)[0].seq == 0
-            # ...leaves the vehicle free for the next upload at once.
+            # ...and the next upload is taken.
             new = ITEMS[:2]
             client.upload(new)
-            assert vehicle.mission == new
-            # While receiving, the vehicle denies a download (as ArduPilot does).
+            assert vehicle.mission[1:] == new[1:]
+            busy_errors = vehicle.acks_sent.count(mavlink.MAV_MISSION_ERROR)
+            assert busy_errors == (1 if _quiet(flavour) else 0)
             link.send(link.mav.mission_count_encode(1, 1, 3, 0))
             link.send(link.mav.mission_request_list_encode(1, 1, 0))
             acks = _collect(link, {"MISSION_ACK"}, 0.3)
-            assert mavlink.MAV_MISSION_DENIED in [m.type for m in acks]
         finally:
             link.close()
+    if _quiet(flavour):
+        assert "Mission download request ignored, already active" in vehicle.statustexts
+    else:
+        assert mavlink.MAV_MISSION_DENIED in [m.type for m in acks]
 
 
 def test_parameters_read_list_and_set():
@@ -181,9 +211,13 @@ def test_fault_injector_conserves_frames_and_is_seeded(seed, drop, dup, delay, r
         assert out == list(range(200))
 
 
-def test_final_item_resent_after_a_lost_ack_is_acknowledged_again():
+@pytest.mark.parametrize("flavour", ["ardupilot", "px4"])
+def test_final_item_resent_after_a_lost_ack_is_acknowledged_again(flavour):
+    """PX4 acknowledges its partner's last item again (its ACK was lost; handle_mission_item_both
+    while idle) and answers any other item MAV_MISSION_ERROR ("No transfer"); ArduPilot, no
+    longer receiving, answers every item MAV_MISSION_ERROR (GCS_MAVLINK::handle_mission_item)."""
     port = free_udp_port()
-    with MockVehicle(f"udpin:127.0.0.1:{port}", flavour="px4", request_timeout=0.5) as vehicle:
+    with MockVehicle(f"udpin:127.0.0.1:{port}", flavour=flavour, request_timeout=0.5) as vehicle:
         link = _raw_peer(port)
         try:
             link.send(link.mav.mission_count_encode(1, 1, 2, 0))
@@ -194,20 +228,21 @@ def test_final_item_resent_after_a_lost_ack_is_acknowledged_again():
                     1, 1, seq, it.frame, it.command, 0, 1, 0, 0, 0, 0, it.x, it.y, 100.0
                 )
 
-            _collect(link, {"MISSION_REQUEST_INT"}, 0.1)
+            _collect(link, _REQUESTS, 0.1)
             link.send(item(0))
-            _collect(link, {"MISSION_REQUEST_INT"}, 0.1)
+            _collect(link, _REQUESTS, 0.1)
             link.send(item(1))
             first = _collect(link, {"MISSION_ACK"}, 0.3)
             link.send(item(1))  # as if that acknowledgement had been lost
             again = _collect(link, {"MISSION_ACK"}, 0.3)
-            link.send(item(0))  # an older item is not the end of the transfer: no answer
+            link.send(item(0))  # an older item is not the end of the transfer
             stale = _collect(link, {"MISSION_ACK"}, 0.3)
         finally:
             link.close()
     assert [m.type for m in first] == [mavlink.MAV_MISSION_ACCEPTED]
-    assert [m.type for m in again] == [mavlink.MAV_MISSION_ACCEPTED]
-    assert stale == []
+    final_again = autopilot_for(flavour).protocol.final_item_again
+    assert [m.type for m in again] == [final_again]
+    assert [m.type for m in stale] == [mavlink.MAV_MISSION_ERROR]
     assert len(vehicle.mission) == 2
 
 

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from gcs_planner.sim.atmosphere import eas2tas
 from gcs_planner.sim.guidance import AutopilotParams, fly
-from test_guidance import FRAME, PROFILE, mission
+from support.flights import FRAME, PROFILE, mission
 
 from gcs_planner.aircraft.autopilot import (
     ARDUPLANE,

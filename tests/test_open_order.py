@@ -7,8 +7,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from test_bnb import enumerate_straight_front, uncertain_straight_scenario
-from test_budget import corridor
+from support.enumeration import enumerate_straight_front
+from support.scenarios import long_corridor_scenario, uncertain_straight_scenario
 
 from gcs_planner.core.bnb import Found, bnb_front
 from gcs_planner.core.bnb.incumbents import _Incumbents
@@ -57,7 +57,7 @@ def test_cut_short_searches_miss_no_route_shorter_than_their_open_bound() -> Non
     front route a search cut short did not find is at least its open bound long."""
     cut = 0
     cases = [(uncertain_straight_scenario(seed), None) for seed in range(150)]
-    cases += [(corridor(seed, n=40), "search") for seed in range(4)]
+    cases += [(long_corridor_scenario(seed, n=40), "search") for seed in range(4)]
     for scenario, how in cases:
         if how is None:
             exact = [(w[0], w[1], -w[2]) for w in enumerate_straight_front(scenario)]

@@ -16,10 +16,9 @@ import math
 
 import numpy as np
 import pytest
-from helpers import legs_modes
-from test_plan_exact import TWO, assert_plans_enumeration, enumerate_fronts, tall_scenario
-from test_probes import probed_scenario
-from test_search_kernel import assert_compiled_flies_as_python
+from support.compiled_search import assert_compiled_flies_as_python, legs_modes
+from support.enumeration import TWO, assert_plans_enumeration, enumerate_fronts
+from support.scenarios import probed_scenario, tall_scenario
 
 from gcs_planner.aircraft.profile import DerivedEnvelope
 from gcs_planner.geometry.airplane import LegEnvelope
@@ -201,10 +200,10 @@ def test_what_varies_per_leg_under_each_autopilot(firmware, varies, dataset_path
     last turn's exit course: its legs keep the highest point's climb and descent angles (the
     dry run of a plan at each leg's own angles lost flights by a lap more) and take the radius
     per leg."""
-    from test_envelope_in_wind import scenario_for
+    from support.envelope import scenario_in_wind
 
-    assert scenario_for(dataset_paths[1], 1, firmware, "5").envelope.per_leg == ()  # asked only
-    scenario = scenario_for(dataset_paths[1], 1, firmware, "5", per_leg=True)
+    assert scenario_in_wind(dataset_paths[1], 1, firmware, "5").envelope.per_leg == ()  # asked only
+    scenario = scenario_in_wind(dataset_paths[1], 1, firmware, "5", per_leg=True)
     assert scenario.envelope.per_leg == varies
     env = leg_envelope(scenario)
     r, c, d = env.at(np.array([0.0, float(scenario.xyz[:, 2].max())]))

@@ -13,7 +13,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 from matplotlib.text import Text
-from test_mission_builder import ORIGIN, make_plan
+from support.missions import ORIGIN, make_plan
 
 from gcs_planner.core.planner import plan as plan_scenario
 from gcs_planner.mission import plan_json

@@ -9,7 +9,7 @@ import matplotlib.image as mpimg
 import matplotlib.pyplot as plt
 import numpy as np
 import pytest
-from test_mission_builder import make_plan
+from support.missions import make_plan
 
 from gcs_planner.errors import InputError
 from gcs_planner.mission.pictures import (

@@ -5,8 +5,7 @@ from __future__ import annotations
 import json
 
 import numpy as np
-from helpers import write_scenario_csv
-from test_policy_missions import _flags
+from support.scenarios import flags_of, write_scenario_csv
 
 from gcs_planner.cli import main
 from gcs_planner.core.from_state import FlightState, compass_heading, state_scenario
@@ -26,7 +25,7 @@ def test_plan_from_a_state_is_the_librarys(tmp_path, capsys) -> None:
     at = next(j for j in range(sc.n) if int(sc.kind[j]) in (Kind.V, Kind.H))
     flown = next(j for j in range(sc.n) if j != at and int(sc.kind[j]) in (Kind.V, Kind.H))
     state = f"{sc.ids[at]}:4.5,7.25:60"
-    args = ["plan", str(csv), *_flags(sc), "--from-state", state, "--flown", sc.ids[flown]]
+    args = ["plan", str(csv), *flags_of(sc), "--from-state", state, "--flown", sc.ids[flown]]
     assert main([*args, "--json", "--min-probability", "0"]) == 0
     got = json.loads(capsys.readouterr().out)
     sub, _ = state_scenario(
@@ -43,7 +42,7 @@ def test_plan_from_a_state_is_the_librarys(tmp_path, capsys) -> None:
 def test_bad_states_exit_2_naming_the_flag(tmp_path, capsys) -> None:
     sc = _scenario()
     csv = write_scenario_csv(sc, tmp_path / "sc.csv")
-    base = ["plan", str(csv), *_flags(sc)]
+    base = ["plan", str(csv), *flags_of(sc)]
     for bad, said in (
         (["--from-state", "nowhere:1,2"], "no point 'nowhere'"),
         (["--from-state", f"{sc.ids[1]}:1"], "two numbers"),

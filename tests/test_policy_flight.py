@@ -4,9 +4,10 @@ UDP loopback: it switches to the branch when the fix at P fails and the vehicle 
 branch's point; with every fix made it stays on the primary; under 5 % link loss; a branch that
 cannot be uploaded leaves a whole mission on the vehicle; a silent vehicle is noticed.
 
-The scenario (tests/policy_scenario.py) is 8 km of straight legs: the primary is lost when the
-fix at P fails, the branch arrives. The vehicle flies 20 simulated seconds per wall second: the
-ground station's window after the report at P is the 4 km to B, some 6 s of wall time.
+The scenario (tests/support/policy_scenario.py) is 8 km of straight legs: the primary is lost
+when the fix at P fails, the branch arrives. The vehicle flies 20 simulated seconds per wall
+second: the ground station's window after the report at P is the 4 km to B, some 6 s of wall
+time.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from dataclasses import replace
 import pytest
 from gcs_planner.sim.live_flight import passed_within
 from gcs_planner.sim.vehicle import MockVehicle, free_udp_port
-from policy_scenario import policy_missions, policy_scenario, write_scenario
+from support.policy_scenario import policy_missions, policy_scenario, write_scenario
 
 from gcs_planner.cli import main
 from gcs_planner.link.connection import open_link

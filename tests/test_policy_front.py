@@ -7,8 +7,9 @@ import itertools
 
 import numpy as np
 import pytest
-from test_bnb import all_routes
-from test_contingency import _scenario, _unreliable
+from support.enumeration import all_routes
+from support.policies import can_fail_at
+from support.scenarios import contingency_scenario
 
 from gcs_planner.core.bnb import flown_route
 from gcs_planner.core.contingency import Policy, _Evaluator, _start_heading, evaluate
@@ -32,7 +33,7 @@ def _every_policy(sc):
             for j in [*corr, sc.end]:
                 if j in used:
                     continue
-                if j == sc.end or _unreliable(sc, j):
+                if j == sc.end or can_fail_at(sc, j):
                     yield (*path, j), used | {j}
                 else:
                     yield from segments((*path, j), used | {j})
@@ -184,8 +185,8 @@ def _weakly(a, b) -> bool:
 
 
 def test_exact_policy_front_refuses_large_scenarios() -> None:
-    sc = _scenario(1, n_max=12)
+    sc = contingency_scenario(1, n_max=12)
     while sum(int(k) in (Kind.V, Kind.H) for k in sc.kind) <= 7:
-        sc = _scenario(int(sc.n) + 100, n_max=12)
+        sc = contingency_scenario(int(sc.n) + 100, n_max=12)
     with pytest.raises(GcsPlannerError, match="stops at 7 correction points"):
         exact_policy_front(sc)

@@ -11,8 +11,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers import write_scenario_csv
-from test_contingency import _random_policy, _scenario
+from support.policies import random_policy
+from support.scenarios import contingency_scenario, flags_of, write_scenario_csv
 
 from gcs_planner.cli import main
 from gcs_planner.core.bnb import flown_route
@@ -130,13 +130,13 @@ def test_random_policies_are_flown_by_their_missions(firmware: str) -> None:
     rng = np.random.default_rng(3)
     branched = 0
     for seed in range(12):
-        sc = _scenario(seed, 0.0, lenient=True)
+        sc = contingency_scenario(seed, 0.0, lenient=True)
         try:
             base = _base_plan(sc)
         except InfeasibleError:  # no plan dict to build missions from
             continue
         for _ in range(3):
-            policy = _random_policy(sc, rng)
+            policy = random_policy(sc, rng)
             pm = policy_missions(sc, policy, base, firmware=firmware)
             _check(sc, policy, pm)
             branched += len(pm.switches) > 1
@@ -145,7 +145,7 @@ def test_random_policies_are_flown_by_their_missions(firmware: str) -> None:
 
 def _replanned(seed: int, departure: float = 150.0):
     """Seed 167's chosen route replans at two failed fixes (airplane legs, 300 m radius)."""
-    sc = _scenario(seed, 300.0, n_max=10)
+    sc = contingency_scenario(seed, 300.0, n_max=10)
     sc = dataclasses.replace(sc, params=dataclasses.replace(sc.params, departure=departure))
     result = plan(sc, min_probability=0.0)
     return sc, result, replan_on_failure(sc, result.route).policy
@@ -298,16 +298,6 @@ def test_unreadable_policy_file(tmp_path) -> None:
 # plan --policy
 
 
-def _flags(sc: Scenario) -> list[str]:
-    p = sc.params
-    names = ("alpha1", "alpha2", "beta1", "beta2", "theta", "delta", "turn_radius", "p_success",
-             "fail_residual", "departure")  # fmt: skip
-    out = []
-    for name in names:
-        out += [f"--{name.replace('_', '-')}", repr(float(getattr(p, name)))]
-    return [*out, "--reserve", "0", "--min-probability", "0"]
-
-
 def test_plan_policy_writes_every_mission_and_the_file(tmp_path, capsys) -> None:
     sc, _, _ = _replanned(167)
     csv = write_scenario_csv(sc, tmp_path / "sc.csv")
@@ -315,9 +305,9 @@ def test_plan_policy_writes_every_mission_and_the_file(tmp_path, capsys) -> None
     # A random scenario of the contest's model: its unlimited climbs are steeper than any
     # autopilot's limits, so its missions are written only when asked for.
     risky = ["--allow-risky"]
-    assert main(["plan", str(csv), *_flags(sc), "--out", str(out), "--policy"]) == 3
+    assert main(["plan", str(csv), *flags_of(sc), "--out", str(out), "--policy"]) == 3
     assert "no ardupilot setup flies this plan" in capsys.readouterr().err
-    assert main(["plan", str(csv), *_flags(sc), "--out", str(out), "--policy", *risky]) == 0
+    assert main(["plan", str(csv), *flags_of(sc), "--out", str(out), "--policy", *risky]) == 0
     text = capsys.readouterr().out
     assert "contingency policy: 3 mission(s), 2 switch(es)" in text
     assert "chosen route 0" in text and "most reliable route" in text
@@ -337,13 +327,13 @@ def test_plan_policy_writes_every_mission_and_the_file(tmp_path, capsys) -> None
         (out / "mission.plan").read_text()
     )
     # A second run replaces the folder it wrote (its branch files included).
-    assert main(["plan", str(csv), *_flags(sc), "--out", str(out), "--policy", *risky]) == 0
+    assert main(["plan", str(csv), *flags_of(sc), "--out", str(out), "--policy", *risky]) == 0
 
 
 def test_plan_policy_needs_out(tmp_path, capsys) -> None:
     sc = _fork_scenario()
     csv = write_scenario_csv(sc, tmp_path / "sc.csv")
-    assert main(["plan", str(csv), *_flags(sc), "--policy"]) == 2
+    assert main(["plan", str(csv), *flags_of(sc), "--policy"]) == 2
     assert "--policy" in capsys.readouterr().err
 
 
@@ -357,7 +347,7 @@ def test_plan_policy_beyond_brute_force_and_bad_levels(tmp_path, capsys) -> None
     sc = random_scenario(15, 3, params=params, box=(60_000, 20_000, 2_000))
     csv = write_scenario_csv(sc, tmp_path / "big.csv")
     out = tmp_path / "out"
-    args = ["plan", str(csv), *_flags(sc), "--out", str(out), "--policy", "--allow-risky"]
+    args = ["plan", str(csv), *flags_of(sc), "--out", str(out), "--policy", "--allow-risky"]
     assert main([*args, "--policy-levels", "2"]) == 0
     printed = capsys.readouterr().out
     assert "policy front (the non-dominated of the front's routes" in printed
@@ -365,7 +355,7 @@ def test_plan_policy_beyond_brute_force_and_bad_levels(tmp_path, capsys) -> None
     bad = tmp_path / "bad"
     bad.mkdir()
     (bad / "plan.json").write_text("earlier")
-    bad_args = ["plan", str(csv), *_flags(sc), "--out", str(bad), "--policy"]
+    bad_args = ["plan", str(csv), *flags_of(sc), "--out", str(bad), "--policy"]
     assert main([*bad_args, "--policy-levels", "0"]) == 2
     err = capsys.readouterr().err
     assert "--policy-levels" in err and "Traceback" not in err
@@ -394,7 +384,7 @@ def test_a_branch_likely_missed_is_exported_only_when_asked(tmp_path, capsys, mo
     monkeypatch.setattr(
         policy_export, "_capture_warning", lambda s, pts: missed if 8 in pts else None
     )
-    args = ["plan", str(csv), *_flags(sc), "--out", str(out), "--policy"]
+    args = ["plan", str(csv), *flags_of(sc), "--out", str(out), "--policy"]
     assert main(args) == 3
     err = capsys.readouterr().err
     assert f"mission branch-5: {missed}" in err and "--allow-risky" in err

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
-from helpers import mixed_scenario
+from support.scenarios import mixed_scenario
 
 from gcs_planner.core.cost_to_go import cost_to_go
 from gcs_planner.core.prefilter import FanBound, covered_fan

@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import functools
 from dataclasses import replace
-from pathlib import Path
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from support.paths import DATA
 
 from gcs_planner.core.probability import (
     brute_force_success,
@@ -21,8 +21,6 @@ from gcs_planner.core.route import Leg, evaluate_route, straight_legs
 from gcs_planner.scenario.generate import DATASET1, random_scenario
 from gcs_planner.scenario.model import Kind, Parameters, Scenario
 from gcs_planner.scenario.readers import load_scenario
-
-DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "gmcm2019f"
 
 # A small box against DATASET1's reach (15-30 km limits) so that the limits bind and a failed
 # correction (residual 5 km) often makes the difference.

@@ -12,8 +12,7 @@ import collections
 import numpy as np
 import pytest
 from numba import njit
-from test_focus_turns import sparse_scenario
-from test_probes import probed_scenario
+from support.scenarios import probed_scenario, sparse_scenario
 
 from gcs_planner.core import bnb, cover_kernel, dominance_kernel, failure_bounds, probe_kernel
 from gcs_planner.core.bnb import Options, dominance, incumbents

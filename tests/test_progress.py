@@ -10,41 +10,12 @@ import math
 import re
 
 import pytest
+from support.terminal import FakeTerminal, screen
 
 from gcs_planner.cli import main
 from gcs_planner.core.budget import Progress as Report
 from gcs_planner.link.progress import Progress as TransferProgress
 from gcs_planner.runtime.progress import Counter, SearchProgress, StatusLine
-
-
-class FakeTerminal(io.StringIO):
-    def isatty(self) -> bool:
-        return True
-
-
-def screen(text: str) -> list[str]:
-    """What a terminal shows after ``text``: carriage returns go back to the column 0 and
-    overwrite, erase-to-end-of-line clears the rest, newlines start a row."""
-    rows, row, col = [], [], 0
-    for token in re.findall(r"\x1b\[K|\x1b\[A|\r|\n|[^\r\n\x1b]", text):
-        if token == "\r":
-            col = 0
-        elif token == "\n":
-            rows.append("".join(row).rstrip())
-            row, col = [], 0
-        elif token == "\x1b[K":
-            del row[col:]
-        elif token == "\x1b[A":
-            raise AssertionError("a single line should never move the cursor up")
-        else:
-            if col < len(row):
-                row[col] = token
-            else:
-                row.append(token)
-            col += 1
-    if row:
-        rows.append("".join(row).rstrip())
-    return rows
 
 
 def report(labels: int, seconds: float, bound: float = 1234.0) -> Report:

@@ -353,3 +353,46 @@ def test_upload_and_download_through_mock_vehicle_radio_process(tmp_path, capsys
             err = proc.communicate()[1]
     assert proc.returncode == 0, err
     assert "SiK radio pair at 250 kbit/s" in err and "holds 15 items" in err
+
+
+def test_mock_vehicle_radio_reached_by_a_listening_ground_station_takes_500_items(tmp_path, capsys):
+    """Issue 51: `mock-vehicle --radio sik --connect udpout:...` (the ground station listens,
+    README's usual pairing) sent nothing: the vehicle listened behind the air radio too, and
+    nobody spoke first. 500 items through the 64 kbit/s pair at 5 % burst loss, by MAVFTP as
+    the client chooses for ArduPilot (seconds; the mission protocol takes minutes for that
+    many over this radio), then 20 more by the mission protocol."""
+    import signal
+    import subprocess
+    import sys
+
+    from gcs_planner.mission.waypoints import dumps_items
+
+    port = free_udp_port()
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "gcs_planner", "mock-vehicle", "--connect",
+         f"udpout:127.0.0.1:{port}", "--scenario", SCENARIO, "--radio", "sik",
+         "--radio-loss", "0.05", "--seed", "3"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )  # fmt: skip
+    try:
+        conn = ["--connect", f"udpin:127.0.0.1:{port}", "--quiet", "--wait", "60"]
+        for n, transfer, way in ((500, "auto", "by MAVFTP"), (20, "mission", "")):
+            items = [MissionItem(i, 0, 16, param2=30.0, x=305_000_000 + 500 * i,
+                                 y=1_235_000_000, z=120.0) for i in range(n)]  # fmt: skip
+            wp = tmp_path / f"m{n}.waypoints"
+            wp.write_text(dumps_items(items, "ardupilot", (30.5, 123.5, 0.0)))
+            args = ["upload", str(wp), *conn, "--keep-loiter-radius", "--transfer", transfer]
+            assert main(args) == 0
+            out = capsys.readouterr().out
+            assert f"uploaded and verified {n} items" in out and way in out
+    finally:
+        proc.send_signal(signal.SIGINT)
+        try:
+            err = proc.communicate(timeout=30)[1]
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            err = proc.communicate()[1]
+    assert proc.returncode == 0, err
+    assert "SiK radio pair at 64 kbit/s" in err and "holds 20 items" in err

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from helpers import corridor_scenario, mixed_scenario
+from support.scenarios import corridor_scenario, mixed_scenario
 
 from gcs_planner.core.reach import arrival_limits_m, build_reach_graph
 

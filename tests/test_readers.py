@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import openpyxl
 import pytest
+from support.paths import DATA, MISSIONS
 
 from gcs_planner.aircraft.profile import DEFAULT_RESERVE_M
 from gcs_planner.core.route import evaluate_route
@@ -18,8 +19,7 @@ from gcs_planner.scenario.generate import DATASET1, random_scenario
 from gcs_planner.scenario.model import PARAMETER_NAMES, Kind, Origin, Parameters, Scenario
 from gcs_planner.scenario.readers import load_scenario
 
-DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "gmcm2019f"
-EXAMPLE = Path(__file__).resolve().parents[1] / "missions" / "example"
+EXAMPLE = MISSIONS / "example"
 REQUIRED = {k: getattr(DATASET1, k) for k in PARAMETER_NAMES}
 LETTER = {Kind.A: "A", Kind.B: "B", Kind.V: "V", Kind.H: "H"}
 HEADER = "id,x,y,z,kind,unreliable"

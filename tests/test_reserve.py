@@ -7,8 +7,8 @@ import dataclasses
 
 import numpy as np
 import pytest
-from test_airplane_legs import climbing_scenario  # noqa: F401 (tight_scenario's base)
-from test_bnb import assert_front_equals_enumeration
+from support.enumeration import assert_front_equals_enumeration
+from support.scenarios import climbing_scenario
 
 from gcs_planner.core.bnb import bnb_front, flown_route
 from gcs_planner.core.probability import success_probability
@@ -19,8 +19,8 @@ LIMIT_NAMES = PARAMETER_NAMES[:5]
 
 
 def tight_scenario(seed: int):
-    """test_airplane_legs' climbing scenarios (turns, helices, unreliable points) with their
-    limits scaled down, so that the limits, and with them the reserve, decide the front."""
+    """The climbing scenarios of support/scenarios.py (turns, helices, unreliable points) with
+    their limits scaled down, so that the limits, and with them the reserve, decide the front."""
     base = climbing_scenario(seed)
     scale = float(np.random.default_rng(500 + seed).uniform(0.5, 0.9))
     p = base.params
@@ -127,7 +127,7 @@ def test_planning_with_every_unreliable_correction_failing_gives_the_certain_fro
     """A route arrives surely exactly when it survives every unreliable correction failing
     (a failure only leaves errors larger), so the front planned with p_success = 0 is the
     (length, corrections) front of the routes whose exact probability is 1, by enumeration."""
-    from test_bnb import all_routes, pareto
+    from support.enumeration import all_routes, pareto
 
     nonempty = through_unreliable = tried = 0
     for seed in range(46):

@@ -84,7 +84,8 @@ def test_free_turn_turns_on_the_spot_as_before():
 
 
 def test_the_compiled_step_flies_the_python_step():
-    """Random states, demands, steps (a finish-line cut, a fine step, a coarse one) and winds:
+    """Random states, demands, steps (a finish-line cut, a fine step, a coarse one) and winds
+    (rising and sinking air too):
     the kernel's step gives the Python step's state to rounding, bank included; a chain of
     steps carries the bank alike."""
     rng = np.random.default_rng(31)
@@ -105,12 +106,13 @@ def test_the_compiled_step_flies_the_python_step():
             lateral = -G * math.tan(math.radians(near))
         climb = float(rng.uniform(-6, 6))
         wx, wy = (float(w) for w in rng.uniform(-8, 8, 2))
+        wz = float(rng.uniform(-2, 2)) if trial % 2 else 0.0  # rising or sinking air
         e2t = float(rng.uniform(1.0, 1.3))
         state = np.array([s.x, s.y, s.z, s.course, s.t, s.bank_deg, s.climb_rate, s.heading,
-                          s.tas, s.ground_speed] + [0.0] * 6)  # fmt: skip
+                          s.tas, s.ground_speed] + [0.0] * (STATE_SIZE - 10))  # fmt: skip
         for _ in range(3):
-            py = step(s, env, lateral, climb, dt, (wx, wy), e2t)
-            pm.step(state, aircraft, lateral, climb, dt, wx, wy, e2t, limit, out)
+            py = step(s, env, lateral, climb, dt, (wx, wy, wz), e2t)
+            pm.step(state, aircraft, lateral, climb, dt, wx, wy, wz, e2t, limit, out)
             want = [py.x, py.y, py.z, py.course, py.t, py.bank_deg, py.climb_rate, py.heading,
                     py.tas, py.ground_speed]  # fmt: skip
             assert out[:10] == pytest.approx(want, rel=1e-9, abs=1e-9)

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from helpers import corridor_scenario, mixed_scenario
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from support.scenarios import corridor_scenario, mixed_scenario
 
 from gcs_planner.baselines.brute import brute_force_front
 from gcs_planner.baselines.milp import milp_front

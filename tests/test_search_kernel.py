@@ -8,48 +8,15 @@ from __future__ import annotations
 
 import collections
 
-from test_probes import assert_same_front, dfs_front, front_of, probed_front, probed_scenario
+from support.compiled_search import assert_same_search, searched_both_ways
+from support.enumeration import assert_same_front, front_of, probed_front
+from support.scenarios import probed_scenario
 
-from gcs_planner.core import bnb, search_kernel
-from gcs_planner.core.bnb import Options
+from gcs_planner.core import search_kernel
 from gcs_planner.core.bnb import search as bnb_search
 from gcs_planner.core.budget import Budget
 
 LEGS = ("airplane", "airplane, climb limits", "cs3d")
-
-
-def _pair(scenario, probability: bool, **budget) -> tuple:
-    results = []
-    for compiled in (True, False):
-        b = Budget(**budget) if budget else None
-        options = Options(compiled_search=compiled)
-        results.append(
-            bnb.bnb_front(
-                scenario, probability=probability, max_labels=10**6, budget=b, options=options
-            )
-        )
-    return tuple(results)
-
-
-def _same(a: bnb.BnbResult, b: bnb.BnbResult, case) -> None:
-    assert [f.points for f in a.front] == [f.points for f in b.front], case
-    assert [(f.corrections, f.probability) for f in a.front] == [
-        (f.corrections, f.probability) for f in b.front
-    ], case
-    for f, g in zip(a.front, b.front):
-        assert abs(f.length - g.length) <= 1e-6, case
-    assert (a.labels, a.probe_labels, a.open_labels) == (b.labels, b.probe_labels, b.open_labels)
-    assert (a.optimal, a.proven, a.exhausted) == (b.optimal, b.proven, b.exhausted), case
-    for x, y in zip(a.lower_bounds, b.lower_bounds):
-        assert abs(x - y) <= 1e-6, case
-
-
-def assert_compiled_flies_as_python(scenario, case) -> None:
-    """The compiled search equals the Python one (three objectives), label for label, and its
-    front equals depth-first enumeration's."""
-    compiled, python = _pair(scenario, True)
-    _same(compiled, python, case)
-    assert_same_front(front_of(compiled, True), dfs_front(scenario, True), case)
 
 
 def test_compiled_searches_equal_the_python_ones_and_enumeration(monkeypatch) -> None:
@@ -66,8 +33,8 @@ def test_compiled_searches_equal_the_python_ones_and_enumeration(monkeypatch) ->
         for seed in range(10):
             scenario = probed_scenario(seed, legs)
             for probability in (True, False) if seed < 4 else (True,):
-                compiled, python = _pair(scenario, probability)
-                _same(compiled, python, (legs, seed, probability))
+                compiled, python = searched_both_ways(scenario, probability)
+                assert_same_search(compiled, python, (legs, seed, probability))
                 want = probed_front(seed, legs, probability)
                 assert_same_front(front_of(compiled, probability), want, (legs, seed))
     # Every kind of legs ran compiled: heading-free, the pair relaxation's, airplane, cs3d.
@@ -89,10 +56,10 @@ def test_compiled_searches_stop_where_the_python_ones_do(monkeypatch) -> None:
         for seed in range(4):
             scenario = probed_scenario(seed, legs)
             for limit in (5, 40, 150):
-                compiled, python = _pair(scenario, True, max_labels=limit)
-                _same(compiled, python, (legs, seed, limit))
-            compiled, python = _pair(scenario, True, max_labels=None, time_limit=0)
-            _same(compiled, python, (legs, seed, "time"))
+                compiled, python = searched_both_ways(scenario, True, max_labels=limit)
+                assert_same_search(compiled, python, (legs, seed, limit))
+            compiled, python = searched_both_ways(scenario, True, max_labels=None, time_limit=0)
+            assert_same_search(compiled, python, (legs, seed, "time"))
             assert not compiled.exhausted and compiled.labels == 0
     assert stopped["compiled, stopped"] >= 20 and stopped["compiled, exhausted"] >= 5, stopped
 

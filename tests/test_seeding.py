@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import numpy as np
-from test_bnb import enumerate_straight_front, uncertain_straight_scenario
+from support.enumeration import enumerate_straight_front
+from support.scenarios import uncertain_straight_scenario
 
 from gcs_planner.core.bnb import bnb_front
 from gcs_planner.core.probability import success_probability

@@ -34,6 +34,8 @@ def imported_by(module: str) -> list[str]:
         "gcs_planner.sim.wind",
         "gcs_planner.sim.atmosphere",
         "gcs_planner.sim.navigators",
+        "gcs_planner.sim.scripting",
+        "gcs_planner.sim.onboard_flight",
     ],  # fmt: skip
 )
 def test_sim_does_not_import_the_planning_core(module):

@@ -8,15 +8,15 @@ from dataclasses import replace
 from pathlib import Path
 
 import pytest
+from support.paths import MISSIONS
 
 from gcs_planner.aircraft.profile import turn_radius_from
 from gcs_planner.cli import main
 from gcs_planner.sweep import expand, read_spec, run_cell
 from gcs_planner.sweep.spec import GeneratedSource
 
-ROOT = Path(__file__).resolve().parents[1]
-EXAMPLE_SPEC = ROOT / "missions" / "sweep-example.toml"
-EXAMPLE_SCENARIO = ROOT / "missions" / "example" / "scenario.toml"
+EXAMPLE_SPEC = MISSIONS / "sweep-example.toml"
+EXAMPLE_SCENARIO = MISSIONS / "example" / "scenario.toml"
 
 
 def write_spec(tmp_path: Path, text: str, name: str = "spec.toml") -> Path:

@@ -20,8 +20,9 @@ from pathlib import Path
 
 import cloudpickle
 import pytest
-import sweep_tasks
 from distributed import LocalCluster
+from support import sweep_tasks
+from support.paths import MISSIONS, TESTS
 
 from gcs_planner.core.planner import plan
 from gcs_planner.errors import InputError
@@ -32,8 +33,7 @@ from gcs_planner.sweep.table import PARQUET, ResultTable
 
 cloudpickle.register_pickle_by_value(sweep_tasks)
 
-ROOT = Path(__file__).resolve().parents[1]
-EXAMPLE_SCENARIO = ROOT / "missions" / "example" / "scenario.toml"
+EXAMPLE_SCENARIO = MISSIONS / "example" / "scenario.toml"
 BIN = Path(sys.executable).parent
 DEADLINE_S = 300.0
 SMALL_BOX = "[40000, 20000, 2000]"
@@ -588,8 +588,8 @@ def test_retry_failed_runs_the_failed_cells_again(tmp_path: Path, cluster) -> No
 
 def with_test_tasks() -> dict:
     """The environment with the tests' folder on the path: a scheduler unpickles the task
-    graph, and a test task of sweep_tasks names its module there."""
-    path = os.pathsep.join(filter(None, [str(ROOT / "tests"), os.environ.get("PYTHONPATH")]))
+    graph, and a test task of support.sweep_tasks names its module there."""
+    path = os.pathsep.join(filter(None, [str(TESTS), os.environ.get("PYTHONPATH")]))
     return {**os.environ, "PYTHONPATH": path}
 
 
@@ -685,7 +685,7 @@ def test_progress_is_one_tqdm_line_on_stderr_and_failed_cells_do_not_break_chose
     import io
 
     import pyarrow.parquet as pq
-    from test_progress import FakeTerminal, screen
+    from support.terminal import FakeTerminal, screen
 
     # stderr a terminal, stdout the messages: the progress bar goes to stderr only, and what a
     # terminal shows after every redraw is one line with the final count (no stray tails).

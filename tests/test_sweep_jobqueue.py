@@ -20,12 +20,12 @@ import time
 from pathlib import Path
 
 import pytest
+from support.paths import MISSIONS
 
 from gcs_planner.errors import InputError
 from gcs_planner.sweep import read_results, read_spec
 
-ROOT = Path(__file__).resolve().parents[1]
-EXAMPLE_SCENARIO = ROOT / "missions" / "example" / "scenario.toml"
+EXAMPLE_SCENARIO = MISSIONS / "example" / "scenario.toml"
 BIN = Path(sys.executable).parent
 DEADLINE_S = 300.0
 

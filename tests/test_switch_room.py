@@ -14,13 +14,13 @@ import numpy as np
 import pytest
 from gcs_planner.sim.guidance import AutopilotParams
 from gcs_planner.sim.live_flight import LiveFlight
-from test_mission_builder import make_plan
+from support.missions import make_plan
 
 from gcs_planner.aircraft.profile import tas_from_eas
 from gcs_planner.cli import main
 from gcs_planner.core.bnb import flown_route
 from gcs_planner.core.switch_room import (
-    DEFAULT_SWITCH_TIME_S,
+    GROUND_SWITCH_TIME_S,
     switch_room,
     with_switch_room,
 )
@@ -55,10 +55,10 @@ def fork(departure: float = 0.0) -> Scenario:
 
 def test_the_room_is_the_capture_radius_and_the_switch_time_at_ground_speed() -> None:
     s = fork()
-    room = switch_room(s, DEFAULT_SWITCH_TIME_S)
+    room = switch_room(s, GROUND_SWITCH_TIME_S)
     tas = tas_from_eas(s.cruise_airspeed, 1000.0 + 12.5)
     assert room.ground_speed == pytest.approx(tas)
-    assert room.distance == pytest.approx(s.capture_radius + DEFAULT_SWITCH_TIME_S * tas)
+    assert room.distance == pytest.approx(s.capture_radius + GROUND_SWITCH_TIME_S * tas)
     assert with_switch_room(s, room).params.departure == pytest.approx(room.distance)
     # A longer run-out of the envelope's own is kept; straight legs have none to lengthen.
     longer = fork(departure=room.distance + 50.0)
@@ -102,7 +102,7 @@ def _switch_late(s: Scenario, delay: float) -> tuple[float, LiveFlight]:
 @pytest.mark.parametrize("delay", [0.0, 4.0, 8.0])
 def test_a_switch_within_the_room_flies_the_branch_as_planned(delay: float) -> None:
     s = fork()
-    s = with_switch_room(s, switch_room(s, DEFAULT_SWITCH_TIME_S))
+    s = with_switch_room(s, switch_room(s, GROUND_SWITCH_TIME_S))
     planned = flown_route(s, tuple(BRANCH)).stops[3].cumulative
     flown, flight = _switch_late(s, delay)
     assert flown == pytest.approx(planned, abs=40.0)
@@ -126,7 +126,7 @@ def test_plan_policy_states_its_switch_room(tmp_path, capsys) -> None:
     import json
     import math
 
-    from policy_scenario import write_scenario
+    from support.policy_scenario import write_scenario
 
     from gcs_planner.mission.policy_file import read_policy
 

@@ -18,7 +18,7 @@ from mavsdk import ComponentType, Configuration, Mavsdk
 from mavsdk.plugins.mission_raw import MissionRaw
 from pymavlink import mavwp
 from pymavlink.dialects.v20 import common as mavlink2
-from test_mission_builder import HOME, make_plan, steep_scenario
+from support.missions import HOME, make_plan, steep_scenario
 
 from gcs_planner.mission.builder import build_mission
 from gcs_planner.mission.items import MAV_FRAME_MISSION

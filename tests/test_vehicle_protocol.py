@@ -12,6 +12,7 @@ from typing import Any
 import pytest
 from gcs_planner.sim.vehicle import MockVehicle, free_udp_port
 
+from gcs_planner.aircraft.autopilot import autopilot_for
 from gcs_planner.link.connection import Link, mavlink, open_link
 from gcs_planner.link.mission_client import MissionClient
 from gcs_planner.link.protocol import item_to_message
@@ -131,9 +132,14 @@ def test_items_are_requested_as_the_autopilot_requests_them(flavour, request_kin
 def test_legacy_request_is_answered_with_the_legacy_item():
     with vehicle_and_peer("px4") as (_vehicle, link):
         upload_raw(link, ITEMS)
-        link.send(link.mav.mission_request_encode(1, 1, 2, 0))
-        item = wait_for(link, lambda m: m.get_type().startswith("MISSION_ITEM"))
-        assert item is not None and item.get_type() == "MISSION_ITEM"
+        # PX4 answers requests only inside a download it started (MISSION_REQUEST_LIST), in
+        # sequence: the list, then items 0, 1, 2 asked the legacy way.
+        link.send(link.mav.mission_request_list_encode(1, 1, 0))
+        assert wait_for(link, of("MISSION_COUNT")) is not None
+        for seq in range(3):
+            link.send(link.mav.mission_request_encode(1, 1, seq, 0))
+            item = wait_for(link, lambda m: m.get_type().startswith("MISSION_ITEM"))
+            assert item is not None and item.get_type() == "MISSION_ITEM" and item.seq == seq
         assert abs(item.x - ITEMS[2].x / 1e7) < 1e-5
 
 
@@ -175,21 +181,44 @@ def denied(msg: Any) -> bool:
 
 
 # Two ground stations -----------------------------------------------------------------------------
-@pytest.mark.parametrize("other_ids", [(254, 190), (255, 190)])
-def test_a_second_ground_station_is_denied_during_a_transfer(other_ids):
+def statustext_seen(vehicle: MockVehicle, text: str, timeout: float = PROOF_S) -> bool:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if any(text in t for t in vehicle.statustexts):
+            return True
+        time.sleep(0.02)
+    return False
+
+
+@pytest.mark.parametrize(
+    "flavour, other_ids",
+    # The same ids from another address restart an ArduPilot upload (it cannot tell them
+    # apart: MissionItemProtocol::handle_mission_count), so that pair is PX4's alone.
+    [("ardupilot", (254, 190)), ("px4", (254, 190)), ("px4", (255, 190))],
+)
+def test_a_second_ground_station_is_refused_during_a_transfer(flavour, other_ids):
     """Other ids, or the same ids from another address (a second `upload` process), are
-    refused; the transfer in progress completes as sent."""
-    with vehicle_and_peer("px4", request_timeout=30.0) as (vehicle, first):
+    refused; the transfer in progress completes as sent. ArduPilot refuses with
+    MAV_MISSION_DENIED (MissionItemProtocol::handle_mission_count / handle_mission_item); PX4
+    answers another's MISSION_COUNT MAV_MISSION_ERROR and its items with a status text only
+    (mavlink_mission.cpp: "partner id mismatch")."""
+    quiet = autopilot_for(flavour).protocol.refuses_quietly
+    refusal = mavlink.MAV_MISSION_ERROR if quiet else mavlink.MAV_MISSION_DENIED
+    with vehicle_and_peer(flavour, request_timeout=30.0) as (vehicle, first):
         other = open_link(
             first.connection, source_system=other_ids[0], source_component=other_ids[1]
         )
         try:
             first.send(first.mav.mission_count_encode(1, 1, 2, 0))
-            assert wait_for(first, of("MISSION_REQUEST_INT")) is not None
+            assert wait_for(first, lambda m: m.get_type().startswith("MISSION_REQUEST"))
             other.send(other.mav.mission_count_encode(1, 1, 3, 0))
-            assert wait_for(other, denied) is not None
+            refused = wait_for(other, of("MISSION_ACK"))
+            assert refused is not None and refused.type == refusal
             other.send(item_to_message(other.mav, ITEMS[3].with_seq(0), 1, 1))
-            assert wait_for(other, denied) is not None
+            if quiet:
+                assert statustext_seen(vehicle, "partner id mismatch")
+            else:
+                assert wait_for(other, denied) is not None
             for seq in range(2):
                 first.send(item_to_message(first.mav, ITEMS[seq], 1, 1))
             # The vehicle's answers reach every client on its port: wait for the acceptance.
@@ -200,26 +229,29 @@ def test_a_second_ground_station_is_denied_during_a_transfer(other_ids):
             assert accepted is not None
         finally:
             other.close()
-        assert vehicle.mission == ITEMS[:2]
+        assert vehicle.mission[1:] == ITEMS[1:2]
+        assert vehicle.acks_sent.count(refusal) == (1 if quiet else 2)
 
 
 def test_two_uploads_with_the_same_ids_interleaving_are_aborted_not_mixed():
     """Two senders the vehicle cannot tell apart (same ids, same address): the same item comes
-    twice with different contents. Nothing of either is stored."""
-    other = [it.with_seq(it.seq) for it in ITEMS]
-    other = [MissionItem(i, 0, 16, x=it.x + 999, y=it.y, z=50.0) for i, it in enumerate(other)]
-    with vehicle_and_peer("px4", request_timeout=30.0) as (vehicle, link):
+    twice with different contents. Nothing of either is stored (this mock's addition where the
+    autopilot answers an item out of sequence: ArduPilot; PX4 ignores one)."""
+    other = [MissionItem(i, 0, 16, x=it.x + 999, y=it.y, z=50.0) for i, it in enumerate(ITEMS)]
+    with vehicle_and_peer("ardupilot", request_timeout=30.0) as (vehicle, link):
         upload_raw(link, ITEMS[:2])
         link.send(link.mav.mission_count_encode(1, 1, 4, 0))
-        assert wait_for(link, of("MISSION_REQUEST_INT")) is not None
+        assert wait_for(link, of("MISSION_REQUEST")) is not None
         link.send(item_to_message(link.mav, other[0], 1, 1))  # uploader B answers first
-        assert wait_for(link, lambda m: m.get_type() == "MISSION_REQUEST_INT" and m.seq == 1)
-        link.send(item_to_message(link.mav, ITEMS[0], 1, 1))  # uploader A's item 0
+        assert wait_for(link, lambda m: m.get_type() == "MISSION_REQUEST" and m.seq == 1)
+        link.send(item_to_message(link.mav, other[1], 1, 1))
+        assert wait_for(link, lambda m: m.get_type() == "MISSION_REQUEST" and m.seq == 2)
+        link.send(item_to_message(link.mav, ITEMS[1], 1, 1))  # uploader A's item 1
         ack = wait_for(link, of("MISSION_ACK"))
         assert ack is not None and ack.type == mavlink.MAV_MISSION_ERROR
         assert vehicle.missions.conflicts == 1
         assert any("interleaved" in t for t in vehicle.statustexts)
-        assert vehicle.mission == ITEMS[:2]
+        assert vehicle.mission[1:] == ITEMS[1:2]
 
 
 def test_mission_start_with_home_alone_is_denied():

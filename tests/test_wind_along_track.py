@@ -18,10 +18,9 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from helpers import legs_modes
-from test_plan_exact import TWO, assert_plans_enumeration, enumerate_fronts, tall_scenario
-from test_probes import probed_scenario
-from test_search_kernel import assert_compiled_flies_as_python
+from support.compiled_search import assert_compiled_flies_as_python, legs_modes
+from support.enumeration import TWO, assert_plans_enumeration, enumerate_fronts
+from support.scenarios import probed_scenario, tall_scenario
 
 from gcs_planner.aircraft.profile import DerivedEnvelope
 from gcs_planner.geometry.airplane import LegEnvelope, track_factor

@@ -97,7 +97,9 @@ class MissionProtocol:
     # (``MissionItemProtocol::handle_mission_count``); PX4 only the transfer's owner.
     restarts_upload_by_ids: bool
     # PX4 refuses a new MISSION_COUNT while items are still expected (``Mission upload busy``,
-    # MAV_MISSION_ERROR).
+    # MAV_MISSION_ERROR), another ground station's with the same result, and asks again for
+    # item 0 when its partner's count comes again before it (``handle_mission_count``);
+    # ArduPilot refuses another's MAV_MISSION_DENIED.
     busy_while_receiving: bool
     # Which MISSION_ACK cancels an upload: PX4 only MAV_MISSION_OPERATION_CANCELLED; ArduPilot
     # any result but ACCEPTED.
@@ -124,6 +126,31 @@ class MissionProtocol:
     # out; ArduPilot answers each request on its own, whatever came before
     # (``MissionItemProtocol::handle_mission_request_int``), so requests can be pipelined.
     requests_in_sequence: bool = False
+    # An uploaded item other than the one asked for: PX4 ignores it ("Item sequence not
+    # expected, ignore item", ``handle_mission_item_both``); ArduPilot answers
+    # MAV_MISSION_INVALID_SEQUENCE (``MissionItemProtocol::handle_mission_item``).
+    ignores_items_out_of_sequence: bool = False
+    # How long the vehicle waits for an item before asking again (s): PX4 0.25
+    # (MAVLINK_MISSION_RETRY_TIMEOUT_DEFAULT, mavlink_mission.h); ArduPilot 1 plus its radio's
+    # stream slowdown (``MissionItemProtocol::update``, wp_recv_timeout_ms).
+    request_resend_s: float = 1.0
+    # How long a transfer may hear nothing before the vehicle ends it (s): PX4 5, downloads
+    # too (MAVLINK_MISSION_PROTOCOL_TIMEOUT_DEFAULT); ArduPilot 8, uploads only
+    # (``MissionItemProtocol::upload_timeout_ms``).
+    transfer_timeout_s: float = 8.0
+    # PX4 answers with a status text only, no MISSION_ACK, what another ground station sends
+    # during a transfer (partner id mismatch) and a download request or a clear while it is busy
+    # ("Mission download request ignored, already active", "REJ. CMD: Busy", "IGN CLEAR CMD:
+    # Busy"), and ends a timed-out transfer the same way ("Operation timeout"); ArduPilot
+    # answers MAV_MISSION_DENIED (a clear: MAV_MISSION_ERROR) and a timed-out upload with
+    # MISSION_ACK MAV_MISSION_OPERATION_CANCELLED (``MissionItemProtocol``).
+    refuses_quietly: bool = False
+    # ArduPilot keeps a position as a Location (whole centimetres, the frame as its altitude
+    # reference) and gives every item back through ``AP_Mission::get_item`` (autocontinue 1,
+    # x/y/z a command does not store 0), by the mission protocol
+    # (``MissionItemProtocol_Waypoints::get_item``) as in its mission file; PX4 gives back its
+    # ``mission_item_s`` (``format_mavlink_mission_item``: float altitude).
+    stores_locations: bool = False
 
 
 # MAV_MISSION_RESULT (common.xml)
@@ -182,6 +209,13 @@ class Autopilot:
     # until then (mission_block.cpp, MissionBlock::is_mission_item_reached_or_completed);
     # ArduPlane passes a waypoint at any altitude (commands_logic.cpp, Plane::verify_nav_wp).
     circles_for_altitude: bool = False
+    # The altitude loop's parameters: the time constant TECS flies a height error out over,
+    # the pitch limit of auto flight, and (ArduPlane) the limit that caps it and stands in for
+    # a pitch limit of 0. ArduPlane AP_TECS.cpp (_update_pitch: SEB_error / timeConstant();
+    # update_pitch_throttle: TECS_PITCH_MAX, 0 -> PTCH_LIM_MAX_DEG, else the smaller); PX4
+    # TECS.cpp (_calcAltitudeControlOutput: height error / FW_T_ALT_TC) and
+    # fw_path_navigation_params.c (FW_P_LIM_MAX, the pitch setpoint's limit).
+    altitude_loop: tuple[str, ...] = ()
     # ArduPilot reads its radio's RADIO_STATUS and slows mission requests to match
     # (GCS_MAVLINK::handle_radio_status, stream_slowdown_ms).
     reads_radio_status: bool = False
@@ -189,6 +223,9 @@ class Autopilot:
     # (Commander::handle_command); ArduPilot DENIED without the custom-mode flag, else FAILED
     # (GCS_MAVLINK::_set_mode_common).
     refuses_mode_temporarily: bool = False
+    # ArduPilot runs Lua applets from its SD card's scripts folder (libraries/AP_Scripting,
+    # lua_scripts.cpp); PX4 runs none, so its onboard switching is a companion's process.
+    runs_lua_applets: bool = False
     protocol: MissionProtocol | None = None
 
     def commanded_airspeed(self, speed: float, values: Mapping[str, float]) -> float | None:
@@ -274,6 +311,12 @@ ARDUPLANE = Autopilot(
         ParamSpec("ROLL_LIMIT_DEG", 45.0, low=0.0, high=90.0, low_open=True, unit="deg"),
         ParamSpec("TECS_CLMB_MAX", 5.0, low=0.1, high=20.0, unit="m/s"),
         ParamSpec("TECS_SINK_MAX", 5.0, low=0.0, high=20.0, low_open=True, unit="m/s"),
+        # AP_TECS.cpp var_info: TIME_CONST 5 s (3..10), PITCH_MAX 15 deg (0..45, 0: use
+        # PTCH_LIM_MAX_DEG; an AP_Int8: whole degrees); ArduPlane/Parameters.cpp
+        # PTCH_LIM_MAX_DEG 20 deg (0..90).
+        ParamSpec("TECS_TIME_CONST", 5.0, low=3.0, high=10.0, unit="s"),
+        ParamSpec("TECS_PITCH_MAX", 15.0, low=0.0, high=45.0, unit="deg"),
+        ParamSpec("PTCH_LIM_MAX_DEG", 20.0, low=0.0, high=90.0, unit="deg"),
         ParamSpec("WP_RADIUS", 90.0, PARAM_TYPE_INT16, low=1.0, high=_RADIUS_MAX, unit="m"),
         ParamSpec(
             "WP_LOITER_RAD",
@@ -303,8 +346,10 @@ ARDUPLANE = Autopilot(
     code_name="ArduPlane",
     path_follower="L1",
     item_acceptance=True,
+    altitude_loop=("TECS_TIME_CONST", "TECS_PITCH_MAX", "PTCH_LIM_MAX_DEG"),
     loiter_widens_with_tas=True,
     reads_radio_status=True,
+    runs_lua_applets=True,
     protocol=MissionProtocol(
         answers_in_heard_spelling=False,
         restarts_upload_by_ids=True,
@@ -316,6 +361,11 @@ ARDUPLANE = Autopilot(
         announces_mission_float=False,
         commands_by_frame=False,
         requests_in_sequence=False,
+        ignores_items_out_of_sequence=False,
+        request_resend_s=1.0,
+        transfer_timeout_s=8.0,
+        refuses_quietly=False,
+        stores_locations=True,
     ),
 )
 
@@ -343,6 +393,9 @@ PX4 = Autopilot(
         ParamSpec("FW_T_SINK_MAX", 5.0, low=1.0, high=20.0, unit="m/s"),
         ParamSpec("FW_T_CLMB_R_SP", 3.0, low=0.5, high=20.0, unit="m/s"),
         ParamSpec("FW_T_SINK_R_SP", 2.0, low=0.5, high=20.0, unit="m/s"),
+        # fw_path_navigation_params.c: FW_T_ALT_TC 5 s (min 2), FW_P_LIM_MAX 30 deg (0..60).
+        ParamSpec("FW_T_ALT_TC", 5.0, low=2.0, unit="s"),
+        ParamSpec("FW_P_LIM_MAX", 30.0, low=0.0, high=60.0, unit="deg"),
         ParamSpec("NAV_LOITER_RAD", 80.0, low=1.0, high=_RADIUS_MAX, unit="m"),
         ParamSpec("NAV_ACC_RAD", 10.0, low=0.05, high=200.0, unit="m"),
         ParamSpec("NPFG_PERIOD", 10.0, low=1.0, high=100.0, unit="s"),
@@ -368,6 +421,7 @@ PX4 = Autopilot(
     switches_early=True,
     helix_exits_on_course=True,
     circles_for_altitude=True,
+    altitude_loop=("FW_T_ALT_TC", "FW_P_LIM_MAX"),
     refuses_mode_temporarily=True,
     protocol=MissionProtocol(
         answers_in_heard_spelling=True,
@@ -380,6 +434,11 @@ PX4 = Autopilot(
         announces_mission_float=True,
         commands_by_frame=True,
         requests_in_sequence=True,
+        ignores_items_out_of_sequence=True,
+        request_resend_s=0.25,
+        transfer_timeout_s=5.0,
+        refuses_quietly=True,
+        stores_locations=False,
     ),
 )
 

@@ -8,6 +8,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from dataclasses import replace
 
 from gcs_planner.aircraft.autopilot import DEFAULT_AUTOPILOT
 from gcs_planner.aircraft.derive import design_wind_speed
@@ -21,6 +22,8 @@ from gcs_planner.cli.common import (
 from gcs_planner.cli.dry_run_policy import add_policy_arguments, refuse_plan_flags, run_policy
 from gcs_planner.cli.vehicle_from import add_envelope_arguments, derive_envelope
 from gcs_planner.core.choose import DEFAULT_MIN_PROBABILITY
+from gcs_planner.dryrun.air import flown_turbulence
+from gcs_planner.dryrun.endurance import vehicle_endurance
 from gcs_planner.dryrun.render import (
     SHOWN_ENVELOPE_SHORTFALLS,
     SHOWN_FLIGHT_LOSSES,
@@ -138,6 +141,13 @@ def _add_vehicle_arguments(p: argparse.ArgumentParser) -> None:
         "flies without it)",
     )
     g.add_argument(
+        "--endurance",
+        metavar="MINUTES",
+        help="the minutes of flight the aircraft has (default the scenario's [vehicle] "
+        "endurance, else unlimited): a flight not at B by then is lost by the flight, as the "
+        "low-battery failsafe ends the mission (ArduPlane BATT_FS_LOW_ACT, PX4 COM_LOW_BAT_ACT)",
+    )
+    g.add_argument(
         "--flight-model",
         choices=("point-mass", "jsbsim"),
         default="point-mass",
@@ -170,6 +180,13 @@ def _add_air_arguments(p: argparse.ArgumentParser) -> None:
         "still-air plan in --wind); --turn-radius and the angles given directly win",
     )
     g.add_argument("--gust", default="0", metavar="SPEED", help="gusts, m/s per axis (default 0)")
+    g.add_argument(
+        "--turbulence",
+        metavar="SIGMA_W|LEVEL",
+        help="vertical turbulence flown: the Dryden vertical gust of MIL-F-8785C, its standard "
+        "deviation in m/s or a level of the standard (light, moderate, severe: sigma_w by "
+        "altitude); default the scenario's [environment] turbulence, else none",
+    )
     g.add_argument(
         "--navigate-on-truth",
         action="store_true",
@@ -313,10 +330,15 @@ def flight_model_from_args(args: argparse.Namespace) -> object | None:
 def run(args: argparse.Namespace) -> int:
     _fill_from_table(args)
     if args.policy is not None:
+        for flag, given in (("--turbulence", args.turbulence), ("--endurance", args.endurance)):
+            if given is not None:
+                raise InputError(f"the policy dry run does not take {flag}", field=flag)
         if args.flight_model != "point-mass" or args.aircraft is not None:
             raise InputError("the policy dry run flies the point mass only", field="--flight-model")
         refuse_plan_flags(args)
         return run_policy(args, _number, parse_params(args.param))
+    if args.onboard:
+        raise InputError("only with --policy (a policy switched on board)", field="--onboard")
     if args.set_params:
         print(
             "gcs-planner: note: --set-params is deprecated: the plan's vehicle setup is set by "
@@ -325,6 +347,8 @@ def run(args: argparse.Namespace) -> int:
         )
     runs = int(_number(args.runs, "--runs", int, 0))
     wind = parse_wind(args.wind, args.gust)
+    wind = replace(wind, turbulence=flown_turbulence(args.turbulence, args.scenario))
+    endurance = vehicle_endurance(args.endurance, args.scenario)
     params = parse_params(args.param)
     settings = _settings(args, runs)
     model = flight_model_from_args(args)
@@ -357,6 +381,7 @@ def run(args: argparse.Namespace) -> int:
         load_scenario_from_args(args),
         flavour=args.autopilot,
         wind=wind,
+        endurance=endurance,
         design_wind=design_wind_speed(argparse.Namespace(wind=design), scenario),
         navigate_on_estimate=not args.navigate_on_truth,
         flight_model=model,

@@ -19,6 +19,7 @@ from gcs_planner.policies.dry_run import (
     policy_probability,
     policy_switch_room,
 )
+from gcs_planner.policies.onboard_dry_run import check_onboard, load_applet, onboard_dry_run
 from gcs_planner.sim.live_vehicle import DEFAULT_TIME_SCALE
 from gcs_planner.sim.replay import DEFAULT_CAPTURE_RADIUS_M
 
@@ -39,6 +40,13 @@ def add_policy_arguments(g: argparse._ArgumentGroup) -> None:
         help="--policy: simulated seconds per wall second the vehicle flies while the ground "
         f"station talks to it (default {DEFAULT_TIME_SCALE:g}); the window for a switch, in "
         "wall time, is the distance to the next item over the ground speed, divided by it",
+    )
+    g.add_argument(
+        "--onboard",
+        action="store_true",
+        help="--policy: switch on board: the onboard mission and policy.lua (the file beside "
+        "POLICY, else generated) on a mock ArduPilot, the ground link cut after take-off, flown "
+        "in simulated time (--time-scale and --cruise-time-scale do not apply)",
     )
     g.add_argument(
         "--cruise-time-scale",
@@ -67,6 +75,8 @@ def run_policy(
     check_against_scenario(policy, landmarks, DEFAULT_CAPTURE_RADIUS_M, args.policy)
     probability = policy_probability(args.policy)
     quiet = args.json
+    if args.onboard:
+        check_onboard(policy, args.policy)
     # The operator's workflow: the vehicle setup plan --out wrote beside policy.json is set with
     # the missions (the user's own --param values win); --vehicle-as-is flies without it.
     setup_path = None if args.vehicle_as_is else param_files.find_beside(args.policy)
@@ -88,20 +98,22 @@ def run_policy(
         if not quiet:
             print(f"  {line}", file=sys.stderr, flush=True)
 
-    report = policy_dry_run(
-        policy,
-        landmarks,
+    common = dict(
         runs=runs,
         probability=probability,
         loss=loss,
         seed=seed,
-        time_scale=scale,
-        cruise_scale=cruise,
         navigate_on_estimate=not args.navigate_on_truth,
         say=say,
         set_params=settings,
         switch_room=policy_switch_room(args.policy),
     )
+    if args.onboard:
+        applet, source = load_applet(args.policy, policy, landmarks)
+        say(f"the applet: {source}")
+        report = onboard_dry_run(policy, landmarks, applet, **common)
+    else:
+        report = policy_dry_run(policy, landmarks, time_scale=scale, cruise_scale=cruise, **common)
     if args.json:
         out = asdict(report)
         out.update(
@@ -135,9 +147,12 @@ def run_policy(
 
 def render(r: PolicyDryRunReport, source: str) -> str:
     low, high = r.interval
+    how = f"{r.time_scale:g} simulated s per wall s"
+    if r.onboard:
+        how = "switched on board by its applet, the ground link cut after take-off, simulated time"
     out = [
         f"dry run of policy {source} on a mock {r.flavour} vehicle over UDP 127.0.0.1 (loss "
-        f"{r.loss:g}, seed {r.seed}, {r.time_scale:g} simulated s per wall s)",
+        f"{r.loss:g}, seed {r.seed}, {how})",
     ]
     for run in r.runs:
         verdict = "arrived" if run.arrived else f"NOT arrived: {run.why}"

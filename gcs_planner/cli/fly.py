@@ -54,13 +54,19 @@ def run(args: argparse.Namespace) -> int:
                 f"{vehicle.firmware}: export them again for it",
                 file=args.policy,
             )
-        flight = PolicyFlight(
-            client,
-            policy,
-            say=lambda line: print(line, flush=True),
-            silence=args.silence,
-            attempts=args.attempts,
-        )
+
+        def say(line: str) -> None:
+            print(line, flush=True)
+
+        if args.onboard:
+            # The companion on the vehicle's local link (policies/companion.py).
+            from gcs_planner.policies.companion import CompanionFlight
+
+            flight: PolicyFlight = CompanionFlight(client, policy, say=say, silence=args.silence)
+        else:
+            flight = PolicyFlight(
+                client, policy, say=say, silence=args.silence, attempts=args.attempts
+            )
         outcome = flight.run(start=args.start, start_wait=args.start_wait)
     finally:
         client.link.close()
@@ -85,6 +91,14 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("policy", help="policy.json, as plan --policy writes it")
     add_link_arguments(p)
     g = p.add_argument_group("flight")
+    g.add_argument(
+        "--onboard",
+        action="store_true",
+        help="switch on board, as a companion computer on the vehicle's local link (PX4, which "
+        "runs no applets; the ground link is optional): hold the onboard mission (every "
+        "branch in one, uploaded and verified unless the vehicle holds it) and set a branch's "
+        "first item current when a fix fails, as policy.lua does on ArduPilot",
+    )
     g.add_argument(
         "--start",
         action="store_true",

@@ -3,8 +3,11 @@ station can talk to, until Ctrl-C. It stores what it is sent and, on MAV_CMD_MIS
 flies it against the scenario's correction points with telemetry.
 
 With ``--radio sik[:AIR_RATE]`` the ground station reaches it through an emulated SiK radio pair
-(:mod:`sim.radio`): CONN is then the ground radio's side, and the vehicle sits behind the air
-radio on a free port of 127.0.0.1.
+(:mod:`sim.radio`): CONN is then the ground radio's side, either end (``udpin``: the ground
+station speaks first; ``udpout``: the radio sends there), and the air radio listens on a free
+port of 127.0.0.1 for the vehicle, which sends to it as an autopilot writes to its radio's
+serial port. (A vehicle that listened behind the air radio could only answer once it heard a
+frame, and with CONN ``udpout`` the ground station listens too: neither spoke first.)
 
 The ArduPilot mock serves MAVLink FTP (:mod:`sim.ftp_server`, ``@MISSION/mission.dat``) and
 advertises it in AUTOPILOT_VERSION; ``--no-ftp`` is an ArduPilot built without it."""
@@ -26,10 +29,11 @@ from gcs_planner.cli.upload import id_in
 from gcs_planner.errors import InputError
 from gcs_planner.link.connection import check_connection
 from gcs_planner.link.signing import key_from_passphrase
+from gcs_planner.scenario.model import Scenario
 from gcs_planner.sim.faults import FaultRates
 from gcs_planner.sim.radio import RadioConfig, SikRadio, parse_radio
 from gcs_planner.sim.replay import DEFAULT_CAPTURE_RADIUS_M
-from gcs_planner.sim.vehicle import MockVehicle, free_udp_port
+from gcs_planner.sim.vehicle import MockVehicle
 
 
 def _rate(text: str) -> float:
@@ -97,27 +101,37 @@ def _burst(text: str) -> float:
     return value
 
 
-def run(args: argparse.Namespace) -> int:
-    check_connection(args.connect)  # a typo is named before the scenario is read
-    args.speedup = _speedup(args.speedup)
-    radio: SikRadio | None = None
-    vehicle_connect = args.connect
-    if args.radio is not None:
-        scheme = args.connect.partition(":")[0].lower()
-        if scheme not in ("udpin", "udpout"):
-            raise InputError(
-                "--radio runs the radio pair as a UDP relay: --connect must be udpin:HOST:PORT "
-                "or udpout:HOST:PORT (the ground radio's side)",
-                field="--connect",
-            )
-        vehicle_port = free_udp_port()
-        vehicle_connect = f"udpin:127.0.0.1:{vehicle_port}"
-    scenario = load_scenario_from_args(args, args.scenario)
+def _check_radio_end(connect: str) -> None:
+    if connect.partition(":")[0].lower() not in ("udpin", "udpout"):
+        raise InputError(
+            "--radio runs the radio pair as a UDP relay: --connect must be udpin:HOST:PORT "
+            "or udpout:HOST:PORT (the ground radio's side)",
+            field="--connect",
+        )
+
+
+def _radio(args: argparse.Namespace) -> SikRadio:
+    """The radio pair for ``--radio`` (not started): the ground side on ``--connect``, the air
+    side listening on a free port of 127.0.0.1 for the vehicle."""
+    config = RadioConfig(
+        air_rate=args.radio,
+        serial_baud=args.baud,
+        loss=args.radio_loss,
+        burst=args.radio_burst,
+        seed=args.seed,
+    )
+    try:
+        return SikRadio(args.connect, "udpin:127.0.0.1:0", config)
+    except (OSError, ValueError) as exc:
+        raise InputError(f"cannot start the radio on {args.connect}: {exc}") from None
+
+
+def _vehicle(args: argparse.Namespace, scenario: Scenario, connect: str) -> MockVehicle:
     faults = FaultRates(
         drop=args.drop, duplicate=args.duplicate, delay=args.delay, reorder=args.reorder
     )
     vehicle = MockVehicle(
-        vehicle_connect,
+        connect,
         scenario=scenario,
         flavour=args.autopilot,
         system_id=args.system_id,
@@ -133,21 +147,25 @@ def run(args: argparse.Namespace) -> int:
         live=args.live,
     )
     vehicle.ftp_enabled = not args.no_ftp
+    return vehicle
+
+
+def run(args: argparse.Namespace) -> int:
+    check_connection(args.connect)  # a typo is named before the scenario is read
+    args.speedup = _speedup(args.speedup)
     if args.radio is not None:
-        config = RadioConfig(
-            air_rate=args.radio,
-            serial_baud=args.baud,
-            loss=args.radio_loss,
-            burst=args.radio_burst,
-            seed=args.seed,
-        )
-        try:
-            radio = SikRadio(args.connect, f"udpout:127.0.0.1:{vehicle_port}", config)
-        except (OSError, ValueError) as exc:
-            vehicle.stop()
-            raise InputError(f"cannot start the radio on {args.connect}: {exc}") from None
+        _check_radio_end(args.connect)
+    scenario = load_scenario_from_args(args, args.scenario)
+    radio = _radio(args) if args.radio is not None else None
+    try:
+        vehicle = _vehicle(args, scenario, radio.vehicle_connection if radio else args.connect)
+    except BaseException:
+        if radio is not None:
+            radio.stop()
+        raise
+    if radio is not None:
         radio.start()
-        t = radio.timing
+        t, config = radio.timing, radio.config
         print(
             f"through a SiK radio pair at {config.air_rate} kbit/s (TDM windows "
             f"{t.window_s * 1000:.0f} ms), serial {config.serial_baud} baud, "

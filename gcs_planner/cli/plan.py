@@ -64,7 +64,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         action="store_true",
         help="with --out, replan the chosen route at each failed fix and write the contingency "
         "policy: primary.plan and one branch-<point>.plan per failure branch, policy.json (the "
-        "switches between them) and pictures of it",
+        "switches between them), pictures of it, and for switching on board onboard.plan (every "
+        "mission in one) with policy.lua (ArduPilot's applet)",
     )
     p.add_argument(
         "--policy-levels",
@@ -78,9 +79,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "--switch-time",
         default=None,
         metavar="SECONDS",
-        help="with --policy, seconds from a failed fix to the branch flying (report, upload, "
-        "read-back, set current; default 10): every run-out is planned at least this long at "
-        "the largest ground speed, plus the capture radius, so the switch happens on it",
+        help="with --policy, seconds from a failed fix to the branch flying: default 1, what "
+        "switching on board needs (the report, one tick of policy.lua); 10 for a ground "
+        "station that uploads each branch (fly without --onboard). Every run-out is planned at "
+        "least this long at the largest ground speed, plus the capture radius, so the switch "
+        "happens on it",
     )
     p.set_defaults(func=run)
 
@@ -136,7 +139,8 @@ def run(args: argparse.Namespace) -> int:
     if args.policy:
         from gcs_planner.mission.policy_export import make_policy
 
-        policy = make_policy(result, plan_dict, levels=args.policy_levels)
+        # The missions for the autopilot the plan is for (its onboard switching too).
+        policy = make_policy(result, plan_dict, levels=args.policy_levels, firmware=autopilot)
         if room is not None:
             from dataclasses import replace
 

@@ -25,11 +25,18 @@ from dataclasses import dataclass
 from gcs_planner.aircraft.profile import tas_from_eas
 from gcs_planner.scenario.model import Scenario
 
-# Seconds from the fix to the branch flying: the report (sent three times, 0.5 s apart), the
-# upload of a mission of ~150 items and its read-back over a telemetry radio with some loss
-# (a SiK radio at 57,600 baud moves ~40 MISSION_ITEM_INT a second each way), and the
-# set-current command with its acknowledgement.
-DEFAULT_SWITCH_TIME_S = 10.0
+# Seconds from the fix to the branch flying, switched on board (the default: the policy's
+# onboard mission and applet, docs/flying-policies.md): the correction sensor's report to the
+# autopilot (a PARAM_SET on its serial port, acknowledged, resent if lost), one tick of the
+# applet (0.1 s) and the navigator's next cycle, with room for the report coming a flight
+# model's step late (the mock's: 0.5 s).
+ONBOARD_SWITCH_TIME_S = 1.0
+DEFAULT_SWITCH_TIME_S = ONBOARD_SWITCH_TIME_S
+# ... switched by the ground station (`fly` without --onboard): the report (sent three times,
+# 0.5 s apart), the upload of a mission of ~150 items and its read-back over a telemetry radio
+# with some loss (a SiK radio at 57,600 baud moves ~40 MISSION_ITEM_INT a second each way), and
+# the set-current command with its acknowledgement.
+GROUND_SWITCH_TIME_S = 10.0
 
 
 @dataclass(frozen=True)

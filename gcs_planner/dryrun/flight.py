@@ -67,6 +67,7 @@ class LostRunRow:
     missed: tuple[str, ...]  # landmarks of the mission it missed before its loss
     failed: tuple[str, ...]  # unreliable points whose correction failed before its loss
     by_the_flight: bool  # lost by the flight (``lost_by_the_flight``), not by chance
+    out_of_endurance: bool = False  # its endurance ran out before B (by the flight)
 
 
 @dataclass(frozen=True)
@@ -118,6 +119,7 @@ def fly_stored_mission(
         navigate_on_estimate=world.navigate_on_estimate,
         error_unit=world.error_unit,
         flight_model=world.flight_model,
+        endurance=None if world.endurance is None else world.endurance * 60.0,
     )
     return Flight(replayed, autopilot, tuple(short), tuple(envelope_shortfalls), flown_wind)
 
@@ -143,7 +145,8 @@ def lost_runs_of(
         return ()
     return tuple(
         LostRunRow(r.run, r.reason, r.missed_ids, r.failed,
-                   lost_by_the_flight(route, params, r.missed, r.failed))
+                   r.out_of_endurance or lost_by_the_flight(route, params, r.missed, r.failed),
+                   r.out_of_endurance)
         for r in mc.lost_runs
     )  # fmt: skip
 
@@ -152,6 +155,8 @@ def seeded_flight_lost(replayed: replay_mod.ReplayReport, route: Route, params: 
     """Whether the seeded flight was lost, and by the flight."""
     run = replayed.run
     failed = [c.id for c in run.corrections if c.succeeded is False]
+    if run.out_of_endurance:
+        return True
     return not run.arrived and lost_by_the_flight(route, params, run.missed_before_loss, failed)
 
 

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 from gcs_planner.dryrun.flight import LostRunRow
 from gcs_planner.dryrun.report import DryRunReport
+from gcs_planner.sim.guidance import ENDURANCE_ENDED
 from gcs_planner.sim.replay import CHORD_SHORTFALL, QUANTISATION_M
 
 # Runs lost by the flight named one by one in the text report (all of them in --json).
@@ -58,6 +59,10 @@ def verdict_line(r: DryRunReport) -> str:
         return "; ".join(parts)
     if r.flight_losses:
         parts.append(f"{r.flight_losses} of {r.runs} runs lost by the flight")
+    if r.endurance_losses:
+        parts.append(
+            f"{r.endurance_losses} of them out of the {r.endurance:g} min endurance before B"
+        )
     if (r.flight_losses or r.missed) and r.setup_shortfalls:
         parts.append(_first_cause(r))
     if not r.probability_within_ci:
@@ -142,6 +147,12 @@ def _flight_lines(r: DryRunReport) -> list[str]:
         f"from the planned path {r.max_deviation:.1f} m (3D), {r.max_deviation_at:,.0f} m from "
         f"A; acceptance radius {r.acceptance_radius:g} m, capture radius {r.capture_radius:g} m",
     ]
+    if r.endurance is not None:
+        left = r.endurance - r.flight_seconds / 60
+        judged = f"had {left:.1f} min to spare"
+        if r.flight_ended == ENDURANCE_ENDED and not r.arrived:
+            judged = "ran out of it before B (the low-battery failsafe ends the mission)"
+        out.append(f"endurance: {r.endurance:g} min; this flight {judged}")
     if r.max_overrun is not None:
         covered = (
             "within the plan's flight reserve"
@@ -160,7 +171,8 @@ def _flight_lines(r: DryRunReport) -> list[str]:
         # What the point mass cannot tell (docs/jsbsim.md, the cross-check's disagreements).
         out.append(
             "flight model: point mass (rolls into its turns; climbs and sinks at the autopilot's "
-            "rates at once, at any altitude: no engine power, ceiling or speed-height coupling; "
+            "rates within its pitch limit, flying height errors out on its TECS time constant, "
+            "at any altitude: no engine power, ceiling or speed-height coupling; "
             "--flight-model jsbsim flies an airframe)"
         )
     for limit in r.airframe_limits:

@@ -119,6 +119,10 @@ class DryRunReport:
     setup: tuple[str, ...] = ()
     vehicle_as_is: bool = False
     setup_shortfalls: tuple[str, ...] = ()
+    # The aircraft's endurance (minutes; None: unlimited) and the runs that were lost by the
+    # flight because it ran out before B (the low-battery failsafe ended the mission).
+    endurance: float | None = None
+    endurance_losses: int = 0
 
     @property
     def demonstration(self) -> bool:
@@ -331,6 +335,7 @@ def _runs_fields(world: DryRunWorld, settings: DryRunSettings, flight: Flight) -
         "success_ci": None if mc is None else (mc.ci_low, mc.ci_high),
         "confidence": None if mc is None else mc.confidence,
         "flight_losses": flight_losses,
+        "endurance_losses": sum(r.out_of_endurance for r in lost_runs),
         "correction_losses": 0 if mc is None else mc.runs - mc.successes - flight_losses,
         "runs_flown": False if mc is None else mc.flown,
         "flight_lost": seeded_flight_lost(replayed, route, params),
@@ -350,6 +355,7 @@ def _world_fields(world: DryRunWorld, flight: Flight) -> dict:
         "envelope_wind": flight.flown_wind if world.plan.scenario.envelope is not None else None,
         "envelope_wind_from": world.air.from_deg,
         "setup_shortfalls": tuple(sh.describe() for sh in flight.setup_shortfalls),
+        "endurance": world.endurance,
     }
 
 

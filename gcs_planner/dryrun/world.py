@@ -44,12 +44,15 @@ class DryRunWorld:
     they win over the plan's setup), ``vehicle_as_is`` (the plan's setup is not set: the vehicle
     flies at its own parameters) and ``design_wind`` (m/s; None: the wind flown), the wind the
     setup's rates and bank hold in when the plan's envelope was stated rather than derived.
+    ``endurance``: the minutes of flight the aircraft has (None: unlimited); a flight that has
+    not come to B by then is lost by the flight (gcs_planner/dryrun/endurance.py).
     """
 
     plan: Plan
     landmarks: Scenario
     flavour: str = DEFAULT_AUTOPILOT
     wind: WindSpec | None = None
+    endurance: float | None = None
     design_wind: float | None = None
     navigate_on_estimate: bool = True
     error_unit: float = DEFAULT_ERROR_UNIT_M
@@ -62,6 +65,8 @@ class DryRunWorld:
         if self.flavour not in AUTOPILOTS:
             known = tuple(AUTOPILOTS)
             raise ValueError(f"flavour must be one of {known}, got {self.flavour!r}")
+        if self.endurance is not None and not 0 < self.endurance < float("inf"):
+            raise ValueError(f"endurance must be minutes > 0, got {self.endurance!r}")
 
     @property
     def air(self) -> WindSpec:

@@ -25,6 +25,7 @@ from gcs_planner.core.policy_front import (
 from gcs_planner.core.replan import replan_on_failure, search_continuation, success_path
 from gcs_planner.core.switch_room import SwitchRoom
 from gcs_planner.errors import GcsPlannerError
+from gcs_planner.mission.onboard_files import ONBOARD_FILES, render_onboard
 from gcs_planner.mission.policy_build import (
     MissionPath,
     PathSwitch,
@@ -79,7 +80,7 @@ class PolicyExport:
 def replaceable(out: str | os.PathLike[str], route_files: tuple[str, ...]) -> list[str]:
     """The names an earlier ``plan --policy`` may have left in ``out``: ``route_files`` (what
     ``plan --out`` writes), policy.json, the pictures and existing mission files."""
-    names = [*route_files, POLICY_FILE, TREE_PNG, FRONT_PNG]
+    names = [*route_files, POLICY_FILE, TREE_PNG, FRONT_PNG, *ONBOARD_FILES]
     if Path(out).is_dir():
         names += [e.name for e in os.scandir(out) if MISSION_FILE.fullmatch(e.name)]
     return names
@@ -174,6 +175,8 @@ def render_policy_files(result: Plan, plan: dict, exp: PolicyExport) -> list[tup
     )
     if exp.switch_room is not None:
         data["switch_room"] = exp.switch_room.to_dict()
+    onboard, data["onboard"] = render_onboard(result.scenario, exp.missions)
+    out += onboard
     out.append((POLICY_FILE, dumps_policy(data)))
     s = result.scenario
     title = (

@@ -18,6 +18,9 @@ each parameter with the least (or most) value the plan needs and the reason:
   FW_T_SINK_R_SP bounded by FW_T_CLMB_MAX / FW_T_SINK_MAX (``FixedwingPositionControl``), so all
   four. A plan with unlimited angles (the contest's model) needs the rate of its chosen route's
   steepest leg, which no autopilot may allow: the setup then says so;
+* the pitch limit of auto flight: TECS clips the pitch it asks for, the climb rate over the TAS,
+  so the plan's climb rate needs asin(rate / TAS) at the slowest TAS (ArduPlane TECS_PITCH_MAX,
+  shipped 15 deg, and PTCH_LIM_MAX_DEG, 20, which caps it; PX4 FW_P_LIM_MAX, 30);
 * the roll limit: a turn of radius R at ground speed Vg banks atan(Vg^2 / (g R)) (ROLL_LIMIT_DEG;
   FW_R_LIM);
 * ArduPlane's NAVL1_LIM_BANK: ``AP_L1_Control::loiter_radius`` widens every loiter by EAS2TAS^2
@@ -33,7 +36,7 @@ vehicle's values and returns what falls short.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from gcs_planner.aircraft.autopilot import Autopilot, autopilot_for, effective
 from gcs_planner.aircraft.profile import UNLIMITED_ANGLE_DEG, G, tas_from_eas
@@ -103,6 +106,7 @@ def needs(plan: dict, firmware: str, wind: float = 0.0) -> list[ParameterNeed]:
         tas = tas_from_eas(eas, _altitudes(plan)[1])
     ground = tas + wind
     out = _airspeed_needs(ap, eas)
+    pitch: list[ParameterNeed] = []
     # climb and sink: the derived rates, else the stated angles at the largest ground speed
     rates = (("climb_rate", "max_climb_angle", "climbs", 1.0), ("sink_rate", "max_descent_angle",
              "sinks", -1.0))  # fmt: skip
@@ -132,11 +136,14 @@ def needs(plan: dict, firmware: str, wind: float = 0.0) -> list[ParameterNeed]:
         names = [ap.mission_climb[i], *ap.mission_climb_bounds[i : i + 1]]
         for name in names:
             out.append(_at_least(ap, name, rate, why))
+        if sign > 0:
+            # Listed last: a shortfall in it loses a flight only on its steepest climbs.
+            pitch = _pitch_needs(ap, rate, tas_from_eas(eas, _altitudes(plan)[0]))
     radius = _number(env.get("turn_radius")) if env else None
     if radius is None:
         radius = _number(params.get("turn_radius"))
     if radius is None or radius <= 0:
-        return out
+        return out + pitch
     bank = _number(env.get("bank_limit_deg")) if env else None
     if bank is None or not 0 < bank < 90:
         bank = math.degrees(math.atan(ground * ground / (G * radius)))
@@ -173,6 +180,28 @@ def needs(plan: dict, firmware: str, wind: float = 0.0) -> list[ParameterNeed]:
     )
     if ap.switches_early:
         out.append(_px4_acceptance(ap, plan, eas, wind))
+    return out + pitch
+
+
+def _pitch_needs(ap: Autopilot, rate: float, slowest_tas: float) -> list[ParameterNeed]:
+    """The pitch limit a climb at ``rate`` m/s needs: TECS asks for a pitch of the climb rate over
+    the TAS and clips it at the limit of auto flight, so the climb needs asin(rate / TAS) at
+    the slowest TAS, the scenario's lowest point's (ArduPlane TECS_PITCH_MAX and the
+    PTCH_LIM_MAX_DEG that caps it, AP_TECS::update_pitch_throttle; PX4 FW_P_LIM_MAX)."""
+    if rate <= 0 or len(ap.altitude_loop) < 2:
+        return []
+    pitch = math.degrees(math.asin(min(rate / max(slowest_tas, 1e-6), 1.0)))
+    why = (
+        f"the plan climbs at up to {rate:.3g} m/s, {pitch:.3g} deg at {slowest_tas:.1f} m/s TAS "
+        "(its lowest point): TECS clips its pitch there"
+    )
+    out = []
+    for name in ap.altitude_loop[1:]:
+        # Whole degrees: ArduPlane stores TECS_PITCH_MAX as an integer (AP_Int8).
+        spec = ap.spec(name)
+        shipped = spec.default if spec is not None else 0.0
+        need = _at_least(ap, name, pitch, why)
+        out.append(replace(need, set_to=max(float(math.ceil(pitch - 1e-9)), shipped)))
     return out
 
 

@@ -63,6 +63,7 @@ class PolicyDryRunReport:
     probability: float | None  # the policy's exact probability of arriving, when given
     confidence: float
     switch_room: float | None = None  # m: the run-out the policy keeps for a switch, if any
+    onboard: bool = False  # switched on board by its applet, the ground link cut after take-off
 
     @property
     def switches(self) -> list[tuple[str, float]]:

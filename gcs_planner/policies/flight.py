@@ -191,21 +191,8 @@ class PolicyFlight:
                 )
 
     def _start(self) -> None:
-        ts, tc = self.client._target()
-        msg = self.client.mav.command_long_encode(
-            ts, tc, mavlink.MAV_CMD_MISSION_START, 0, 0, 0, 0, 0, 0, 0, 0
-        )
-        for _ in range(self.client.retries + 1):
-            self.client.link.send(msg)
-            ack = self.client._recv(self.client.timeout, {"COMMAND_ACK"}, None)
-            if ack is not None and ack.command == mavlink.MAV_CMD_MISSION_START:
-                if ack.result != mavlink.MAV_RESULT_ACCEPTED:
-                    raise LinkError(
-                        f"the vehicle refused to start the mission (result {ack.result})"
-                    )
-                self._line("mission started (MAV_CMD_MISSION_START accepted)")
-                return
-        raise LinkError("the vehicle did not answer MAV_CMD_MISSION_START")
+        start_mission(self.client)
+        self._line("mission started (MAV_CMD_MISSION_START accepted)")
 
     def _upload(self, name: str, items: Any) -> Any:
         errors = []
@@ -315,6 +302,23 @@ class PolicyFlight:
             f"{why}; the vehicle had stored part of it: mission {self.flown!r} "
             "uploaded again and verified, it flies that"
         )
+
+
+def start_mission(client: MissionClient) -> None:
+    """MAV_CMD_MISSION_START until the vehicle acknowledges it (LinkError when it refuses or
+    never answers)."""
+    ts, tc = client._target()
+    msg = client.mav.command_long_encode(
+        ts, tc, mavlink.MAV_CMD_MISSION_START, 0, 0, 0, 0, 0, 0, 0, 0
+    )
+    for _ in range(client.retries + 1):
+        client.link.send(msg)
+        ack = client._recv(client.timeout, {"COMMAND_ACK"}, None)
+        if ack is not None and ack.command == mavlink.MAV_CMD_MISSION_START:
+            if ack.result != mavlink.MAV_RESULT_ACCEPTED:
+                raise LinkError(f"the vehicle refused to start the mission (result {ack.result})")
+            return
+    raise LinkError("the vehicle did not answer MAV_CMD_MISSION_START")
 
 
 def check_policy(policy: PolicyMissions, source: str = "") -> None:

@@ -17,6 +17,7 @@ from pathlib import Path
 from gcs_planner.aircraft.autopilot import AUTOPILOTS
 from gcs_planner.errors import InputError
 from gcs_planner.scenario.model import Origin, Parameters
+from gcs_planner.sim.turbulence import parse_turbulence
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -37,12 +38,16 @@ TOP_KEYS = (
     "dry_run",
 )
 # [vehicle] in the autopilot's terms: the envelope is derived from these (cli/vehicle_from.py,
-# issue 32), so they are kept apart from the keys the scenario reader turns into parameters.
-AUTOPILOT_KEYS = ("max_climb_rate", "max_sink_rate", "firmware")
+# issue 32), so they are kept apart from the keys the scenario reader turns into parameters;
+# so is the endurance (minutes of flight: the dry run judges each flight's time against it,
+# gcs_planner/dryrun/endurance.py).
+# "firmware" is the former name of "autopilot", still read.
+AUTOPILOT_KEYS = ("max_climb_rate", "max_sink_rate", "autopilot", "firmware", "endurance")
 # [environment]: the design wind ("SPEED[@FROM_DEG]" or a number of m/s), the design gust (m/s
 # per horizontal axis: the derived flight reserve covers it), metres of position error per error
-# unit, and the landmarks' capture radius (metres, 3D).
-ENVIRONMENT_KEYS = ("wind", "gust", "error_unit", "capture_radius")
+# unit, the landmarks' capture radius (metres, 3D), and the vertical turbulence the aircraft
+# meets (sigma_w m/s or a level of MIL-F-8785C: sim/turbulence.py; the dry run flies it).
+ENVIRONMENT_KEYS = ("wind", "gust", "error_unit", "capture_radius", "turbulence")
 # [vehicle]: the aircraft. The turning radius and the climb limits may stand here or under
 # [parameters]; cruise_airspeed with max_bank_angle gives the radius when it is not given.
 VEHICLE_KEYS = (
@@ -319,13 +324,13 @@ def read_scenario_toml(path: Path) -> ScenarioSpec:
 def _term(value: object, key: str, table: str, file: str, text: str) -> tuple[object, int | None]:
     """A [vehicle] autopilot term or an [environment] value, checked for its type and range:
     (value, line). Rates, the error unit and the capture radius are numbers > 0; the wind a
-    number >= 0 or "SPEED[@FROM_DEG]"; the firmware one of ``AUTOPILOTS``."""
+    number >= 0 or "SPEED[@FROM_DEG]"; the autopilot one of ``AUTOPILOTS``."""
     line = key_line(text, table, key)
 
     def fail(why: str) -> InputError:
         return InputError(why, file=file, row=line, field=f"{table}.{key}")
 
-    if key == "firmware":
+    if key in ("autopilot", "firmware"):
         if not isinstance(value, str) or value not in AUTOPILOTS:
             names = " or ".join(f'"{name}"' for name in AUTOPILOTS)
             raise fail(f"must be {names} (got {value!r})")
@@ -342,6 +347,12 @@ def _term(value: object, key: str, table: str, file: str, text: str) -> tuple[ob
         if not ok or not math.isfinite(float(speed)):
             raise fail(f'must be SPEED >= 0 m/s or "SPEED@FROM_DEG" (got {value!r})')
         return text_value, line
+    if key == "turbulence":
+        try:
+            parse_turbulence(value if isinstance(value, str) or _is_number(value) else "?")
+        except ValueError as exc:
+            raise fail(str(exc)) from None
+        return value, line
     if key == "gust":
         if not _is_number(value) or not 0.0 <= float(value) <= 50.0:  # type: ignore[arg-type]
             raise fail(f"must be a speed in [0, 50] m/s (got {value!r})")

@@ -40,6 +40,7 @@ from gcs_planner.sim.navigators.commands import (
     Event,
     NavCommand,
 )
+from gcs_planner.sim.navigators.params import DEFAULT_TIME_CONSTANT_S
 from gcs_planner.sim.navigators.state import (
     COARSE_STEPS,
     DEFAULT_STEP_S,
@@ -59,8 +60,9 @@ __all__ = [
     "NavigatorFactory", "PointMass", "wrap",
 ]  # fmt: skip
 
-# TECS altitude time constant (ArduPlane TECS_TIME_CONST, PX4 FW_T_ALT_TC): 5 s.
-ALTITUDE_TIME_CONSTANT_S = 5.0
+# TECS altitude time constant (ArduPlane TECS_TIME_CONST, PX4 FW_T_ALT_TC) as both ship it: 5 s.
+# The navigator flies its autopilot's own (AutopilotParams.altitude_time_constant).
+ALTITUDE_TIME_CONSTANT_S = DEFAULT_TIME_CONSTANT_S
 
 
 class Navigator(NavigatorState):
@@ -212,11 +214,17 @@ class Navigator(NavigatorState):
 
     # Altitude -----------------------------------------------------------------------------
     def climb_to(self, alt: float, feedforward: float = 0.0) -> float:
+        """The climb rate TECS asks for to reach ``alt`` (m) from the estimate: the demand's own
+        rate plus the height error over its time constant (ArduPlane AP_TECS::_update_pitch,
+        SEBdot_dem = hgt_rate_dem g + SEB_error / timeConstant(); PX4 TECS.cpp
+        _calcAltitudeControlOutput, the error times 1 / FW_T_ALT_TC plus the rate setpoint)."""
         return feedforward + (alt - self.est[2]) / self._altitude_gain_dt()
 
     def _altitude_gain_dt(self) -> float:
-        """The time over which climb_to asks to fly out an altitude error."""
-        return max(ALTITUDE_TIME_CONSTANT_S * 0.2, self.dt)
+        """The time over which climb_to asks to fly out an altitude error: the autopilot's
+        TECS time constant (TECS_TIME_CONST, FW_T_ALT_TC), at least a step."""
+        tc = self.ap.altitude_time_constant or ALTITUDE_TIME_CONSTANT_S
+        return max(tc, self.dt)
 
     def glide(self, a: tuple, b: tuple, end_dist: float) -> float:
         """Climb rate on the glide slope from a's altitude to b's, reached ``end_dist`` before b;
@@ -271,7 +279,7 @@ class Navigator(NavigatorState):
             # No turn limit: point the ground track at the waypoint and stop on its acceptance
             # circle. The flight between is a straight line: in steady air a long step flies it
             # as exactly as short ones (the INS finds passes on the segments).
-            if self.wind is None or self.wind.sigma == 0.0:
+            if self.steady_air:
                 dt *= 4 * COARSE_STEPS
             heading, dt, climb = self._free_turn_step(c, dist, climb, dt, acc)
         else:
@@ -280,20 +288,21 @@ class Navigator(NavigatorState):
             if (
                 self.settled
                 and self.airframe.exact
-                and (self.wind is None or self.wind.sigma == 0.0)
+                and self.steady_air
                 and abs(self.alt_error) < 0.5
                 and dist > 3.0 * self.ground_speed() * coarse
                 and -self.env.sink_rate < climb < self.env.climb_rate
             ):
                 dt = coarse
-                # The altitude error flown out over the coarse step, as the fine steps would
-                # (to e^-4 in its 4 s), not the fine step's rate held 4 s: that put the aircraft
-                # three times the error past its target, then fine steps back down: ~1 m wiggles
-                # a minute on a long climbing leg, 1e-4 of its length once the aircraft rolls
-                # into its turns and switches between coarse and fine steps more often.
-                climb += self.alt_error * (1.0 / coarse - 1.0 / self._altitude_gain_dt())
+                # The altitude error flown out over the coarse step as the fine steps would
+                # (the share 1 - e^(-coarse / time constant)), not the fine step's rate held over
+                # it: that overshot the target, then fine steps flew back: ~1 m wiggles a minute
+                # on a long climbing leg, 1e-4 of its length once the aircraft rolls into its
+                # turns and switches between coarse and fine steps more often.
+                gain = self._altitude_gain_dt()
+                climb += self.alt_error * (-math.expm1(-coarse / gain) / coarse - 1.0 / gain)
         before, est0 = self.s, self.est
-        wind = (0.0, 0.0) if self.wind is None else self.wind.step(dt)
+        wind = self.air(dt)
         e2t = self.eas2tas(before.z)
         self.s = self.airframe.step(before, self.env, lateral, climb, dt, wind, e2t, heading)
         off = (est0[0] - before.x, est0[1] - before.y)
@@ -322,7 +331,7 @@ class Navigator(NavigatorState):
         bearing = math.atan2(c.pos[1] - y, c.pos[0] - x)
         wx, wy = self.wind.current() if self.wind is not None else (0.0, 0.0)
         tas = self.env.airspeed * self.eas2tas(z)
-        vz = min(max(climb, -self.env.sink_rate), self.env.climb_rate)
+        vz = self.env.climb_through_air(climb, tas)
         vh = math.sqrt(max(tas * tas - vz * vz, 1e-9))
         cross = -wx * math.sin(bearing) + wy * math.cos(bearing)
         heading = bearing - math.asin(max(-1.0, min(1.0, cross / vh)))

@@ -22,6 +22,7 @@ from gcs_planner.sim.flight_records import (
 )
 from gcs_planner.sim.navigators.base import Navigator
 from gcs_planner.sim.navigators.commands import LOITERS, NAV_WAYPOINT
+from gcs_planner.sim.navigators.params import DEFAULT_TIME_CONSTANT_S
 
 
 def compiled_mode(nav: Navigator) -> int | None:
@@ -79,6 +80,7 @@ def rules_record(nav: Navigator) -> Rules:
         float(ap.npfg_period),
         float(ap.npfg_damping),
         float(ap.npfg_switch_multiplier),
+        float(ap.altitude_time_constant or DEFAULT_TIME_CONSTANT_S),
     )
 
 
@@ -93,14 +95,19 @@ def flight_record(nav: Navigator, time_limit: float) -> Flight:
     )
 
 
-def state_vector(nav: Navigator, gusts: tuple[float, float], distance: float) -> np.ndarray:
+def state_vector(
+    nav: Navigator,
+    gusts: tuple[float, float],
+    distance: float,
+    turbulence: tuple[float, float] = (0.0, 0.0),
+) -> np.ndarray:
     """The kernel's state (sim/flight_records.py ``S_*``) of the navigator, with the gusts'
-    (east, north m/s) and the metres flown."""
+    (east, north m/s), the metres flown and the vertical turbulence's filter state."""
     s = nav.s
     return np.array([
         s.x, s.y, s.z, s.course, s.t, s.bank_deg, s.climb_rate, s.heading, s.tas,
         s.ground_speed, nav.min_dist, nav.alt_error, 1.0 if nav.settled else 0.0,
-        gusts[0], gusts[1], distance,
+        gusts[0], gusts[1], distance, turbulence[0], turbulence[1],
     ])  # fmt: skip
 
 

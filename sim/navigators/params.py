@@ -6,7 +6,11 @@ TECS_CLMB_MAX and TECS_SINK_MAX, WP_RADIUS, NAVL1_LIM_BANK (0 scales every loite
 EAS2TAS^2, AP_L1_Control::loiter_radius), AIRSPEED_MIN and AIRSPEED_MAX; PX4's FW_R_LIM,
 FW_T_CLMB_MAX and FW_T_SINK_MAX, FW_T_CLMB_R_SP and FW_T_SINK_R_SP (fw_pos_control_params.c:
 "the default rate at which the vehicle will climb in autonomous modes"), NAV_ACC_RAD,
-NPFG_PERIOD, NPFG_DAMPING, NPFG_SW_DST_MLT (npfg_params.c), FW_AIRSPD_MIN and FW_AIRSPD_MAX.
+NPFG_PERIOD, NPFG_DAMPING, NPFG_SW_DST_MLT (npfg_params.c), FW_AIRSPD_MIN and FW_AIRSPD_MAX;
+and each one's altitude loop (the record's ``altitude_loop``): the time constant its TECS flies
+a height error out over (ArduPlane TECS_TIME_CONST, PX4 FW_T_ALT_TC: 5 s) and the pitch limit
+of auto flight (ArduPlane TECS_PITCH_MAX 15 deg, capped by PTCH_LIM_MAX_DEG 20 and replaced by
+it when 0; PX4 FW_P_LIM_MAX 30 deg).
 
 A vehicle's parameters (the mock's PARAM table) override them name by name
 (:meth:`AutopilotParams.from_parameters`).
@@ -29,6 +33,9 @@ from gcs_planner.aircraft.autopilot import (
 LOITER_BANK_PARAM = "NAVL1_LIM_BANK"
 # The loiter radius (m) when the vehicle's table does not hold one: the mock's own, not shipped.
 DEFAULT_LOITER_RADIUS_M = 200.0
+# The TECS time constant both autopilots ship (TECS_TIME_CONST, FW_T_ALT_TC), for a record
+# without an altitude loop.
+DEFAULT_TIME_CONSTANT_S = 5.0
 
 
 @dataclass(frozen=True)
@@ -50,6 +57,8 @@ class AutopilotParams:
     npfg_switch_multiplier: float = PX4.defaults["NPFG_SW_DST_MLT"]  # PX4 NPFG_SW_DST_MLT
     airspeed_min: float | None = None  # m/s: AIRSPEED_MIN / FW_AIRSPD_MIN
     airspeed_max: float | None = None  # m/s: AIRSPEED_MAX / FW_AIRSPD_MAX
+    altitude_time_constant: float | None = None  # s: TECS_TIME_CONST / FW_T_ALT_TC
+    pitch_limit: float | None = None  # deg: TECS_PITCH_MAX (PTCH_LIM_MAX_DEG) / FW_P_LIM_MAX
 
     def __post_init__(self) -> None:
         shipped = _limits(self.autopilot, self.autopilot.defaults)
@@ -69,6 +78,8 @@ class AutopilotParams:
         ap = autopilot_for(flavour)
         merged = dict(ap.defaults)
         merged.update({k: float(v) for k, v in params.items() if _usable(v)})
+        # A pitch limit may be 0 (ArduPlane: TECS_PITCH_MAX 0 takes PTCH_LIM_MAX_DEG).
+        merged.update({k: float(params[k]) for k in ap.altitude_loop[1:] if _at_least_0(params, k)})
         limits = _limits(ap, merged)
         radius = float(params.get(ap.loiter_radius_param, DEFAULT_LOITER_RADIUS_M))
         acceptance = merged[ap.acceptance_param]
@@ -116,10 +127,25 @@ class AutopilotParams:
         if ap.mission_climb_bounds:
             climb_max, sink_max = ap.mission_climb_bounds
             climb, sink = f"min({climb}, {climb_max})", f"min({sink}, {sink_max})"
-        return (
+        out = (
             f"{ap.envelope['bank_limit']} {self.bank_limit:g} deg, climb {self.climb_rate:g} m/s "
             f"({climb}), sink {self.sink_rate:g} m/s ({sink})"
         )
+        if ap.altitude_loop:
+            time_constant, pitch = ap.altitude_loop[0], ap.altitude_loop[1]
+            out += (
+                f", height errors flown out over {self.altitude_time_constant:g} s "
+                f"({time_constant}), pitch up to {self.pitch_limit:g} deg ({pitch})"
+            )
+        return out
+
+
+def _at_least_0(params: dict[str, float], name: str) -> bool:
+    try:
+        value = float(params[name])
+    except (KeyError, TypeError, ValueError):
+        return False
+    return math.isfinite(value) and value >= 0
 
 
 def _usable(v: object) -> bool:
@@ -145,4 +171,20 @@ def _limits(ap: Autopilot, p: dict[str, float]) -> dict[str, float]:
         "sink_rate": sink,
         "airspeed_min": p[low],
         "airspeed_max": p[high],
+        **_altitude_loop(ap, p),
     }
+
+
+def _altitude_loop(ap: Autopilot, p: dict[str, float]) -> dict[str, float]:
+    """The altitude loop's time constant (s) and pitch limit (deg) of ``ap`` from the table
+    ``p``: its ``altitude_loop`` names, a pitch limit of 0 taking the cap's value and any
+    other capped by it (ArduPlane AP_TECS::update_pitch_throttle). Without them: TECS's 5 s
+    and no pitch limit (90 deg)."""
+    names = ap.altitude_loop
+    if not names:
+        return {"altitude_time_constant": DEFAULT_TIME_CONSTANT_S, "pitch_limit": 90.0}
+    pitch = p[names[1]] if len(names) > 1 else 90.0
+    if len(names) > 2:
+        cap = p[names[2]]
+        pitch = cap if pitch <= 0 else min(pitch, cap)
+    return {"altitude_time_constant": p[names[0]], "pitch_limit": pitch}

@@ -88,7 +88,8 @@ class NavigatorState:
         bank = 90.0 if self.free_turn else float(self.ap.bank_limit or 45.0)
         climb = float(self.ap.climb_rate or 5.0)
         sink = float(self.ap.sink_rate or 5.0)
-        return Envelope(float(airspeed), bank, climb, sink)
+        pitch = 90.0 if self.ap.pitch_limit is None else float(self.ap.pitch_limit)
+        return Envelope(float(airspeed), bank, climb, sink, pitch)
 
     def eas2tas(self, z: float) -> float:
         return atmosphere.eas2tas(z + self.alt_offset)
@@ -107,8 +108,20 @@ class NavigatorState:
         a headwind (or a steep climb) shortens L1 and slows the turns they ask for."""
         return max(self.s.ground_speed, 1e-3)
 
+    def air(self, dt: float) -> tuple[float, ...]:
+        """The air's motion over the next ``dt`` seconds (east, north, and up in turbulence,
+        m/s) where the aircraft flies now: still air without a wind field."""
+        if self.wind is None:
+            return (0.0, 0.0)
+        return self.wind.air(dt, self.s.z + self.alt_offset, self.s.tas)
+
+    @property
+    def steady_air(self) -> bool:
+        """No gusts and no turbulence: the air changes nothing from step to step."""
+        return self.wind is None or self.wind.steady
+
     def _fly(self, lateral: float, climb: float, dt: float, heading: float | None = None) -> None:
-        wind = (0.0, 0.0) if self.wind is None else self.wind.step(dt)
+        wind = self.air(dt)
         before = self.s
         e2t = self.eas2tas(before.z)
         self.s = self.airframe.step(before, self.env, lateral, climb, dt, wind, e2t, heading)

@@ -14,13 +14,17 @@ hang on the link's speed.
 
 from __future__ import annotations
 
-import numpy as np
-from test_mission_builder import make_plan
+from pathlib import Path
 
+import numpy as np
+
+from gcs_planner.aircraft.autopilot import DEFAULT_AUTOPILOT
 from gcs_planner.mission.builder import build_mission
 from gcs_planner.mission.policy_missions import PolicyMissions, Switch
 from gcs_planner.scenario.generate import DATASET1
 from gcs_planner.scenario.model import Kind, Origin, Scenario
+
+from .missions import make_plan
 
 ORIGIN = Origin(lat=31.2, lon=122.8, alt=12.5)
 IDS = ("A0", "H1", "P2", "V3", "B4")
@@ -36,6 +40,7 @@ BRANCH = [0, 1, 2, 3, 4]
 
 
 def policy_scenario(p_success: float = 0.8) -> Scenario:
+    """The scenario, corrections at P succeeding with ``p_success``."""
     params = {**DATASET1.to_dict(), "alpha1": 35.0, "alpha2": 25.0, "beta1": 25.0,
               "beta2": 25.0, "theta": 38.0, "delta": 0.005, "fail_residual": 20.0,
               "p_success": p_success, "turn_radius": 0.0}  # fmt: skip
@@ -47,7 +52,7 @@ def policy_scenario(p_success: float = 0.8) -> Scenario:
     )  # fmt: skip
 
 
-def policy_missions(scenario: Scenario, firmware: str = "ardupilot") -> PolicyMissions:
+def policy_missions(scenario: Scenario, firmware: str = DEFAULT_AUTOPILOT) -> PolicyMissions:
     """The primary mission and the branch taken when the fix at P fails."""
     plan = make_plan(scenario, routes=(PRIMARY, BRANCH), probability=True)
     primary = build_mission(plan, route_index=0, firmware=firmware, acceptance_radius=1)
@@ -60,7 +65,7 @@ def policy_missions(scenario: Scenario, firmware: str = "ardupilot") -> PolicyMi
     )
 
 
-def write_scenario(folder, p_success: float = 0.8):  # noqa: ANN001, ANN201 - a test helper
+def write_scenario(folder: Path, p_success: float = 0.8) -> Path:
     """The scenario as files (scenario.toml and points.csv in ``folder``): the path of the
     TOML, for the command line."""
     s = policy_scenario(p_success)

@@ -1,0 +1,246 @@
+"""``policy.lua``: the ArduPilot scripting applet that switches a contingency policy's branches on
+board (docs/flying-policies.md, "Switching on board").
+
+The applet is generated from the onboard mission (mission/onboard_mission.py): tables of its
+switch points and items, and one update function that ArduPilot's scripting runs every
+``TICK_MS``. It uses only bindings documented in ArduPilot's
+``libraries/AP_Scripting/docs/docs.lua`` (:data:`BINDINGS`, each with the signature docs.lua
+gives) and Lua 5.3's own ``math``, ``string`` and ``ipairs``, which ArduPilot's sandbox opens
+(``lua_scripts::create_sandbox``).
+
+Where the applet learns a fix's outcome: the correction sensor (or the companion computer that
+runs it) writes the parameter ``PLCY_FIX`` (a table the applet adds, ``param:add_table``) with
+PARAM_SET, which the autopilot answers with PARAM_VALUE, so the sender knows it arrived and
+resends until it has. The value is ``10 * code + outcome``: ``code`` is the landmark's row in
+the scenario's point list, from 1 (the landmark database the sensor and the planner share),
+``outcome`` 1 made, 2 failed (the fix did not take), 3 missed (passed outside the capture
+radius). A landmark is used once per flight, so each report is a new value.
+
+When no report comes: a switch point whose run-out the aircraft has left (its current item is
+past the departure waypoint after the point) without a report is taken as failed, and the
+branch flown. The branch was planned for the failed outcome's errors, which are never smaller
+than a made fix leaves, so it arrives under either; staying on the primary would arrive only if
+the fix took. (A plan without run-outs has the next point's item there: the switch then comes
+an item late.)
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+from gcs_planner.mission.onboard_mission import OnboardMission
+from gcs_planner.mission.onboard_report import (
+    APPLET_FILE,
+    OUTCOMES,
+    PARAM_PREFIX,
+    PARAM_TABLE_KEY,
+    REPORT_PARAM,
+    point_codes,
+    report_value,
+)
+
+__all__ = [
+    "APPLET_FILE", "BINDINGS", "OUTCOMES", "PARAM_PREFIX", "PARAM_TABLE_KEY", "REPORT_PARAM",
+    "TICK_MS", "applet_text", "point_codes", "report_value",
+]  # fmt: skip
+
+# The scripting tick: one run of the update function every this many milliseconds. A switch is
+# made within one tick of its report.
+TICK_MS = 100
+# The docs.lua the applet's bindings were read from.
+DOCS_LUA = "ArduPilot libraries/AP_Scripting/docs/docs.lua (commit 0004fb5656bad9df)"
+# Every ArduPilot binding the applet calls, as docs.lua declares it.
+BINDINGS = {
+    "param:add_table": "param:add_table(table_key, prefix, num_params) -> boolean",
+    "param:add_param": "param:add_param(table_key, param_num, name, default_value) -> boolean",
+    "param:get": "param:get(name) -> number|nil",
+    "param:set": "param:set(name, value) -> boolean",
+    "mission:state": "mission:state() -> integer (mission.MISSION_RUNNING while flown)",
+    "mission:num_commands": "mission:num_commands() -> integer (home included)",
+    "mission:get_item": "mission:get_item(index) -> mavlink_mission_item_int_t_ud|nil",
+    "mavlink_mission_item_int_t_ud:command": "item:command() -> integer",
+    "mavlink_mission_item_int_t_ud:x": "item:x() -> integer (latitude, degE7)",
+    "mavlink_mission_item_int_t_ud:y": "item:y() -> integer (longitude, degE7)",
+    "mission:get_current_nav_index": "mission:get_current_nav_index() -> integer",
+    "mission:set_current_cmd": "mission:set_current_cmd(index) -> boolean",
+    "gcs:send_text": "gcs:send_text(severity, text)",
+}
+MAV_SEVERITY_CRITICAL = 2
+MAV_SEVERITY_WARNING = 4
+MAV_SEVERITY_INFO = 6
+
+
+def _lua_string(text: str) -> str:
+    return '"' + "".join(c if c.isalnum() or c in " ._-+:/()'" else "_" for c in text) + '"'
+
+
+def applet_text(onboard: OnboardMission, codes: Mapping[str, int], title: str = "") -> str:
+    """The applet for ``onboard`` (deterministic text: the same policy gives the same bytes).
+    ``codes``: each switch point's report code (:func:`point_codes`)."""
+    names = list(dict.fromkeys([onboard.primary, *(s.to_mission for s in onboard.switches)]))
+    number = {name: k + 1 for k, name in enumerate(names)}
+    items = onboard.mission.items
+    rows, checks, points = [], [], {}
+    for s in onboard.switches:
+        code = codes[s.point]
+        points[code] = s.point
+        rows.append(
+            f"  {{mission = {number[s.mission]}, code = {code}, item = {s.item}, "
+            f"to = {number[s.to_mission]}, resume = {s.resume}, late = {s.late}, "
+            f"jump = {'true' if s.jump else 'false'}}},"
+        )
+        for k in sorted({s.item, s.resume, s.late} if s.jump else {s.item}):
+            checks.append(k)
+    check_rows = [
+        f"  {{{k}, {items[k].command}, {items[k].x}, {items[k].y}}}," for k in sorted(set(checks))
+    ]
+    head = [
+        f"-- {APPLET_FILE}: {title or 'a contingency policy'}, switched on board.",
+        "-- Generated by gcs-planner plan --policy from policy.json: plan again to change it.",
+        "--",
+        "-- Flies with onboard.plan (the primary mission, then each branch's own items behind",
+        "-- the end action before it). When the correction sensor reports that the fix at a",
+        "-- switch point did not take (PLCY_FIX = 10 * code + outcome: 1 made, 2 failed,",
+        "-- 3 missed), the branch's first item is set current within one tick. A switch point",
+        "-- whose run-out the aircraft leaves without a report is taken as failed: the branch,",
+        "-- planned for the failed fix's errors, arrives after a made fix too.",
+        "--",
+        f"-- ArduPilot bindings used, as {DOCS_LUA} declares them:",
+        *(f"--   {sig}" for sig in BINDINGS.values()),
+        "-- Each run returns the update function and the delay in ms before the next",
+        "-- (lua_scripts.cpp, lua_scripts::run_next_script).",
+        "",
+        f"local TICK_MS = {TICK_MS}",
+        f"local PARAM_TABLE_KEY = {PARAM_TABLE_KEY}",
+        f'local PREFIX, NAME = "{PARAM_PREFIX}", "{REPORT_PARAM[len(PARAM_PREFIX) :]}"',
+        "local REPORT = PREFIX .. NAME",
+        f"local MADE, FAILED, MISSED = {OUTCOMES['made']}, {OUTCOMES['FAILED']}, "
+        f"{OUTCOMES['MISSED']}",
+        f"local ITEMS = {len(items)}  -- mission:num_commands() of onboard.plan, home included",
+        "",
+        "-- report code -> landmark id",
+        "local POINTS = {",
+        *(f"  [{c}] = {_lua_string(p)}," for c, p in sorted(points.items())),
+        "}",
+        "local MISSIONS = {",
+        *(f"  {_lua_string(n)}," for n in names),
+        "}",
+        "-- from mission, report code, onboard items: the point's waypoint, the branch's first,",
+        "-- the one after it (when the run-out is already behind), and whether to jump at all",
+        "local SWITCHES = {",
+        *rows,
+        "}",
+        "-- onboard items the applet jumps from or to: index, command, latitude, longitude (degE7)",
+        "local CHECKS = {",
+        *check_rows,
+        "}",
+        "",
+    ]
+    return "\n".join(head) + _BODY
+
+
+_BODY = """\
+assert(param:add_table(PARAM_TABLE_KEY, PREFIX, 1), "PLCY: cannot add the parameter table")
+assert(param:add_param(PARAM_TABLE_KEY, 1, NAME, 0), "PLCY: cannot add " .. REPORT)
+param:set(REPORT, 0)  -- a report from an earlier flight is not this one's
+
+local flying = 1       -- the mission flown (MISSIONS index)
+local reported = {}    -- report code -> outcome
+local taken = {}       -- SWITCHES index -> true once acted on
+local last_index = -1
+local last_value = 0
+local checked = false
+
+local function say(severity, text)
+  gcs:send_text(severity, "PLCY: " .. text)
+end
+
+local function reset()
+  flying, reported, taken, last_value = 1, {}, {}, 0
+end
+
+local function matches()
+  local held = mission:num_commands()
+  if held ~= ITEMS then
+    return false, string.format("%d items, not %d", held, ITEMS)
+  end
+  for _, c in ipairs(CHECKS) do
+    local item = mission:get_item(c[1])
+    if not item or item:command() ~= c[2] or item:x() ~= c[3] or item:y() ~= c[4] then
+      return false, string.format("item %d differs", c[1])
+    end
+  end
+  return true, ""
+end
+
+local function read_report()
+  local value = param:get(REPORT)
+  if not value or value == last_value then
+    return
+  end
+  last_value = value
+  local v = math.floor(value + 0.5)
+  local code, outcome = v // 10, v % 10
+  if code > 0 and reported[code] == nil then
+    reported[code] = outcome
+  end
+end
+
+local function take(k, s, index, why)
+  if s.jump then
+    local target = s.resume
+    if index > s.item + 1 then
+      target = s.late
+    end
+    if not mission:set_current_cmd(target) then
+      return false
+    end
+    say(4, string.format("%s %s: item %d, %s", POINTS[s.code], why, target, MISSIONS[s.to]))
+  else
+    say(6, string.format("%s %s: %s, same items", POINTS[s.code], why, MISSIONS[s.to]))
+  end
+  taken[k] = true
+  flying = s.to
+  return true
+end
+
+local function switch(index)
+  for k, s in ipairs(SWITCHES) do
+    if s.mission == flying and not taken[k] then
+      local outcome = reported[s.code]
+      if outcome == FAILED or outcome == MISSED then
+        take(k, s, index, outcome == FAILED and "failed" or "missed")
+        return
+      elseif outcome == nil and index > s.item + 1 then
+        take(k, s, index, "no report")
+        return
+      end
+    end
+  end
+end
+
+local function update()
+  if mission:state() ~= mission.MISSION_RUNNING then
+    return update, TICK_MS
+  end
+  if not checked then
+    local ok, why = matches()
+    if not ok then
+      say(2, "not the policy's mission (" .. why .. "): off")
+      return
+    end
+    checked = true
+  end
+  local index = mission:get_current_nav_index()
+  if index < last_index then
+    reset()  -- the mission started again from an earlier item
+  end
+  last_index = index
+  read_report()
+  switch(index)
+  return update, TICK_MS
+end
+
+say(6, string.format("policy applet loaded: %d switch(es)", #SWITCHES))
+return update, TICK_MS
+"""
