@@ -23,7 +23,7 @@ reaches a plain waypoint followed by one. The kernel stops BEFORE the first step
 its own, without keeping it, and the Python navigator flies that step: every correction, every
 draw of the seeded generators, every loiter item, DO item, landing and mission end stays in
 Python, in the same order, so the seeded reports do not change. Only the rounding of a
-reassociated sum may differ (tests/test_flight_kernel.py flies both).
+reassociated sum may differ (tests/sim/test_flight_kernel.py flies both).
 
 The kernel reads records (sim/flight_records.py): the aircraft, the autopilot's rules (its
 record's traits), the mission's commands, the gusts and the INS, made from the navigator by

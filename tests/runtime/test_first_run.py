@@ -1,6 +1,6 @@
 """A first plan after installing: with numba's cache empty, a plan Python proves quickly runs in
 Python (nothing compiled) and gives the same plan. (`gcs-planner compile` filling the cache:
-tests/test_compile_notice.py, which compiles once for both.)"""
+tests/runtime/test_compile_notice.py, which compiles once for both.)"""
 
 from __future__ import annotations
 

@@ -57,7 +57,7 @@ def policy_file(monkeypatch, tmp_path):
         return str(path)
 
     # The missions come from this file's hand-made policy, not from a whole policy.json
-    # (tests/test_policy_missions.py and the end-to-end test below read real ones).
+    # (tests/mission/test_policy_missions.py and the end-to-end test below read real ones).
     monkeypatch.setattr(real, "read_policy", lambda path: held[str(path)])
     return provide
 

@@ -145,7 +145,7 @@ def test_the_companion_switches_a_px4_mock_on_its_local_link(px4_policy_file, ca
                           live=True, speedup=40.0, navigate_on_estimate=False)  # fmt: skip
     with vehicle:
         # PX4 counts a waypoint reached at npfg's switch distance (~56 m here) and would cut the
-        # corner at V3 (tests/test_policy_flight.py): a tighter tuning overflies it.
+        # corner at V3 (tests/policies/test_policy_flight.py): a tighter tuning overflies it.
         for name, value in {"NAV_ACC_RAD": 1.0, "NPFG_SW_DST_MLT": 0.1, "NPFG_PERIOD": 2.0}.items():
             vehicle.params.table[name] = (value, vehicle.params.table[name][1])
         rc = main(["fly", path, "--onboard", "--start", "--connect", f"udpout:127.0.0.1:{port}"])

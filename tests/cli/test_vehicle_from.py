@@ -44,7 +44,7 @@ def test_plan_reads_the_envelope_from_the_vehicle(flavour, tmp_path, monkeypatch
     assert seen["cruise_airspeed"] == pytest.approx(airspeed)
     assert seen["max_bank_angle"] == pytest.approx(table[names["bank_limit"]][0])
     # the rate a mission sinks at (PX4: min(FW_T_SINK_R_SP, FW_T_SINK_MAX)), from which the
-    # descent angle is derived after the scenario loads (tests/test_vehicle_profile.py)
+    # descent angle is derived after the scenario loads (tests/aircraft/test_vehicle_profile.py)
     sink = effective(flavour, {k: v[0] for k, v in table.items()}).sink_rate
     assert seen["max_sink_rate"] == pytest.approx(sink)
     assert seen["max_descent_angle"] is None

@@ -55,13 +55,13 @@ def run_on_terminal(args: list[str], env: dict[str, str]) -> tuple[int, str, str
 def test_a_fresh_cache_gets_one_notice_on_a_terminal(tmp_path: Path) -> None:
     """The one test that compiles: NUMBA_CACHE_DIR an empty folder, stderr a terminal; the
     first plan is proven as every later one (its time limit does not count the compile:
-    tests/test_work_clock.py). Then `gcs-planner compile` in the same cache compiles what the
-    plan did not need, and a second one finds nothing left: one compile of every kernel for
+    tests/runtime/test_work_clock.py). Then `gcs-planner compile` in the same cache compiles
+    what the plan did not need, and a second one finds nothing left: one compile of every kernel for
     both tests (each took a minute or more of CI alone)."""
     assert ENTRY.exists(), f"{ENTRY} missing: install the package (pip install -e .)"
     scenario = small_scenario(tmp_path / "points.csv")
     # (GCS_PLANNER_COMPILE=always: compiled at once, not planned in Python first; see
-    # tests/test_first_run.py for the default.)
+    # tests/runtime/test_first_run.py for the default.)
     env = {
         **os.environ,
         "NUMBA_CACHE_DIR": str(tmp_path / "numba-cache"),

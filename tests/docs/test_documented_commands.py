@@ -28,7 +28,7 @@ What is not run as written is said here, each with its reason:
   the fix.
 
 Blocks of other languages (`text`, `toml`, `json`, `python`) are not run here; README's Python
-example and missions/README.md's files are tests/test_docs.py's.
+example and missions/README.md's files are tests/docs/test_docs.py's.
 """
 
 from __future__ import annotations

@@ -42,7 +42,8 @@ OPTIONS = [
     for fr in ("amsl", "relative")
     for end in ("loiter", "rtl", "land")
 ]
-# PX4 missions are not written as .waypoints (mission/waypoints.py; tests/test_altitude_frames.py).
+# PX4 missions are not written as .waypoints (mission/waypoints.py;
+# tests/mission/test_altitude_frames.py).
 WAYPOINTS_OPTIONS = [o for o in OPTIONS if o["firmware"] == "ardupilot"]
 # The plain tiny plan, and one whose climbs need helices (loiter items in the mission).
 PLANS = {"flat": lambda: make_plan(), "helices": lambda: make_plan(steep_scenario())}
