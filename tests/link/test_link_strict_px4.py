@@ -1,4 +1,4 @@
-"""The client against a vehicle that keeps PX4's mission rules (tests/strict_px4.py, written from
+"""The client against a vehicle that keeps PX4's mission rules (support/strict_px4.py, written from
 ``MavlinkMissionManager`` in mavlink_mission.cpp): downloads and verified uploads through 20 %
 frame loss each way, a MISSION_ACK error in the middle of a download, and a vehicle without
 MISSION_REQUEST_INT.
@@ -12,7 +12,7 @@ from contextlib import contextmanager
 from typing import Any
 
 import pytest
-from strict_px4 import SENDLIST, StrictPx4
+from support.strict_px4 import SENDLIST, StrictPx4
 
 from gcs_planner.errors import LinkError
 from gcs_planner.link.connection import mavlink, open_link

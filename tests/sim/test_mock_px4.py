@@ -1,6 +1,6 @@
 """The mock vehicle's PX4 flavour rule by rule, as PX4's mission manager keeps them
 (``MavlinkMissionManager``, src/modules/mavlink/mavlink_mission.cpp); one script of exchanges
-answered alike by the mock and by tests/strict_px4.py, the small vehicle written independently
+answered alike by the mock and by support/strict_px4.py, the small vehicle written independently
 from the same source; and the client's transfers through the mock at 20 % frame loss.
 
 Driven by a raw pymavlink peer over UDP on 127.0.0.1. An absence ("nothing answered") is
@@ -15,9 +15,9 @@ from contextlib import contextmanager
 from typing import Any
 
 import pytest
-import strict_px4
 from gcs_planner.sim.faults import FaultRates
 from gcs_planner.sim.vehicle import MockVehicle, free_udp_port
+from support import strict_px4
 
 from gcs_planner.aircraft.autopilot import PX4
 from gcs_planner.link.connection import Link, mavlink, open_link
