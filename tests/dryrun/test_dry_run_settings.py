@@ -8,6 +8,7 @@ import json
 from pathlib import Path
 
 import pytest
+from support.short_line import HEAD, POINTS, short_line
 
 from gcs_planner.cli import build_parser, main
 from gcs_planner.cli.dry_run import _fill_from_table
@@ -15,31 +16,9 @@ from gcs_planner.core.choose import DEFAULT_MIN_PROBABILITY
 from gcs_planner.link.protocol import DEFAULT_TIMEOUT_S
 from gcs_planner.scenario.readers import load_scenario
 
-# A, one V point, B, 12 km apart: the route A V B, planned and flown in seconds.
-POINTS = """id,x,y,z,kind,unreliable
-P0,0,0,5000,A,0
-P1,12000,0,5000,V,0
-P2,24000,0,5000,B,0
-"""
-HEAD = """name = "short line"
-points = "line.csv"
-
-[parameters]
-alpha1 = 25
-alpha2 = 15
-beta1 = 20
-beta2 = 25
-theta = 30
-delta = 0.001
-turn_radius = 0
-"""
-
 
 def scenario(tmp_path: Path, table: str) -> Path:
-    (tmp_path / "line.csv").write_text(POINTS, encoding="utf-8")
-    path = tmp_path / "line.toml"
-    path.write_text(HEAD + table, encoding="utf-8")
-    return path
+    return short_line(tmp_path, table)
 
 
 def parsed(*argv: str):
