@@ -73,6 +73,7 @@ from gcs_planner.sim.turbulence import (
     SCALE_LENGTH_HIGH_FT,
     SQRT3,
 )
+from gcs_planner.sim.turbulence import dryden_step as _dryden_step_py
 from numba import njit
 
 
@@ -235,22 +236,9 @@ def scale_length_w(altitude_m: float) -> float:
     return length * FT
 
 
-@njit(cache=True, inline="always")
-def dryden_step(x1: float, x2: float, du: float, n1: float, n2: float) -> tuple[float, float]:
-    """sim/turbulence.py dryden_step."""
-    if du <= 0.0:
-        return x1, x2
-    e = math.exp(-du)
-    y = 2.0 * du
-    e2 = math.exp(-y)
-    grown = -math.expm1(-y)
-    q11 = 0.5 * grown
-    q12 = 0.25 * (grown - y * e2)
-    q22 = 0.25 * (grown - e2 * (y + 0.5 * y * y))
-    l11 = math.sqrt(q11)
-    l21 = q12 / l11
-    l22 = math.sqrt(max(q22 - l21 * l21, 0.0))
-    return e * x1 + l11 * n1, e * (du * x1 + x2) + l21 * n1 + l22 * n2
+# The Dryden filter's step compiled from its one statement (sim/turbulence.py, which the Python
+# navigator runs): the two paths fly the same formulas because they are one function.
+dryden_step = njit(cache=True, inline="always")(_dryden_step_py)
 
 
 @njit(cache=True, inline="always")

@@ -151,8 +151,8 @@ def stationary_state(n1: float, n2: float) -> tuple[float, float]:
 
 def dryden_step(x1: float, x2: float, du: float, n1: float, n2: float) -> tuple[float, float]:
     """The filter's state (x1, x2) after ``du`` scale lengths flown through the air, with two
-    standard normals (module docstring; sim/navigator_kernel.py ``vertical_gust`` is its
-    compiled twin, the same formulas in the same order)."""
+    standard normals (module docstring; sim/navigator_kernel.py compiles this very function for
+    the compiled flight)."""
     if du <= 0.0:
         return x1, x2
     e = math.exp(-du)
