@@ -4,9 +4,13 @@ air time the items need.
 
 Run: ``python -m benchmarks.radio`` (the full table, about an hour and a half with ``--jobs
 4``), ``--quick`` for a small one; ``--target`` for the issue-33 check only (1,000 items at
-64 kbit/s with 5 % burst loss, 20 runs). Each run is a fresh mock vehicle (ArduPilot) behind a
-fresh radio pair with its own loss seed; runs go ``--jobs`` at a time in separate processes
-(each uses a few per cent of a core: the radio waits on its air time, not on the CPU).
+64 kbit/s with 5 % burst loss, 20 runs); ``--floor`` for issue 51's check (the same 1,000
+items, 5 runs of each transfer with the radios' RADIO_STATUS on and off, the mission protocol
+against the item count times the round trip measured on the radio in the same run, MAVFTP
+against its air time; about 11 minutes with ``--jobs 5``). Each run is a fresh mock vehicle
+(ArduPilot) behind a fresh radio pair with its own loss seed; runs go ``--jobs`` at a time in
+separate processes (each uses a few per cent of a core: the radio waits on its air time, not on
+the CPU).
 
 Columns:
 
@@ -165,6 +169,21 @@ class Case:
     client: str  # "project", "classic" or "ftp"
     seed: int
     verify: str = "crc"  # how an FTP upload is verified (the mission protocol reads back)
+    status: bool = True  # the radios write RADIO_STATUS to their hosts
+    probe: int = 0  # round trips to measure on the radio before the transfer
+
+
+def round_trip(client: MissionClient, count: int) -> float:
+    """The radio's round trip, measured on it: the median of ``count`` exchanges one at a
+    time, PARAM_REQUEST_READ answered by PARAM_VALUE (a request and an answer of about a
+    mission request's and a mission item's size); an exchange lost is not counted."""
+    samples: list[float] = []
+    for _ in range(count):
+        asked = time.perf_counter()
+        client.link.send(client.mav.param_request_read_encode(*client._target(), b"", 0))
+        if client._recv(3.0, {"PARAM_VALUE"}, None) is not None:
+            samples.append(time.perf_counter() - asked)
+    return statistics.median(samples) if samples else math.nan
 
 
 def _classic(client: MissionClient) -> None:
@@ -188,7 +207,9 @@ def transfer(case: Case) -> dict[str, object]:
             continue
     else:
         raise RuntimeError("no free UDP port")
-    cfg = RadioConfig(air_rate=case.air_rate, loss=case.loss, burst=BURST, seed=case.seed)
+    cfg = RadioConfig(
+        air_rate=case.air_rate, loss=case.loss, burst=BURST, seed=case.seed, status=case.status
+    )
     with vehicle, SikRadio("udpin:127.0.0.1:0", f"udpout:127.0.0.1:{port}", cfg) as radio:
         link = open_link(radio.ground_connection)
         error = ""
@@ -201,6 +222,7 @@ def transfer(case: Case) -> dict[str, object]:
             if case.client == "classic":
                 _classic(client)
             client.connect(timeout=30.0)
+            rtt = round_trip(client, case.probe) if case.probe else math.nan
             start = time.perf_counter()
             try:
                 report = client.upload_verified(items)
@@ -226,6 +248,7 @@ def transfer(case: Case) -> dict[str, object]:
         "resends": resends,
         "lost": lost,
         "error": error,
+        "rtt": rtt,
     }
 
 
@@ -317,10 +340,89 @@ def target_line(results: list[dict[str, object]], who: str = "project") -> str:
     )
 
 
+FLOOR_FACTOR = 1.25  # issue 51: the mission protocol within 1.25x its round-trip floor
+FTP_FACTOR = 1.5  # issue 51: MAVFTP within 1.5x the air time
+PROBES = 20  # round trips measured per run
+
+
+def floor_cases(runs: int, n: int = 1000, rate: int = 64, loss: float = 0.05) -> list[Case]:
+    """Issue 51's Done-when: each transfer with and without RADIO_STATUS, ``runs`` seeds, the
+    radio's round trip measured in each run. The long mission-protocol runs go first."""
+    return [
+        Case(n, rate, loss, who, seed, status=status, probe=PROBES)
+        for who in ("project", "ftp")
+        for status in (True, False)
+        for seed in range(runs)
+    ]
+
+
+def render_floor(results: list[dict[str, object]]) -> str:
+    """The Done-when table: medians, each mission-protocol run against its own round-trip
+    floor (items x the round trip measured on its radio), each FTP run against the air time
+    its frames need (upload and read-back, as the FTP columns of :func:`render`)."""
+    head = [
+        "| transfer | RADIO_STATUS | runs | verified | median | slowest | round trip "
+        "(median) | floor | median / floor | resends (median) | air lost |",
+        "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
+    ]
+    rows, lines = [], []
+    groups: dict[tuple[str, bool], list[dict[str, object]]] = {}
+    for r in results:
+        c = r["case"]
+        assert isinstance(c, Case)
+        groups.setdefault((c.client, c.status), []).append(r)
+    for (who, status), done in sorted(groups.items(), key=lambda g: (g[0][0], not g[0][1])):
+        c0 = done[0]["case"]
+        assert isinstance(c0, Case)
+        n, rate = c0.items, c0.air_rate
+        rtt = _median(done, "rtt")
+        if who == "ftp":
+            floor_s = ftp_air_time(n, rate)
+            what, factor, floor_text = "MAVFTP", FTP_FACTOR, f"{floor_s:.1f} s of air"
+            ratios = [float(d["seconds"]) / floor_s for d in done]  # type: ignore[arg-type]
+        else:
+            floor_s = n * rtt
+            what, factor, floor_text = "mission protocol", FLOOR_FACTOR, f"{n:,} x {rtt:.3f} s"
+            ratios = [
+                float(d["seconds"]) / (n * float(d["rtt"]))  # type: ignore[arg-type]
+                for d in done
+            ]
+        ok = sum(bool(d["verified"]) and bool(d["holds"]) for d in done)
+        med = _median(done, "seconds")
+        worst = max(float(d["seconds"]) for d in done)  # type: ignore[arg-type]
+        ratio = statistics.median(ratios)
+        rows.append(
+            f"| {what} | {'on' if status else 'off'} | {len(done)} | {ok}/{len(done)} | "
+            f"{med:.1f} s | {worst:.1f} s | {rtt * 1000:.0f} ms | {floor_text} = "
+            f"{floor_s:.1f} s | {ratio:.2f}× | {_median(done, 'resends'):.0f} | "
+            f"{_median(done, 'lost'):.1%} |"
+        )
+        if status:
+            met = ratio <= factor and ok == len(done)
+            lines.append(
+                f"{what} with RADIO_STATUS: median {ratio:.2f}x its "
+                f"{'air time' if who == 'ftp' else 'round-trip floor'} against {factor:g}x: "
+                f"{'met' if met else 'NOT met'}"
+            )
+    by = {k: _median(v, "seconds") for k, v in groups.items()}
+    if ("ftp", False) in by and ("project", False) in by:
+        lines.append(
+            f"without RADIO_STATUS: MAVFTP {by[('ftp', False)]:.1f} s against the mission "
+            f"protocol's {by[('project', False)]:.1f} s on the same link"
+        )
+    return "\n".join(head + rows) + "\n\n" + "\n".join(lines)
+
+
 def main(argv: list[str] | None = None) -> None:
     p = argparse.ArgumentParser(prog="python -m benchmarks.radio")
     p.add_argument("--quick", action="store_true", help="100 and 300 items, 2 runs")
     p.add_argument("--target", action="store_true", help="the 1,000-item target only")
+    p.add_argument(
+        "--floor",
+        action="store_true",
+        help="issue 51: 1,000 items at 5 %% burst loss against the measured round-trip floor "
+        "and the air time, with and without RADIO_STATUS (default 5 runs each)",
+    )
     p.add_argument("--runs", type=int, default=None, help="runs per cell (default 5; 20 target)")
     p.add_argument("--jobs", type=int, default=4, help="runs at once (separate processes)")
     p.add_argument("--classic-runs", type=int, default=None, help="runs of the classic client")
@@ -333,6 +435,16 @@ def main(argv: list[str] | None = None) -> None:
         help="how the FTP runs verify: the vehicle's CRC (default) or the full read-back",
     )
     args = p.parse_args(argv)
+    if args.floor:
+        cases = floor_cases(args.runs or 5)
+        print(f"{len(cases)} transfers, {args.jobs} at a time; {machine()}", file=sys.stderr)
+        start = time.perf_counter()
+        results = run_cases(cases, args.jobs)
+        print(render_floor(results))
+        for e in sorted({str(r["error"])[:160] for r in results if r["error"]})[:5]:
+            print(f"- failure: {e}")
+        print(f"\n({time.perf_counter() - start:.0f} s wall)", file=sys.stderr)
+        return
     if args.target:
         runs = args.runs or 20
         cells = [(1000, 64, 0.05)]

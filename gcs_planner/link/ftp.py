@@ -18,8 +18,11 @@ replies could not go for 3 s and a read here goes on in a new one from what it h
 take a file's length from its header (ArduPilot's stat of mission.dat says 1 MiB). A refused
 open is not asked again after ResetSessions (AP_Filesystem_Mission takes one upload at a time,
 and a lost open ACK leaves the file held by the first copy). It hands back no CRC value
-(``cmd_crc`` logs it). What a hostile vehicle sends is logged and returned as codes, not ended
-with an error that names it.
+(``cmd_crc`` logs it), so a download cannot be checked end to end against the vehicle's CRC,
+and its windows (``max_backlog`` 5 gap reads, ``write_qsize`` 5 writes) stay the same
+whatever the resends say, where these back off on a link whose radio does not report its
+buffer. What a hostile vehicle sends is logged and returned as codes, not ended with an error
+that names it.
 """
 
 from __future__ import annotations
@@ -57,7 +60,8 @@ from gcs_planner.link.ftp_payload import (
     pack,
     unpack,
 )
-from gcs_planner.link.pacing import Window
+from gcs_planner.link.ftp_pieces import contiguous, gaps, take
+from gcs_planner.link.pacing import Backoff, Window
 from gcs_planner.link.rtt import RoundTrip
 
 __all__ = [
@@ -126,6 +130,7 @@ class FtpClient:
         retries: int = 5,
         extra_wait: Callable[[], float] = lambda: 0.0,
         congested: Callable[[], bool] = lambda: False,
+        radio_reports: Callable[[], bool] = lambda: False,
         hint: Callable[[], str] = lambda: "",
     ) -> None:
         self.mav = mav
@@ -136,6 +141,7 @@ class FtpClient:
         self.retries = retries
         self.extra_wait = extra_wait
         self.congested = congested
+        self.radio_reports = radio_reports  # a radio reports its buffer (RADIO_STATUS)
         self.hint = hint  # what to add to a silence (the session's: signing may be why)
         # Resends wait the measured round trip of FTP requests (RFC 6298, Karn's rule), from
         # FIRST_WAIT_S until there is a sample: a 260-byte WriteFile on a TDM radio takes a
@@ -149,9 +155,12 @@ class FtpClient:
 
     def resend_wait(self, attempts: int) -> float:
         """The round-trip timeout (FIRST_WAIT_S before a sample), doubled per resend in a row
-        past the fourth up to the protocol timeout, plus the local radio's slowdown."""
+        up to the protocol timeout, plus the local radio's slowdown. While a radio reports its
+        buffer, the doubling starts past the fourth resend (a full buffer is reported, so a few
+        losses in a row are the channel's); without reports from the first (RFC 6298, 5.5): the
+        answer may be waiting in the link's queue, which a copy would only lengthen."""
         base = self._rtt.timeout if self._rtt.srtt is not None else FIRST_WAIT_S
-        doublings = min(max(0, attempts - 4), 8)
+        doublings = min(max(0, attempts - (4 if self.radio_reports() else 0)), 8)
         return max(base, min(base * 2**doublings, self.timeout)) + self.extra_wait()
 
     # One request and its reply ----------------------------------------------------------------
@@ -358,24 +367,27 @@ class FtpClient:
                     pass  # ArduPilot closes an idle session after 20 s
         raise AssertionError("unreachable")
 
-    def _contiguous(self, chunks: dict[int, bytes]) -> bytes:
-        out = bytearray()
-        while len(out) in chunks:
-            out += chunks[len(out)]
-        return bytes(out)
+    def _backoff(self, start: int, high: int) -> Backoff | None:
+        """The back-off of a transfer on a link whose radio does not report its buffer (None
+        while one does: its reports pace the transfer, as ArduPilot's GCS_FTP is paced)."""
+        return None if self.radio_reports() else Backoff(start, high=high)
+
+    def _round_trip(self) -> float:
+        return self._rtt.srtt if self._rtt.srtt is not None else FIRST_WAIT_S
 
     def _read_all(self, path: str, length_of: Callable[[bytes], int | None],
                   chunks: dict[int, bytes]) -> bytes:  # fmt: skip
         end: int | None = None  # the file's length, once known
         last_progress = time.monotonic()
         window = Window(4, low=1, high=16)
+        backoff = self._backoff(4, 16)
         outstanding: dict[int, float] = {}  # offset -> when asked (ReadFile)
         by_seq: dict[int, int] = {}  # the reply's sequence number -> the offset asked
         bursting = False
         bursts = 0
         stall_limit = (self.retries + 1) * self.timeout
         while True:
-            head = self._contiguous(chunks)
+            head = contiguous(chunks)
             if end is None:
                 end = length_of(head)
             if end is not None and len(head) >= end:
@@ -385,7 +397,7 @@ class FtpClient:
                 raise self._quiet(f"read of {path} stalled at byte {len(head)}")
             if not bursting:
                 tail = max((o + len(c) for o, c in chunks.items()), default=0)
-                inside = self._gaps(chunks, tail, len(head))
+                inside = gaps(chunks, tail, len(head))
                 if end is None or (not inside and tail < end):
                     # Nothing known missing below the highest byte read: a burst from there
                     # (from the first missing byte while the length is not known).
@@ -398,19 +410,22 @@ class FtpClient:
                     # Requests a burst has answered since hold no slot of the window.
                     for offset in [o for o in outstanding if o in chunks]:
                         del outstanding[offset]
-                    for offset, _ in self._gaps(chunks, end, len(head)):
+                    for offset, _ in gaps(chunks, end, len(head)):
                         if self.congested():
                             break
                         asked = outstanding.get(offset)
                         if asked is not None and now - asked < self.resend_wait(0):
                             continue  # its answer can still come
-                        if asked is None and len(outstanding) >= window.size:
+                        slots = window.size if backoff is None else min(window.size, backoff.slots)
+                        if asked is None and len(outstanding) >= slots:
                             # No room for a new request; but one whose answer was lost is
                             # asked again below even with the window full (else a window of
                             # lost requests waits for ever: a burst loss stalled the read).
                             continue
                         if asked is not None:
                             window.lost()
+                            if backoff is not None:
+                                backoff.resent(now, self._round_trip())
                         # Every ReadFile asks again for what a burst lost: a resend.
                         self.retry_count += 1
                         outstanding[offset] = now
@@ -449,56 +464,15 @@ class FtpClient:
                 bursting = False
             if p.opcode != ACK:
                 continue
-            self._take(p, chunks, end, path)
+            take(p, chunks, end, path)
             if p.size:
                 last_progress = now
             if asked_at is not None:
                 self._rtt.sample(now - asked_at)
                 window.rtt(now - asked_at)
                 window.delivered(now, True)
-
-    @staticmethod
-    def _gaps(chunks: dict[int, bytes], end: int | None, start: int) -> list[tuple[int, int]]:
-        """Missing (offset, length) ranges from ``start``, in DATA_MAX pieces, to ``end`` (or
-        to the highest byte read when the end is not known yet)."""
-        covered = sorted((o, o + len(c)) for o, c in chunks.items())
-        limit = end if end is not None else max((b for _, b in covered), default=0)
-        gaps: list[tuple[int, int]] = []
-        pos = start
-        for a, b in covered:
-            if b <= pos:
-                continue
-            while pos < min(a, limit):
-                gaps.append((pos, min(DATA_MAX, min(a, limit) - pos)))
-                pos += DATA_MAX
-            pos = max(pos, b)
-        while pos < limit:
-            gaps.append((pos, min(DATA_MAX, limit - pos)))
-            pos += DATA_MAX
-        return gaps
-
-    def _take(self, p: Packet, chunks: dict[int, bytes], end: int | None, path: str) -> None:
-        if p.size == 0:
-            return
-        if end is not None and p.offset + p.size > end:
-            raise FtpError(
-                f"the vehicle sent bytes {p.offset}..{p.offset + p.size - 1} of {path}, past "
-                f"its end at {end} bytes"
-            )
-        old = chunks.get(p.offset)
-        if old is not None and old != p.data:
-            raise FtpError(f"the vehicle sent two different contents for byte {p.offset} of {path}")
-        for o, c in chunks.items():  # an overlap that is not the same piece is a lie
-            if o != p.offset and o < p.offset + p.size and p.offset < o + len(c):
-                lo, hi = max(o, p.offset), min(o + len(c), p.offset + p.size)
-                if c[lo - o : hi - o] != p.data[lo - p.offset : hi - p.offset]:
-                    raise FtpError(
-                        f"the vehicle sent two different contents for byte {lo} of {path}"
-                    )
-                if o > p.offset:
-                    continue
-                return  # already held
-        chunks[p.offset] = p.data
+                if backoff is not None:
+                    backoff.answered()
 
     # Writing ----------------------------------------------------------------------------------
     def write(self, path: str, data: bytes) -> Packet | None:
@@ -513,6 +487,7 @@ class FtpClient:
         # Each piece is a 260-byte frame: WRITE_WINDOW of them fill a SiK radio's 1,850-byte
         # serial buffer, past which it drops what the host writes.
         window = Window(2, low=1, high=WRITE_WINDOW)
+        backoff = self._backoff(2, WRITE_WINDOW)
         last_progress = time.monotonic()
         pending = sorted(pieces)
         stall_limit = (self.retries + 1) * self.timeout
@@ -526,9 +501,12 @@ class FtpClient:
                 if not self.congested():
                     self.retry_count += 1
                     window.lost()
+                    if backoff is not None:
+                        backoff.resent(now, self._round_trip())
                     sent[oldest] = (now, sent[oldest][1] + 1)
                     self._request(WRITE_FILE, oldest, pieces[oldest])
-            while pending and len(sent) < window.size and not self.congested():
+            slots = window.size if backoff is None else min(window.size, backoff.slots)
+            while pending and len(sent) < slots and not self.congested():
                 o = pending.pop(0)
                 sent[o] = (now, 0)
                 self._request(WRITE_FILE, o, pieces[o])
@@ -551,6 +529,8 @@ class FtpClient:
             if when is not None and when[1] == 0:
                 self._rtt.sample(now - when[0])
                 window.rtt(now - when[0])
+                if backoff is not None:
+                    backoff.answered()
             window.delivered(now, limited)
             last_progress = now
         try:

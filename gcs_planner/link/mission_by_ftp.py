@@ -78,6 +78,7 @@ def ftp_client(session: VehicleSession) -> FtpClient:
         retries=session.retries,
         extra_wait=session.radio.extra_wait,
         congested=session.radio.congested,
+        radio_reports=lambda: session.radio.present,
         hint=session.signing_hint,
     )
 

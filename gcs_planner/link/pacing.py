@@ -145,3 +145,41 @@ class Window:
         target = self.estimate()
         if target is not None:
             self.size = max(self.low, min(self.size, target))
+
+
+class Backoff:
+    """How many requests a link that says nothing of its buffers (no RADIO_STATUS) is trusted
+    with: TCP's congestion avoidance (RFC 5681, 3.1) on a window of requests. One more per
+    window of clean answers (about one per round trip), halved at a resend, once per round
+    trip (a burst that takes several requests is one loss event: RFC 6582).
+
+    Without a radio's report a resend is the only sign that the link is full: a half-duplex
+    link turns a window of requests into a queue that delays every answer, and a resend sent
+    into that queue only lengthens it. Halving lets the queue drain; the window then grows
+    back at the pace at which answers come.
+    """
+
+    def __init__(self, start: int, low: int = 1, high: int = 32) -> None:
+        self.low = max(1, low)
+        self.high = max(self.low, high)
+        self.size = float(min(self.high, max(self.low, start)))
+        self.cut_at = -math.inf
+        self.halvings = 0
+
+    @property
+    def slots(self) -> int:
+        """Requests that may be outstanding now."""
+        return max(self.low, int(self.size))
+
+    def answered(self) -> None:
+        """A clean answer (to a request sent once): additive increase."""
+        self.size = min(float(self.high), self.size + 1.0 / self.size)
+
+    def resent(self, now: float, round_trip: float) -> None:
+        """A request is sent again at ``now``: halve, unless already halved within the last
+        ``round_trip`` (the same loss event)."""
+        if now - self.cut_at < round_trip:
+            return
+        self.size = max(float(self.low), self.size / 2.0)
+        self.cut_at = now
+        self.halvings += 1

@@ -16,6 +16,17 @@ holds, one side flies a mission the other does not: with a home on the surface, 
 would fly to it at sea level first. A .plan says where home is (plannedHomePosition) and which
 firmware it is for, and every reader agrees on it. Reading still takes a PX4 file written by
 earlier releases (row 0 home, seq k at row k + 1), as QGroundControl reads it.
+
+Why not pymavlink's ``mavwp.MAVWPLoader`` (read in pymavlink 2.4.50): its ``save`` writes
+latitude and longitude with ``%f`` (6 decimals, about 0.1 m, where this keeps 8) straight into
+the file opened for writing (a crash or a full disk leaves a cut file, where this writes to a
+temporary file and renames it), and knows no autopilot, so it cannot refuse a PX4 mission or
+number its rows. Its ``load`` makes each row a MISSION_ITEM, sent with float32 latitude and
+longitude (steps of 0.85 m in longitude at 123.5 degrees E), where this keeps the 1e-7 degree
+integers of MISSION_ITEM_INT; it renumbers the rows (``add`` sets ``seq`` from the count)
+instead of refusing one out of order, takes NaN or infinite positions, turns a row 0 of command
+0 into a waypoint, and reports a bad row as "invalid waypoint line with N values" or Python's
+own ValueError, without the file, the row or the field.
 """
 
 from __future__ import annotations
