@@ -225,6 +225,9 @@ def fly_live(vehicle: Any, *, seed: int = 0, time_scale: float | None = None) ->
     cruise = scale if cruise is None else max(float(cruise), scale)
     # The landmarks whose failed or missed fix the ground station acts on (None: any).
     watch = getattr(vehicle, "watch_points", None)
+    # How long the honest scale outlasts a set-current (a ground station may set its own:
+    # policies/dry_run.py, from its timeout).
+    settle = float(getattr(vehicle, "settle_wall_s", SETTLE_WALL_S))
     sim_t = 0.0
     window: _Window | None = None
     try:
@@ -251,7 +254,7 @@ def fly_live(vehicle: Any, *, seed: int = 0, time_scale: float | None = None) ->
                     flight.set_current(value)
                     # The ground station has acted: back to the cruise scale once it is quiet
                     # (a resent set-current lands in honest time).
-                    window = _Window(sim_t, quiet_until=now + SETTLE_WALL_S)
+                    window = _Window(sim_t, quiet_until=now + settle)
             if flight.current >= 0 and flight.current != last_current:
                 last_current = flight.current
                 vehicle._fly_current(last_current)

@@ -40,8 +40,17 @@ from gcs_planner.scenario.model import Kind, Scenario
 # Brute force over simple continuations grows factorially: the reference engine refuses
 # scenarios with more correction points than this.
 BRUTE_FORCE_MAX_POINTS = 12
-# Seconds each continuation's plan may take (its statement says what it proved).
-DEFAULT_BRANCH_TIME_LIMIT = 20.0
+# Seconds each continuation's plan may take, counted as the plan's own are (core/budget.py: the
+# process's CPU time): its statement says what it proved. A continuation is a plan from a
+# failure state over fewer points than the mission's (dataset 2's are proven in a fraction of a
+# second each); the limit bounds one that is not, so a policy of a hundred continuations stays
+# within what a planner waits for.
+DEFAULT_BRANCH_TIME_LIMIT = 5.0
+# How deep ``plan --policy`` replans: the route's own failures, then its branches' own. A
+# branch is a fixed route from its failure state until it is replanned at its own failures too;
+# beyond two levels the branches' branches seldom change (docs/flying-policies.md: dataset 2
+# within 15°/15° gains from one level to two, not from two to three).
+DEFAULT_POLICY_LEVELS = 2
 
 
 @dataclass
@@ -89,7 +98,18 @@ def search_continuation(
     scenario's indices or None when no route is left, proven optimal)."""
     from gcs_planner.core.planner import plan  # the planner imports this module's callers
 
+    # One plan per state, whichever route reached it: the routes of a front share their first
+    # points (dataset 2's four share seven), so their failure states recur from route to route,
+    # and a continuation depends on the state alone (core/from_state.py).
+    planned: dict[FlightState, tuple[tuple[int, ...] | None, bool]] = {}
+
     def continuation(state: FlightState) -> tuple[tuple[int, ...] | None, bool]:
+        got = planned.get(state)
+        if got is None:
+            got = planned[state] = _plan_from(state)
+        return got
+
+    def _plan_from(state: FlightState) -> tuple[tuple[int, ...] | None, bool]:
         sub, indices = state_scenario(scenario, state)
         try:
             got = plan(sub, choice=choice, min_probability=min_probability, time_limit=time_limit)

@@ -22,7 +22,12 @@ from gcs_planner.core.policy_front import (
     exact_policy_front,
     replanned_front,
 )
-from gcs_planner.core.replan import replan_on_failure, search_continuation, success_path
+from gcs_planner.core.replan import (
+    DEFAULT_POLICY_LEVELS,
+    replan_on_failure,
+    search_continuation,
+    success_path,
+)
 from gcs_planner.core.switch_room import SwitchRoom
 from gcs_planner.errors import GcsPlannerError
 from gcs_planner.mission.onboard_files import ONBOARD_FILES, render_onboard
@@ -87,7 +92,7 @@ def replaceable(out: str | os.PathLike[str], route_files: tuple[str, ...]) -> li
 
 
 def make_policy(
-    result: Plan, plan: dict, *, levels: int = 1, **mission_options: Any
+    result: Plan, plan: dict, *, levels: int = DEFAULT_POLICY_LEVELS, **mission_options: Any
 ) -> PolicyExport:
     """Replan the chosen route (and, for the policy front and its picture, every route of the
     front) on failure, each failure branch the continuation the planner chooses from the state

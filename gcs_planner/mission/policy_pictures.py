@@ -33,14 +33,31 @@ from gcs_planner.mission.policy_build import MissionPath, PathSwitch
 BRANCH_COLOURS = ("#9467bd", "#17becf", "#e377c2", "#8c564b", "#bcbd22", "#7f7f7f", "#ff7f0e")
 
 
+# The labels keep clear of the tracks as polylines of at most this many samples: a dataset's
+# track has tens of thousands (metres apart), and the placer tests every label's candidate spots
+# against every segment. Straight legs lose nothing; a turn becomes chords a few pixels long
+# at a map of a few hundred kilometres.
+PLACER_SAMPLES = 400
+
+
+def _thinned(track: np.ndarray) -> np.ndarray:
+    """``track`` with every k-th sample (and its last) so that at most PLACER_SAMPLES remain."""
+    step = -(-len(track) // PLACER_SAMPLES)
+    if step <= 1:
+        return track
+    return np.vstack([track[::step], track[-1:]])
+
+
 def _leave_index(track: np.ndarray, parent: np.ndarray) -> int:
     """Index in ``track`` of the last sample it shares with ``parent`` (the branch's items
     equal the parent's up to the failed point, so their tracks agree sample for sample)."""
-    k = 0
     n = min(len(track), len(parent))
-    while k + 1 < n and np.allclose(track[k + 1], parent[k + 1], atol=1e-6):
-        k += 1
-    return k
+    if n < 2:
+        return 0
+    # Every sample compared at once (a branch's track has thousands): np.allclose's rule.
+    same = np.isclose(track[1:n], parent[1:n], atol=1e-6).all(axis=1)
+    differs = np.flatnonzero(~same)
+    return int(differs[0]) if len(differs) else n - 1
 
 
 def tree_figure(
@@ -118,7 +135,7 @@ def tree_figure(
 
     labels, markers = _tree_labels(missions, xyz, ids, ends, by_point)
     placer = LabelPlacer(fig)
-    dropped = placer.place(ax, labels, markers, [t[:, :2] for t in tracks.values()])
+    dropped = placer.place(ax, labels, markers, [_thinned(t[:, :2]) for t in tracks.values()])
     if dropped:
         plural = "" if dropped == 1 else "s"
         ax.set_title(f"{ax.get_title()}\n({dropped} label{plural} left out: no room)", fontsize=12)

@@ -100,7 +100,7 @@ class CompanionFlight(PolicyFlight):
             due = self.rules.due(self.current)
             if due is not None:
                 switches += self._take(*due)
-            if self.armed is False:
+            if self.ended:  # disarmed after it was seen flying (PolicyFlight._observe)
                 self._line(f"the vehicle disarmed: flight over on mission {self.flown!r}")
                 return PolicyOutcome(tuple(self.flown_names), tuple(self.seen), switches, "landed")
             self._listen(0.05)
@@ -126,7 +126,7 @@ class CompanionFlight(PolicyFlight):
 
     def _wait_armed(self, start_wait: float) -> None:
         deadline = time.monotonic() + start_wait
-        while not self.armed:
+        while not self.flew:  # any sign of flight, not the armed HEARTBEAT alone
             if time.monotonic() > deadline:
                 raise LinkError(f"the vehicle did not start the mission within {start_wait:g} s")
             self._listen(0.2)

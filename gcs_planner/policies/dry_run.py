@@ -36,6 +36,14 @@ from gcs_planner.sim.live_vehicle import DEFAULT_TIME_SCALE
 from gcs_planner.sim.replay import DEFAULT_CAPTURE_RADIUS_M, scenario_frame
 from gcs_planner.sim.vehicle import MockVehicle, free_udp_port
 
+# After the vehicle takes a DO_SET_MISSION_CURRENT, its honest time scale holds until the ground
+# station has been quiet this many of its timeouts (sim/live_vehicle.py). The ground station
+# sends a copy each timeout until it is confirmed: at two timeouts, a copy taken with its
+# acknowledgement lost and the next copy lost on the way left the third leaving as the window
+# closed, landing at the cruise scale with the aircraft far past the item, and turning it back
+# (run 59 of docs/flying-policies.md's 400 runs). At four, three copies in a row must be lost
+# for one to land after the window.
+SETTLE_TIMEOUTS = 4
 # The dry run's waypoint acceptance radius (m): where the autopilot ignores a waypoint's own
 # (PX4 fixed wing ignores param2), it is set as the vehicle-wide parameter.
 DRY_RUN_ACCEPTANCE_M = 1.0
@@ -264,6 +272,7 @@ def _one_run(
         for s in policy.switches
         if policy.missions[s.to_mission].items != policy.missions[s.mission].items
     )
+    vehicle.settle_wall_s = SETTLE_TIMEOUTS * timeout
     flown: tuple[str, ...] = ()
     why = ""
     with vehicle:

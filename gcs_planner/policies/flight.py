@@ -96,6 +96,12 @@ class PolicyFlight:
         self.reported: set[str] = set()
         self.unreported_warned: set[str] = set()
         self.armed: bool | None = None
+        # Whether the vehicle has been seen flying (an armed HEARTBEAT, an item reached, a
+        # correction report) and, after that, disarmed: the flight is over. A flight is known by
+        # any of these, not by its armed HEARTBEAT alone: a flight in the dry run's time warp can
+        # start and end between two heartbeats (1 Hz), and the one that said armed may be lost.
+        self.flew = False
+        self.ended = False
         self.current: int | None = None
         self.heard = time.monotonic()
         self.t0 = time.monotonic()
@@ -111,11 +117,21 @@ class PolicyFlight:
             report = parse_report(getattr(msg, "text", None))
             # Each report comes in copies (a STATUSTEXT is not acknowledged); a landmark is
             # used once per flight, so the first copy for a point is the report.
+            if report is not None:
+                self.flew = True  # a fix is made in flight only
             if report is not None and report.point not in self.reported:
                 self.reported.add(report.point)
                 self.reports.append(report)
         elif kind == "HEARTBEAT" and msg.get_srcComponent() == self.client.target_component:
             self.armed = bool(msg.base_mode & MAV_MODE_FLAG_SAFETY_ARMED)
+            if self.armed:
+                self.flew = True
+            elif self.flew:
+                # Disarmed after it flew: over. A disarmed HEARTBEAT from before the flight
+                # (sent as the start was taken) comes before any sign of flight on the link.
+                self.ended = True
+        elif kind == "MISSION_ITEM_REACHED":
+            self.flew = True
         elif kind == "MISSION_CURRENT":
             self.current = int(msg.seq)
 
@@ -154,7 +170,7 @@ class PolicyFlight:
         else:
             self._line("waiting for the operator to start the mission (mode AUTO, armed)")
         deadline = time.monotonic() + start_wait
-        while not self.armed:
+        while not self.flew:
             if time.monotonic() > deadline:
                 raise LinkError(f"the vehicle did not start the mission within {start_wait:g} s")
             self._listen(0.2)
@@ -170,7 +186,7 @@ class PolicyFlight:
                     self._switch(switch, r.point)
                     switches += 1
             self._warn_unreported()
-            if self.armed is False:
+            if self.ended:
                 self._line(f"the vehicle disarmed: flight over on mission {self.flown!r}")
                 return PolicyOutcome(tuple(self.flown_names), tuple(self.seen), switches, "landed")
             self._listen(0.2)
@@ -191,7 +207,7 @@ class PolicyFlight:
                 )
 
     def _start(self) -> None:
-        start_mission(self.client)
+        start_mission(self.client, flying=lambda: self.flew)
         self._line("mission started (MAV_CMD_MISSION_START accepted)")
 
     def _upload(self, name: str, items: Any) -> Any:
@@ -242,11 +258,13 @@ class PolicyFlight:
         cmd = self.client.mav.command_long_encode(
             ts, tc, mavlink.MAV_CMD_DO_SET_MISSION_CURRENT, 0, seq, 0, 0, 0, 0, 0, 0
         )
+        # The vehicle may say MISSION_CURRENT before its COMMAND_ACK (the mock does, as
+        # ArduPilot's handler sends it on the way): both, in either order and from any copy
+        # (they are the same command), confirm. Each copy sent while unconfirmed is one more
+        # the vehicle takes, so none is sent once both have come.
+        accepted = current = False
         for _ in range(2 * (self.client.retries + 1)):
             self.client.link.send(cmd)
-            # The vehicle may say MISSION_CURRENT before its COMMAND_ACK (the mock does, as
-            # ArduPilot's handler sends it on the way): both, in either order, confirm.
-            accepted = current = False
             end = time.monotonic() + self.client.timeout
             while (left := end - time.monotonic()) > 0:
                 msg = self.client._recv(left, {"COMMAND_ACK", "MISSION_CURRENT"}, None)
@@ -304,9 +322,11 @@ class PolicyFlight:
         )
 
 
-def start_mission(client: MissionClient) -> None:
+def start_mission(client: MissionClient, flying: Callable[[], bool] | None = None) -> None:
     """MAV_CMD_MISSION_START until the vehicle acknowledges it (LinkError when it refuses or
-    never answers)."""
+    never answers). ``flying``: whether the vehicle has been seen flying since; then its start
+    was taken and its acknowledgement lost, and the command is not sent again (a copy reaching
+    a vehicle whose flight is already over would start the mission once more)."""
     ts, tc = client._target()
     msg = client.mav.command_long_encode(
         ts, tc, mavlink.MAV_CMD_MISSION_START, 0, 0, 0, 0, 0, 0, 0, 0
@@ -317,6 +337,8 @@ def start_mission(client: MissionClient) -> None:
         if ack is not None and ack.command == mavlink.MAV_CMD_MISSION_START:
             if ack.result != mavlink.MAV_RESULT_ACCEPTED:
                 raise LinkError(f"the vehicle refused to start the mission (result {ack.result})")
+            return
+        if flying is not None and flying():
             return
     raise LinkError("the vehicle did not answer MAV_CMD_MISSION_START")
 

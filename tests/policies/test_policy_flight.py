@@ -220,11 +220,12 @@ def test_a_vehicle_that_stops_reporting_is_noticed(policy_file, capsys):
                           speedup=SCALE, navigate_on_estimate=False)  # fmt: skip
 
     def fall_silent() -> None:
-        # Once the flight is under way the vehicle's loop ends: no heartbeat, no telemetry.
+        # Once the flight is under way the vehicle falls silent: no heartbeat, no telemetry.
+        # (Its link cut, not its loop stopped: a stopped flight says disarmed as it ends.)
         while not vehicle.flying:
             if vehicle._stop.wait(0.05):
                 return
-        vehicle.request_stop()
+        vehicle.cut_link()
 
     with vehicle:
         watcher = threading.Thread(target=fall_silent, daemon=True)
