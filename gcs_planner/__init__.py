@@ -62,6 +62,17 @@ def _find_sim_in_checkout() -> None:
 
 _find_sim_in_checkout()
 
+# A test's hold at one import, to send Ctrl-C there (gcs_planner/runtime/hold.py); never set in use.
+if os.environ.get("GCS_PLANNER_HOLD_IMPORT"):
+    from gcs_planner.runtime.hold import install_from_environment
+
+    install_from_environment()
+# The installed script imports the command line before its main() can catch a Ctrl-C.
+if os.path.basename(sys.argv[0] if sys.argv else "") == "gcs-planner":
+    from gcs_planner.runtime.interrupt import one_line_if_uncaught
+
+    one_line_if_uncaught()
+
 # public name -> module that defines it
 _WHERE = {
     "load_scenario": "gcs_planner.library",

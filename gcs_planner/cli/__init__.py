@@ -69,9 +69,11 @@ def _command_in(argv: Sequence[str]) -> str | None:
 def main(argv: Sequence[str] | None = None) -> int:
     if argv is None:
         argv = sys.argv[1:]
-    parser = build_parser(argv)
-    args = parser.parse_args(argv)
     try:
+        # Building the parser imports the command's module (numpy, scipy and the rest): a
+        # Ctrl-C there is the user's as much as one during the plan.
+        parser = build_parser(argv)
+        args = parser.parse_args(argv)
         return int(args.func(args) or 0)
     except GcsPlannerError as exc:
         print(f"gcs-planner: error: {exc}", file=sys.stderr)

@@ -143,7 +143,8 @@ def add_plan_arguments(parser: argparse.ArgumentParser) -> None:
         type=_seconds,
         default=DEFAULT_TIME_LIMIT,
         metavar="SECONDS",
-        help=f"stop the branch and bound after this many seconds in all (default "
+        help=f"stop the branch and bound after this many seconds of CPU in all, numba's "
+        f"compiling not counted, so a busy machine proves what a quiet one does (default "
         f"{DEFAULT_TIME_LIMIT:g}; 'none' for no limit); past it the bounds built before the "
         "search are cut short or skipped, and the statement says what stopped it; reading the "
         "scenario and building its reach graph are not interrupted",
@@ -245,17 +246,18 @@ def _labels(text: str) -> int:
 
 
 def _suggest_compiling(quiet: bool) -> None:
-    """On a terminal, after a plan that ran without the search kernels because numba has not
-    compiled them yet (core/bnb/context.first_run): how to make later plans faster."""
-    if quiet or not on_terminal(sys.stderr) or "gcs_planner.core.search_kernel" in sys.modules:
-        return
-    from gcs_planner.runtime.precompile import missing
+    """After a plan, when a kernel the commands use is not in numba's cache (a first plan
+    after installing runs in Python: core/bnb/context.first_run): compile them in a background
+    process once this command has ended (gcs_planner/runtime/background_compile.py), and say so
+    on a terminal."""
+    from gcs_planner.runtime import background_compile
 
-    if missing():
+    if not background_compile.after_this_command():
+        return
+    if not quiet and on_terminal(sys.stderr):
         print(
-            "gcs-planner: planned without the compiled search kernels (numba has not compiled "
-            "them yet); `gcs-planner compile` compiles them once (about 40 s) for plans about "
-            "3x faster",
+            "gcs-planner: compiling its kernels once in the background (low priority) for "
+            f"faster later plans; {background_compile.VARIABLE}=0 turns this off",
             file=sys.stderr,
         )
 

@@ -1,5 +1,5 @@
-"""`gcs-planner compile`: compile the planner's numba kernels now, once, rather than at the first
-plan that needs them (gcs_planner/runtime/precompile.py)."""
+"""`gcs-planner compile`: compile the planner's and the dry run's numba kernels now, once, rather
+than at the first plan that needs them (gcs_planner/runtime/precompile.py)."""
 
 from __future__ import annotations
 
@@ -11,8 +11,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "compile",
         help="compile the planner's kernels once (numba), so that every later plan is fast",
-        description="Compile the search kernels into numba's cache. Until they are compiled, "
-        "plans that Python proves quickly run in Python; the others compile them at once.",
+        description="Compile the search kernels and the dry run's flight kernels into numba's "
+        "cache. Until they are compiled, plans that Python proves quickly run in Python and the "
+        "first plan compiles them in a background process when it ends "
+        "(GCS_PLANNER_BACKGROUND_COMPILE=0 turns that off); the others compile them at once.",
     )
     p.set_defaults(func=run)
 

@@ -123,3 +123,20 @@ def deferred() -> Iterator[None]:
     # Outside ``finally``: an exception from the block stays the one reported.
     if pressed:
         raise KeyboardInterrupt
+
+
+def one_line_if_uncaught() -> None:
+    """In the installed ``gcs-planner`` script, a Ctrl-C before :func:`gcs_planner.cli.main`
+    runs (the script's own import of the command line) ends as one inside it does: the one
+    line and exit status 130, not Python's traceback. Other exceptions are left to Python."""
+    previous = sys.excepthook
+
+    def hook(kind: type[BaseException], value: BaseException, tb: object) -> None:
+        if issubclass(kind, KeyboardInterrupt):
+            with contextlib.suppress(OSError, ValueError):
+                sys.stderr.write(f"{MESSAGE}\n")
+                sys.stderr.flush()
+            os._exit(EXIT_CODE)
+        previous(kind, value, tb)  # type: ignore[arg-type]
+
+    sys.excepthook = hook

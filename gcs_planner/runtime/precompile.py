@@ -5,7 +5,8 @@ quickly runs in Python (``core/bnb/context.first_run``), so that a first plan af
 takes seconds, not the half minute of compiling. Plans that need the kernels compile them
 anyway; this command compiles them once, on purpose, so that every later plan is fast: each
 kernel is run on a small generated scenario of the same types as any plan's (the kernels are
-compiled for one signature each: see core/kernel_records.py).
+compiled for one signature each: see core/kernel_records.py), and a small dry run flies the
+flight kernels.
 """
 
 from __future__ import annotations
@@ -21,6 +22,9 @@ KERNELS = (
     ("gcs_planner.core.probe_kernel", "probe", "the probes of the search over simple routes"),
     ("gcs_planner.core.kernel", "fewest_corrections", "straight legs on maps of 3,000+ points"),
     ("gcs_planner.core.kernel", "layered_search", "straight legs on maps of 3,000+ points"),
+    ("gcs_planner.geometry.airplane_kernel", "airplane_lengths", "the airplane legs' lengths"),
+    ("gcs_planner.sim.flight_kernel", "fly_plain", "the dry run's flight (point mass)"),
+    ("gcs_planner.sim.flight_kernel", "closest_approach", "the dry run's replay of the track"),
 )
 
 
@@ -59,4 +63,23 @@ def compile_kernels(say: Callable[[str], None] = print) -> list[tuple[str, float
         t0 = time.perf_counter()
         straight_front(big, compiled=True, focus=focus)
         done.append((name, time.perf_counter() - t0))
+    say("compiling the dry run's flight ...")
+    t0 = time.perf_counter()
+    _fly_once()
+    done.append(("flight", time.perf_counter() - t0))
     return done
+
+
+def _fly_once() -> None:
+    """One dry run of a small plan, the command's own path (plan, upload to the mock vehicle on
+    loopback, the vehicle's flight and the replay): it compiles the flight kernels
+    (sim/flight_kernel.py with sim/point_mass_kernel.py and sim/navigator_kernel.py inlined, the
+    replay's closest approach) for the types every dry run flies them with."""
+    from gcs_planner.core.planner import plan
+    from gcs_planner.dryrun.run import dry_run
+    from gcs_planner.scenario.generate import random_scenario
+    from gcs_planner.scenario.model import Parameters
+
+    params = Parameters(25, 15, 20, 25, 30, 0.001, turn_radius=200.0)
+    scenario = random_scenario(12, 0, params=params, box=(20_000, 5_000, 300))
+    dry_run(plan(scenario, min_probability=0.0), scenario)

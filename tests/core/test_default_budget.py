@@ -1,5 +1,5 @@
-"""The default budget is time (60 s), not labels: a search the old default of 5,000 labels per
-search stopped short is proven with default arguments (issue 29).
+"""The default budget is time (60 s of CPU), not labels: a search the old default of 5,000
+labels per search stopped short is proven with default arguments (issue 29).
 
 The corridor is the issue's kind of case at a size CI affords: straight legs, three objectives,
 a long narrow corridor whose front routes trade corrections against the probability of
@@ -57,5 +57,5 @@ def test_a_corridor_the_old_label_default_left_unproven_is_proven_by_default() -
 def test_a_search_stopped_by_the_time_limit_says_so() -> None:
     result = plan(long_corridor(), objectives=THREE, time_limit=0)
     assert not result.optimal
-    assert "stopped by the 0 s time limit after 0 labels" in result.statement
+    assert "stopped by the 0 s CPU time limit after 0 labels" in result.statement
     assert "--time-limit" in result.statement

@@ -3,6 +3,7 @@ a kernel is not cached, one line, and the check itself loads no numba."""
 
 from __future__ import annotations
 
+import json
 import os
 import pickle
 import pty
@@ -90,6 +91,47 @@ def test_a_fresh_cache_gets_one_notice_on_a_terminal(tmp_path: Path) -> None:
         assert any(n.startswith(kernel) for n in names), (kernel, names)
     again = subprocess.run([str(ENTRY), "compile"], env=env, capture_output=True, text=True)
     assert again.returncode == 0 and "none (all cached)" in again.stdout, again.stdout
+
+    # After `gcs-planner compile` a dry run (plan, upload, the vehicle's flight, the replay)
+    # compiles nothing: the flight kernels are the compile's too (issue 54).
+    compiled = compiles_of([*DRY_RUN, str(EXAMPLE), "--quiet"], env)
+    assert compiled == [], compiled
+
+
+EXAMPLE = Path(__file__).resolve().parents[2] / "missions" / "example" / "scenario.toml"
+DRY_RUN = ["dry-run"]
+# Runs the command line in-process and lists numba's compiles of the project's kernels. The
+# object-mode block of the search's progress tick (its arguments all ``ffi_forced_object``) is
+# lifted and compiled in every process: numba caches no object-mode code, so it is not counted.
+_COUNT = """
+import json, sys
+from numba.core import event
+seen = []
+class Listener(event.Listener):
+    def on_start(self, ev):
+        data = ev.data or {}
+        f = getattr(data.get("dispatcher"), "py_func", None)
+        module = getattr(f, "__module__", "") or ""
+        lifted = all(str(a) == "ffi_forced_object" for a in data.get("args") or ())
+        if module.startswith(("gcs_planner.", "sim.")) and not lifted:
+            seen.append(module + "." + f.__name__)
+    def on_end(self, ev):
+        pass
+event.register("numba:compile", Listener())
+from gcs_planner.cli import main
+code = main(sys.argv[1:])
+print(json.dumps(seen))
+sys.exit(code)
+"""
+
+
+def compiles_of(args: list[str], env: dict[str, str]) -> list[str]:
+    """The project's kernels numba compiled while ``gcs-planner ARGS`` ran (stdout's last line)."""
+    done = subprocess.run(
+        [sys.executable, "-c", _COUNT, *args], env=env, capture_output=True, text=True
+    )
+    assert done.returncode == 0, done.stderr[-3000:]
+    return json.loads(done.stdout.strip().splitlines()[-1])
 
 
 def test_no_notice_off_a_terminal(tmp_path: Path) -> None:
