@@ -78,6 +78,25 @@ class Envelope:
     # at most TAS sin(limit) (the point mass has no angle of attack: the pitch is its flight
     # path). >= 90: none.
     pitch_limit_deg: float = 90.0
+    # The autopilot's ground-speed floor (m/s; 0: none) and its largest airspeed (m/s EAS):
+    # ArduPlane MIN_GNDSPD_CM, PX4 FW_GND_SPD_MIN (gcs_planner/aircraft/autopilot.py
+    # ``ground_speed_floor``), AIRSPEED_MAX / FW_AIRSPD_MAX.
+    ground_speed_floor: float = 0.0
+    airspeed_max: float = math.inf
+
+    def held_tas(self, tas: float, heading: float, wx: float, wy: float, eas2tas: float) -> float:
+        """The TAS flown at ``heading`` (rad) in the wind (wx, wy): ``tas``, raised by the
+        shortfall of the ground speed along the heading below the floor, up to the largest
+        airspeed (PX4 FixedwingPositionControl.cpp get_auto_airspeed_setpoint, "groundspeed
+        undershoot": the body-forward ground speed; ArduPlane navigation.cpp
+        calc_gndspeed_undershoot, added to the airspeed demand in Attitude.cpp
+        calc_airspeed_errors). At once: the autopilot's airspeed loop is not modelled."""
+        if self.ground_speed_floor <= 0.0:
+            return tas
+        short = self.ground_speed_floor - (tas + wx * math.cos(heading) + wy * math.sin(heading))
+        if short <= 0.0:
+            return tas
+        return max(tas, min(tas + short, self.airspeed_max * eas2tas))
 
     def climb_through_air(self, climb_rate: float, tas: float) -> float:
         """``climb_rate`` (m/s) within the autopilot's climb and sink rates and its pitch
@@ -141,10 +160,10 @@ def arc_step(
     sinks with the air, its climb rate over the sea the sum) at EAS2TAS ``eas2tas``: one exact
     arc. An aircraft without a turn limit (``env.free_turn``) takes ``heading`` as given
     instead."""
-    v = env.airspeed * eas2tas
+    psi0 = s.heading if s.heading is not None else s.course
+    v = env.held_tas(env.airspeed * eas2tas, psi0, wind[0], wind[1], eas2tas)
     vz = env.climb_through_air(climb_rate, v)
     vh = math.sqrt(max(v * v - vz * vz, 0.0))
-    psi0 = s.heading if s.heading is not None else s.course
     if env.free_turn:
         a = 0.0
         psi0 = psi0 if heading is None else heading

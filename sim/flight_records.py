@@ -72,6 +72,8 @@ class Aircraft(NamedTuple):
     roll_substep: float  # s
     roll_settled: float  # deg
     roll_one_arc: float  # deg s
+    ground_speed_floor: float  # m/s (0: none): sim/aircraft.py ``Envelope.held_tas``
+    airspeed_max: float  # m/s, equivalent: the most the floor raises the airspeed to
 
 
 def aircraft_record(env: Envelope) -> Aircraft:
@@ -87,6 +89,8 @@ def aircraft_record(env: Envelope) -> Aircraft:
         float(ROLL_SUBSTEP_S),
         float(ROLL_SETTLED_DEG),
         float(ROLL_ONE_ARC_DEG_S),
+        float(env.ground_speed_floor),
+        float(min(env.airspeed_max, 1e9)),
     )
 
 

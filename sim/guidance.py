@@ -58,12 +58,15 @@ __all__ = [
     "COARSE_STEPS", "DEFAULT_STEP_S", "DO_CHANGE_SPEED", "L1_DAMPING", "L1_PERIOD_S", "LOITERS",
     "NAV_LAND", "NAV_LOITER_TIME", "NAV_LOITER_TO_ALT", "NAV_LOITER_TURNS", "NAV_LOITER_UNLIM",
     "NAV_RETURN_TO_LAUNCH", "NAV_TAKEOFF", "NAV_WAYPOINT", "ENDURANCE_ENDED", "AutopilotParams",
-    "Event", "Flight", "NavCommand", "WindModel", "fly", "nav_commands", "turn_radius_flown",
+    "NOT_FLOWN", "Event", "Flight", "NavCommand", "WindModel", "fly", "nav_commands",
+    "turn_radius_flown",
 ]  # fmt: skip
 
 
 # Why a flight ended when its endurance ran out (``fly``'s ``endurance``).
 ENDURANCE_ENDED = "endurance"
+# How the flight of a mission the airframe cannot fly ends: it never started (``_unflown``).
+NOT_FLOWN = "cannot be flown"
 
 
 @dataclass(frozen=True)
@@ -208,8 +211,8 @@ def fly(
     model before issue 31, for the cross-check), in Python too; sim/jsbsim_airframe.py
     ``CheckedPointMass`` checks the legs against a JSBSim aircraft and leaves the flight to the
     point mass (compiled as without a model). The legs are checked against the airframe first
-    (``Flight.limits``), and an airframe that cannot be trimmed at the start is not flown
-    (``ended`` "cannot be flown").
+    (``Flight.limits``): a mission with any leg the airframe cannot fly, or an airframe that
+    cannot be trimmed at the start, is not flown (``ended`` "cannot be flown").
 
     ``endurance`` (s): the flight the aircraft's battery or fuel gives from the start; past it
     the low-battery failsafe (ArduPlane BATT_FS_LOW_ACT, PX4 COM_LOW_BAT_ACT) ends the mission
@@ -240,6 +243,9 @@ def fly(
             )
         except AirframeLimit as exc:
             limits.insert(0, str(exc))
+        if limits:
+            # No trim at the start, or a leg above the airframe's ceiling, beyond its climb or
+            # its bank: refused before the flight starts (issue 52), nothing flown.
             return _unflown(s0, profile, ap, wind, flight_model, limits)
     if airframe is not None:  # None: the dry run's point mass flies (a model that only checks)
         compiled = False  # the numba kernel flies the point mass only
@@ -341,7 +347,7 @@ def _unflown(
     return Flight(
         t=one, xyz=np.array([[s0.x, s0.y, s0.z]]), course=np.array([s0.course]),
         bank=np.zeros(1), climb=np.zeros(1), airspeed=np.array([profile.cruise_airspeed]),
-        current=np.array([-1]), events=(), ended="cannot be flown", notes=(),
+        current=np.array([-1]), events=(), ended=NOT_FLOWN, notes=(),
         heading=np.array([s0.course]), tas=np.zeros(1), ground_speed=np.zeros(1),
         autopilot=ap, wind=wind, flight_model=model.describe(), limits=tuple(limits),
     )  # fmt: skip

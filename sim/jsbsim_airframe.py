@@ -2,9 +2,10 @@
 
 The point mass (sim/aircraft.py) banks and climbs the instant its guidance asks. Here the same
 navigators (sim/navigators/: L1 / npfg lateral acceleration, the climb-rate target of the glide
-slope) fly a JSBSim airframe (``pip install '.[jsbsim]'``; the aircraft shipped with the
-``jsbsim`` package, the c172x by default) through the ISA atmosphere (JSBSim's own standard
-atmosphere) and the dry run's wind, gusts and vertical turbulence (sim/wind.py, set as
+slope) fly a JSBSim airframe (``pip install '.[jsbsim]'``; the project's own aerosonde,
+gcs_planner/aircraft/airframes, or an aircraft shipped with the ``jsbsim`` package, the c172r
+by default; sim/jsbsim_trim.py loads and trims them) through the ISA atmosphere (JSBSim's own
+standard atmosphere) and the dry run's wind, gusts and vertical turbulence (sim/wind.py, set as
 JSBSim's wind every outer step). Between the navigator's steps an autopilot of the usual shape
 runs at the FDM's rate (``RATE_HZ``):
 
@@ -23,8 +24,9 @@ The aircraft is trimmed (JSBSim's full trim) at the cruise equivalent airspeed a
 altitude on the start heading, in the start wind. The mission's legs are checked before the
 flight against trims at their altitudes (``FlightModel.limits``): level flight at the cruise
 airspeed, the leg's climb, the bank its turns need; what the airframe cannot do is reported
-with where and why. In flight, what it could not hold for long (airspeed, climb, bank) is
-reported too (``JSBSimAirframe.shortfalls``).
+with where and why, and such a mission is not flown at all (sim/guidance.py ``fly``). In
+flight, what it could not hold for long (airspeed, climb, bank) is reported too
+(``JSBSimAirframe.shortfalls``).
 
 Position: the local frame is flat (x east, y north, z up, metres), JSBSim's is the WGS84
 ellipsoid. The horizontal position is the integral of JSBSim's NED ground velocity over each
@@ -36,21 +38,24 @@ JSBSim's altitude above sea level less the frame's origin altitude.
 
 from __future__ import annotations
 
-import ctypes
-import io
 import math
-import os
-import sys
-from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 from gcs_planner.sim import atmosphere
 from gcs_planner.sim.aircraft import AircraftState, Envelope
+from gcs_planner.sim.jsbsim_trim import (  # noqa: F401 - the flight's names, imported from here
+    FT,
+    AirframeLimit,
+    Trim,
+    _new_fdm,
+    _quiet,
+    available_aircraft,
+    trim,
+)
 
 from gcs_planner.aircraft.profile import G
 
-FT = 0.3048
 RATE_HZ = 60.0  # FDM and inner loops (the issue's 50-120 Hz; ArduPlane's fast loop is 50 Hz)
 # The c172r: the c172x's controls have hysteresis (0.05 rad on the elevator) that makes any
 # inner loop limit-cycle; the c172r's have none.
@@ -80,7 +85,6 @@ FULL_THROTTLE = 0.9
 WATCH_S = 5.0
 
 
-_LIBC = ctypes.CDLL(None)
 _NODES = {
     "phi": "attitude/phi-rad", "theta": "attitude/theta-rad", "vt": "velocities/vt-fps",
     "ve": "velocities/ve-fps", "vdown": "velocities/v-down-fps", "p": "velocities/p-rad_sec",
@@ -89,104 +93,6 @@ _NODES = {
     "rudder": "fcs/rudder-cmd-norm", "elevator": "fcs/elevator-cmd-norm",
     "throttle": "fcs/throttle-cmd-norm",
 }  # fmt: skip
-
-
-class AirframeLimit(Exception):
-    """The airframe cannot be flown as asked (no trim at the start)."""
-
-
-@contextmanager
-def _quiet() -> Iterator[None]:
-    """JSBSim writes its banner, trim reports and output-file errors to std::cout, which the
-    jsbsim module may pass on to Python's sys.stdout or leave on the C stream: silence both,
-    so a dry run's text (and its --json) stays the dry run's."""
-    sys.stdout.flush()
-    sys.stderr.flush()
-    saved = [os.dup(1), os.dup(2)]
-    null = os.open(os.devnull, os.O_WRONLY)
-    py_out, py_err = sys.stdout, sys.stderr
-    try:
-        os.dup2(null, 1)
-        os.dup2(null, 2)
-        sys.stdout = sys.stderr = io.StringIO()
-        yield
-    finally:
-        sys.stdout, sys.stderr = py_out, py_err
-        # std::cout is synchronised with C's stdout, which buffers when not a terminal: flush
-        # it into /dev/null before the descriptors are put back.
-        _LIBC.fflush(None)
-        os.dup2(saved[0], 1)
-        os.dup2(saved[1], 2)
-        for fd in (*saved, null):
-            os.close(fd)
-
-
-def available_aircraft() -> list[str]:
-    """The aircraft shipped with the jsbsim package (their folder names)."""
-    import jsbsim
-
-    root = os.path.join(jsbsim.get_default_root_dir(), "aircraft")
-    return sorted(d for d in os.listdir(root) if os.path.isfile(os.path.join(root, d, f"{d}.xml")))
-
-
-def _new_fdm(aircraft: str, rate_hz: float):  # noqa: ANN202 - jsbsim.FGFDMExec
-    import jsbsim
-
-    with _quiet():
-        fdm = jsbsim.FGFDMExec(jsbsim.get_default_root_dir())
-        fdm.set_debug_level(0)
-        if not fdm.load_model(aircraft):
-            raise AirframeLimit(f"JSBSim cannot load the aircraft {aircraft!r}")
-        fdm.disable_output()
-    fdm.set_dt(1.0 / rate_hz)
-    return fdm
-
-
-def _psi_deg(course: float) -> float:
-    """JSBSim's heading (degrees clockwise from north) of a local angle (rad CCW from east)."""
-    return (90.0 - math.degrees(course)) % 360.0
-
-
-@dataclass
-class Trim:
-    throttle: float
-    theta: float  # rad
-    pitch_trim: float
-
-
-def trim(
-    fdm,  # noqa: ANN001 - jsbsim.FGFDMExec
-    altitude_msl: float,
-    eas: float,
-    *,
-    gamma_deg: float = 0.0,
-    bank_deg: float = 0.0,
-    course: float = 0.0,
-    wind: tuple[float, float] = (0.0, 0.0),
-) -> Trim | None:
-    """JSBSim's trim at ``eas`` (m/s, equivalent) and ``altitude_msl`` (m): full trim on a
-    flight-path angle ``gamma_deg``, or a level turn at ``bank_deg``; None when it finds none
-    (beyond the airframe: the throttle or the elevator at its stop, or the wing stalled)."""
-    fdm["atmosphere/wind-east-fps"] = wind[0] / FT
-    fdm["atmosphere/wind-north-fps"] = wind[1] / FT
-    fdm["ic/h-sl-ft"] = altitude_msl / FT
-    fdm["ic/vt-fps"] = eas * atmosphere.eas2tas(altitude_msl) / FT
-    fdm["ic/gamma-deg"] = gamma_deg
-    fdm["ic/phi-deg"] = bank_deg
-    fdm["ic/psi-true-deg"] = _psi_deg(course)
-    fdm["ic/lat-geod-deg"] = 0.0
-    fdm["ic/long-gc-deg"] = 0.0
-    with _quiet():
-        fdm.run_ic()
-        fdm["propulsion/set-running"] = -1
-        try:
-            fdm.do_trim(5 if bank_deg else 1)
-        except Exception:  # jsbsim.TrimFailureError; its base class differs between versions
-            return None
-    thr = float(fdm["fcs/throttle-cmd-norm"])
-    if not 0.0 <= thr <= 1.0:
-        return None
-    return Trim(thr, float(fdm["attitude/theta-rad"]), float(fdm["fcs/pitch-trim-cmd-norm"]))
 
 
 @dataclass

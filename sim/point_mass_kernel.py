@@ -68,11 +68,15 @@ def arc_step(s: np.ndarray, aircraft: Aircraft, lateral: float, climb: float, dt
     (east, north, up); writes the new state's aircraft fields into ``out``, which may be ``s``
     (each field is read before it is written)."""
     v = aircraft.airspeed * e2t
+    psi0 = s[S_HEADING]
+    if aircraft.ground_speed_floor > 0.0:  # sim/aircraft.py Envelope.held_tas
+        short = aircraft.ground_speed_floor - (v + wx * math.cos(psi0) + wy * math.sin(psi0))
+        if short > 0.0:
+            v = max(v, min(v + short, aircraft.airspeed_max * e2t))
     vz = min(max(climb, -aircraft.sink_rate), aircraft.climb_rate)
     if aircraft.pitch_limit < 90.0:
         vz = min(vz, v * math.sin(math.radians(aircraft.pitch_limit)))
     vh = math.sqrt(max(v * v - vz * vz, 0.0))
-    psi0 = s[S_HEADING]
     a = min(max(lateral, -limit), limit)
     w = a / v
     if abs(w) < 1e-9:

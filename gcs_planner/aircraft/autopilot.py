@@ -216,6 +216,11 @@ class Autopilot:
     # TECS.cpp (_calcAltitudeControlOutput: height error / FW_T_ALT_TC) and
     # fw_path_navigation_params.c (FW_P_LIM_MAX, the pitch setpoint's limit).
     altitude_loop: tuple[str, ...] = ()
+    # The ground-speed floor (parameter, m/s per unit): airspeed demand raised by the shortfall,
+    # up to the largest airspeed. ArduPlane MIN_GNDSPD_CM (ArduPlane/navigation.cpp
+    # calc_gndspeed_undershoot, added in Attitude.cpp calc_airspeed_errors); PX4 FW_GND_SPD_MIN
+    # (FixedwingPositionControl.cpp get_auto_airspeed_setpoint, "groundspeed undershoot").
+    ground_speed_floor: tuple[str, float] = ("", 1.0)
     # ArduPilot reads its radio's RADIO_STATUS and slows mission requests to match
     # (GCS_MAVLINK::handle_radio_status, stream_slowdown_ms).
     reads_radio_status: bool = False
@@ -313,10 +318,11 @@ ARDUPLANE = Autopilot(
         ParamSpec("TECS_SINK_MAX", 5.0, low=0.0, high=20.0, low_open=True, unit="m/s"),
         # AP_TECS.cpp var_info: TIME_CONST 5 s (3..10), PITCH_MAX 15 deg (0..45, 0: use
         # PTCH_LIM_MAX_DEG; an AP_Int8: whole degrees); ArduPlane/Parameters.cpp
-        # PTCH_LIM_MAX_DEG 20 deg (0..90).
+        # PTCH_LIM_MAX_DEG 20 deg (0..90), MIN_GNDSPD_CM 0 cm/s (off).
         ParamSpec("TECS_TIME_CONST", 5.0, low=3.0, high=10.0, unit="s"),
         ParamSpec("TECS_PITCH_MAX", 15.0, low=0.0, high=45.0, unit="deg"),
         ParamSpec("PTCH_LIM_MAX_DEG", 20.0, low=0.0, high=90.0, unit="deg"),
+        ParamSpec("MIN_GNDSPD_CM", 0.0, low=0.0, high=10_000.0, unit="cm/s"),
         ParamSpec("WP_RADIUS", 90.0, PARAM_TYPE_INT16, low=1.0, high=_RADIUS_MAX, unit="m"),
         ParamSpec(
             "WP_LOITER_RAD",
@@ -347,6 +353,7 @@ ARDUPLANE = Autopilot(
     path_follower="L1",
     item_acceptance=True,
     altitude_loop=("TECS_TIME_CONST", "TECS_PITCH_MAX", "PTCH_LIM_MAX_DEG"),
+    ground_speed_floor=("MIN_GNDSPD_CM", 0.01),
     loiter_widens_with_tas=True,
     reads_radio_status=True,
     runs_lua_applets=True,
@@ -393,9 +400,11 @@ PX4 = Autopilot(
         ParamSpec("FW_T_SINK_MAX", 5.0, low=1.0, high=20.0, unit="m/s"),
         ParamSpec("FW_T_CLMB_R_SP", 3.0, low=0.5, high=20.0, unit="m/s"),
         ParamSpec("FW_T_SINK_R_SP", 2.0, low=0.5, high=20.0, unit="m/s"),
-        # fw_path_navigation_params.c: FW_T_ALT_TC 5 s (min 2), FW_P_LIM_MAX 30 deg (0..60).
+        # fw_path_navigation_params.c: FW_T_ALT_TC 5 s (min 2), FW_P_LIM_MAX 30 deg (0..60),
+        # FW_GND_SPD_MIN 5 m/s (0..40).
         ParamSpec("FW_T_ALT_TC", 5.0, low=2.0, unit="s"),
         ParamSpec("FW_P_LIM_MAX", 30.0, low=0.0, high=60.0, unit="deg"),
+        ParamSpec("FW_GND_SPD_MIN", 5.0, low=0.0, high=40.0, unit="m/s"),
         ParamSpec("NAV_LOITER_RAD", 80.0, low=1.0, high=_RADIUS_MAX, unit="m"),
         ParamSpec("NAV_ACC_RAD", 10.0, low=0.05, high=200.0, unit="m"),
         ParamSpec("NPFG_PERIOD", 10.0, low=1.0, high=100.0, unit="s"),
@@ -422,6 +431,7 @@ PX4 = Autopilot(
     helix_exits_on_course=True,
     circles_for_altitude=True,
     altitude_loop=("FW_T_ALT_TC", "FW_P_LIM_MAX"),
+    ground_speed_floor=("FW_GND_SPD_MIN", 1.0),
     refuses_mode_temporarily=True,
     protocol=MissionProtocol(
         answers_in_heard_spelling=True,

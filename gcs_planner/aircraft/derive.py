@@ -125,9 +125,11 @@ def derive_envelope(
         file_terms=file_terms,
     )
     env = _envelope(args, scenario, picked, stated, climb, sink, file_bank, wind, wind_from)
+    env = within_pitch_limit(env, picked.shipped, stated)
     flier = picked.shipped
     if flier is None and flown_by is not None:
         flier = effective(flown_by, {})
+    env = with_ground_speed_floor(env, flier)
     env = _with_runs(env, args, scenario, flier)
     for name, why in env.refusals():
         if name == "max_bank_angle" and env.bank_deg <= 0:
@@ -254,6 +256,64 @@ def _envelope(
         sources=tuple(pick.sources),
         low_altitude=low_altitude,
     )
+
+
+def pitch_limit(flier: EffectiveParameters) -> float:
+    """The pitch limit of auto flight (deg; 90: none) of ``flier``'s table: ArduPlane
+    TECS_PITCH_MAX, 0 taking PTCH_LIM_MAX_DEG's value and any other capped by it
+    (``libraries/AP_TECS/AP_TECS.cpp``, ``AP_TECS::update_pitch_throttle``); PX4 FW_P_LIM_MAX
+    (``src/modules/fw_pos_control/fw_path_navigation_params.c``), the limit of its pitch
+    setpoint (``TECS.cpp``)."""
+    names = autopilot_for(flier.firmware).altitude_loop
+    if len(names) < 2:
+        return 90.0
+    pitch = float(flier.values[names[1]])
+    if len(names) > 2:
+        cap = float(flier.values[names[2]])
+        pitch = cap if pitch <= 0 else min(pitch, cap)
+    return pitch if 0 < pitch < 90 else 90.0
+
+
+def within_pitch_limit(
+    env: DerivedEnvelope, flier: EffectiveParameters | None, stated: set[str]
+) -> DerivedEnvelope:
+    """The envelope with its climb rate within the autopilot's pitch limit: TECS asks for the
+    pitch of the climb's flight path in the air, asin(rate / TAS), and clips it at the limit,
+    so no climb steeper than the limit is flown (docs/model.md, "The pitch limit and the
+    ground-speed floor"). The rate is capped at TAS sin(limit) at the slowest TAS (the
+    scenario's lowest point): every leg's derived angle, atan(rate / (TAS + W)) at its own
+    TAS, is then within the limit. Only where the climb angle is derived (not stated) and the
+    autopilot's table is known."""
+    if flier is None or "max_climb_angle" in stated or not math.isfinite(env.climb_rate):
+        return env
+    limit = pitch_limit(flier)
+    if limit >= 90.0:
+        return env
+    most = env.tas_low * math.sin(math.radians(limit))
+    if env.climb_rate <= most:
+        return env
+    name = autopilot_for(flier.firmware).altitude_loop[1]
+    why = f"capped by {name} {limit:g} deg at {env.tas_low:.1f} m/s TAS (the lowest point)"
+    sources = tuple((k, f"{v}, {why}" if k == "max_climb_rate" else v) for k, v in env.sources)
+    return replace(env, climb_rate=most, sources=sources)
+
+
+def with_ground_speed_floor(
+    env: DerivedEnvelope, flier: EffectiveParameters | None
+) -> DerivedEnvelope:
+    """The envelope with the autopilot's ground-speed floor and largest airspeed (its record's
+    ``ground_speed_floor``; AIRSPEED_MAX / FW_AIRSPD_MAX): into a headwind stronger than
+    TAS - floor it flies faster, and the turning radius and angles take that TAS
+    (``DerivedEnvelope.tas_flown``)."""
+    if flier is None:
+        return env
+    ap = autopilot_for(flier.firmware)
+    name, scale = ap.ground_speed_floor
+    if not name:
+        return env
+    floor = float(flier.values[name]) * scale
+    most = float(flier.values[ap.airspeed_range[1]])
+    return replace(env, ground_speed_floor=floor, airspeed_max=max(most, env.eas))
 
 
 def _changes(env: DerivedEnvelope, stated: set[str]) -> dict[str, float]:

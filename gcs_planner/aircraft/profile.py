@@ -292,6 +292,11 @@ class DerivedEnvelope:
     per_leg: tuple[str, ...] = ()
     # Each leg's angles along its own track in the design wind's stated direction.
     along_track: bool = False
+    # The autopilot's ground-speed floor (m/s; 0: none) and largest airspeed (m/s EAS): into a
+    # headwind that leaves less ground speed than the floor it raises its airspeed, and the
+    # turns widen with it (``tas_flown``; derive.py ``with_ground_speed_floor``).
+    ground_speed_floor: float = 0.0
+    airspeed_max: float = math.inf
 
     @property
     def wind_rule(self) -> str:
@@ -326,8 +331,22 @@ class DerivedEnvelope:
         return tas_from_eas(self.eas, self.lowest_altitude)
 
     @property
+    def tas_flown(self) -> float:
+        """The most TAS flown at ``altitude`` in the design wind: the TAS, raised into a
+        headwind stronger than TAS - floor to W + floor (at most the largest airspeed) by the
+        autopilot's ground-speed floor (PX4 FW_GND_SPD_MIN, FixedwingPositionControl.cpp
+        get_auto_airspeed_setpoint; ArduPlane MIN_GNDSPD_CM, ArduPlane/navigation.cpp
+        calc_gndspeed_undershoot). Taken as held through a turn: the airspeed loop lags the
+        heading, so a turn out of the headwind starts at the raised TAS."""
+        tas = self.tas
+        floor = self.ground_speed_floor
+        if floor <= 0 or self.wind <= tas - floor:
+            return tas
+        return max(tas, min(self.wind + floor, tas_from_eas(self.airspeed_max, self.altitude)))
+
+    @property
     def ground_speed_max(self) -> float:
-        return self.tas + self.wind
+        return self.tas_flown + self.wind
 
     @property
     def climb_angle(self) -> float:
@@ -394,7 +413,13 @@ class DerivedEnvelope:
         lines = [
             f"envelope derived for {self.autopilot or 'the aircraft'}: {self.eas:g} m/s EAS = "
             f"{self.tas:.2f} m/s TAS at {self.altitude:.0f} m (ISA, {where}); {wind}; ground "
-            f"speed <= {v:.2f} m/s",
+            f"speed <= {v:.2f} m/s"
+            + (
+                f" (TAS raised to {self.tas_flown:.2f} m/s by the ground-speed floor of "
+                f"{self.ground_speed_floor:g} m/s into the headwind)"
+                if self.tas_flown > self.tas
+                else ""
+            ),
             (
                 f"  turning radius R = (TAS + W)^2 / (g tan {self.bank_deg:.4g} deg) = "
                 f"{self.turn_radius:.1f} m"

@@ -7,12 +7,21 @@ bounds, no dominance. The arithmetic mirrors ``evaluate_route`` step by step (sa
 same order of additions, same comparison in metres flown against ``Parameters.limits_m``), so a
 boundary case is decided identically. Exponential: for scenarios of up to about 9 correction
 points.
+
+With ``Scenario.capture_vertical`` (a design turbulence) a route must also fit every capture
+(docs/model.md, "Turbulence in the plan"): at each V, H and B point, every correction outcome
+arriving within the limits (the unreliable points' failures clipped to r) passes within the
+capture radius, its vertical error plus the point's vertical allowance and the tracking
+allowance added as ``capture_check`` adds them.
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
+from gcs_planner.aircraft.profile import TRACKING_ALLOWANCE_M
 from gcs_planner.baselines import Front
 from gcs_planner.scenario.model import Kind, Scenario
 
@@ -54,12 +63,41 @@ def brute_force_front(scenario: Scenario, max_corrections: int | None = None) ->
     used = [False] * scenario.n
     used[start] = True
 
-    def visit(i: int, dv: float, dh: float, length: float) -> None:
+    vertical = scenario.capture_vertical
+    residual = params.residual_m
+
+    def outcomes(j: int, states: frozenset, d: float) -> frozenset | None:
+        """The correction outcomes after arriving at ``j``, None when a capture does not fit."""
+        lim_v, lim_h = limits[j]
+        arrived = [(v + d, h + d) for v, h in states if v + d <= lim_v and h + d <= lim_h]
+        if vertical is None:
+            return frozenset()
+        if not arrived:
+            return None
+        z, unit = vertical[j] / scenario.error_unit, scenario.error_unit
+        worst = max(math.hypot(v * params.delta + z, h * params.delta) for v, h in arrived) * unit
+        if worst + TRACKING_ALLOWANCE_M > scenario.capture_radius:
+            return None
+        # The outcomes that can happen: a correction that never works (p = 0) leaves only its
+        # failure, one that always does (p = 1) only its success (as the probability model).
+        fails = bool(scenario.unreliable[j]) and kinds[j] in (Kind.V, Kind.H)
+        works = not fails or params.p_success > 0.0
+        out = set()
+        for v, h in arrived:
+            if works:
+                out.add(
+                    (0.0, h) if kinds[j] == Kind.V else (v, 0.0) if kinds[j] == Kind.H else (v, h)
+                )
+            if fails and params.p_success < 1.0:
+                out.add((min(v, residual), h) if kinds[j] == Kind.V else (v, min(h, residual)))
+        return frozenset(out)
+
+    def visit(i: int, dv: float, dh: float, length: float, states: frozenset) -> None:
         row = dist[i]
         # B ends the route: record it, never extend past it.
         d = row[end]
         lim_v, lim_h = limits[end]
-        if dv + d <= lim_v and dh + d <= lim_h:
+        if dv + d <= lim_v and dh + d <= lim_h and outcomes(end, states, d) is not None:
             k = len(path) - 1
             total = length + d
             if k not in best or total < best[k][0]:
@@ -74,15 +112,18 @@ def brute_force_front(scenario: Scenario, max_corrections: int | None = None) ->
             lim_v, lim_h = limits[j]
             if arrive_v > lim_v or arrive_h > lim_h:
                 continue
+            after = outcomes(j, states, d)
+            if after is None:
+                continue
             if kinds[j] == Kind.V:
                 arrive_v = 0.0
             else:
                 arrive_h = 0.0
             used[j] = True
             path.append(j)
-            visit(j, arrive_v, arrive_h, length + d)
+            visit(j, arrive_v, arrive_h, length + d, after)
             path.pop()
             used[j] = False
 
-    visit(start, 0.0, 0.0, 0.0)
+    visit(start, 0.0, 0.0, 0.0, frozenset([(0.0, 0.0)]))
     return front_from_best(best)

@@ -9,7 +9,9 @@ import argparse
 import json
 import sys
 from dataclasses import replace
+from typing import TYPE_CHECKING
 
+from gcs_planner.aircraft.altitude_hold import design_hold
 from gcs_planner.aircraft.autopilot import DEFAULT_AUTOPILOT
 from gcs_planner.aircraft.derive import design_wind_speed
 from gcs_planner.cli.common import (
@@ -21,8 +23,9 @@ from gcs_planner.cli.common import (
 )
 from gcs_planner.cli.dry_run_policy import add_policy_arguments, refuse_plan_flags, run_policy
 from gcs_planner.cli.vehicle_from import add_envelope_arguments, derive_envelope
+from gcs_planner.core.capture import with_design_turbulence
 from gcs_planner.core.choose import DEFAULT_MIN_PROBABILITY
-from gcs_planner.dryrun.air import flown_turbulence
+from gcs_planner.dryrun.air import design_turbulence, flown_turbulence
 from gcs_planner.dryrun.endurance import vehicle_endurance
 from gcs_planner.dryrun.render import (
     SHOWN_ENVELOPE_SHORTFALLS,
@@ -49,7 +52,13 @@ from gcs_planner.mission.geo_exports import trajectory_local
 from gcs_planner.mission.plan_json import plan_to_dict
 from gcs_planner.sim.live_vehicle import DEFAULT_TIME_SCALE
 from gcs_planner.sim.replay import ReplayReport
+from gcs_planner.sim.turbulence import Turbulence
 from gcs_planner.sim.wind import WindSpec
+
+if TYPE_CHECKING:
+    from gcs_planner.aircraft.altitude_hold import AltitudeHold
+    from gcs_planner.core.planner import Plan
+    from gcs_planner.scenario.model import Scenario
 
 # The report's text moved to gcs_planner/dryrun/render.py; its names stay importable here.
 __all__ = [
@@ -157,9 +166,10 @@ def _add_vehicle_arguments(p: argparse.ArgumentParser) -> None:
     g.add_argument(
         "--aircraft",
         metavar="NAME",
-        help="a JSBSim aircraft, one shipped with the jsbsim package: what --flight-model jsbsim "
-        "flies (default c172r); without it, the point mass flies and each leg is first checked "
-        "against this aircraft's trims at its altitude (engine power, speed range, ceiling)",
+        help="a JSBSim aircraft, the project's aerosonde or one the jsbsim package ships: what "
+        "--flight-model jsbsim flies (default c172r); without it, the point mass flies and each "
+        "leg is first checked against this aircraft's trims at its altitude (engine power, "
+        "speed range, ceiling)",
     )
 
 
@@ -186,6 +196,12 @@ def _add_air_arguments(p: argparse.ArgumentParser) -> None:
         help="vertical turbulence flown: the Dryden vertical gust of MIL-F-8785C, its standard "
         "deviation in m/s or a level of the standard (light, moderate, severe: sigma_w by "
         "altitude); default the scenario's [environment] turbulence, else none",
+    )
+    g.add_argument(
+        "--design-turbulence",
+        metavar="SIGMA_W|LEVEL",
+        help="the vertical turbulence the plan's captures are given an allowance for (default: "
+        "the turbulence flown; 0 flies a plan made for still air in --turbulence)",
     )
     g.add_argument(
         "--navigate-on-truth",
@@ -317,7 +333,7 @@ def flight_model_from_args(args: argparse.Namespace) -> object | None:
     name = args.aircraft or DEFAULT_AIRCRAFT
     shipped = available_aircraft()
     if name not in shipped:
-        light = ", ".join(a for a in ("c172r", "c172x", "c182", "c310", "J3Cub", "pa28"))
+        light = ", ".join(("aerosonde", "c172r", "c172x", "c182", "c310", "J3Cub", "pa28"))
         raise InputError(
             f"no JSBSim aircraft {name!r} (shipped: {len(shipped)}, e.g. {light})",
             field="--aircraft",
@@ -330,7 +346,11 @@ def flight_model_from_args(args: argparse.Namespace) -> object | None:
 def run(args: argparse.Namespace) -> int:
     _fill_from_table(args)
     if args.policy is not None:
-        for flag, given in (("--turbulence", args.turbulence), ("--endurance", args.endurance)):
+        for flag, given in (
+            ("--turbulence", args.turbulence),
+            ("--design-turbulence", args.design_turbulence),
+            ("--endurance", args.endurance),
+        ):
             if given is not None:
                 raise InputError(f"the policy dry run does not take {flag}", field=flag)
         if args.flight_model != "point-mass" or args.aircraft is not None:
@@ -348,6 +368,7 @@ def run(args: argparse.Namespace) -> int:
     runs = int(_number(args.runs, "--runs", int, 0))
     wind = parse_wind(args.wind, args.gust)
     wind = replace(wind, turbulence=flown_turbulence(args.turbulence, args.scenario))
+    designed = design_turbulence(args.design_turbulence, wind.turbulence)
     endurance = vehicle_endurance(args.endurance, args.scenario)
     params = parse_params(args.param)
     settings = _settings(args, runs)
@@ -356,6 +377,10 @@ def run(args: argparse.Namespace) -> int:
     if track_out is not None and not track_out.lower().endswith((".geojson", ".json", ".kml")):
         raise InputError("must end in .geojson, .json or .kml", field="--track-out")
     scenario = load_scenario_from_args(args)
+    if args.aircraft is not None:  # the plan flown climbs within the airframe (issue 52)
+        from gcs_planner.aircraft.airframe_trim import bound_by_airframe
+
+        scenario = bound_by_airframe(args, scenario)
     # The wind flown, unless --design-wind; a still flight (the default "0") leaves the
     # scenario file's [environment] wind, if any, as the design wind.
     design = args.design_wind if args.design_wind is not None else args.wind
@@ -374,7 +399,13 @@ def run(args: argparse.Namespace) -> int:
         # The gusts flown are the plan's design gusts: the derived reserve covers them.
         gust=wind.gust,
     )
+    # The plan keeps to the endurance the flights are judged against (core/endurance_front.py).
+    scenario = replace(scenario, endurance=endurance)
+    hold = _design_hold(args, scenario, designed, params)
+    if hold is not None:  # each capture's vertical allowance, kept to in the search
+        scenario = with_design_turbulence(scenario, hold)
     result = plan_from_args(args, scenario)
+    _check_design_turbulence(args, result, hold)
     # The vehicle's landmark database comes from the file again, not from the planner.
     world = DryRunWorld(
         result,
@@ -393,6 +424,41 @@ def run(args: argparse.Namespace) -> int:
     if track_out is not None and flown:
         _write_track(track_out, flown[0], world)
     return _report(args, report, result.min_probability)
+
+
+def _design_hold(
+    args: argparse.Namespace,
+    scenario: Scenario,
+    designed: Turbulence | None,
+    params: dict[str, float],
+) -> AltitudeHold | None:
+    """The plan made for the ``designed`` turbulence through the flown autopilot's altitude
+    loop, at its --param value, else as shipped (None: no turbulence designed for)."""
+    eas = scenario.envelope.eas if scenario.envelope is not None else scenario.cruise_airspeed
+    return design_hold(designed, args.autopilot or DEFAULT_AUTOPILOT, eas, params)
+
+
+def _check_design_turbulence(
+    args: argparse.Namespace, result: Plan, hold: AltitudeHold | None
+) -> None:
+    """The chosen route's captures in the design turbulence, checked again as the plan checks
+    them (the search keeps to them; a route found past its budget may not): one that does not
+    fit is not flown unless --allow-risky."""
+    if hold is None:
+        return
+    from gcs_planner.aircraft.profile import TRACKING_ALLOWANCE_M
+    from gcs_planner.core.capture import turbulence_capture
+
+    check = turbulence_capture(result.route.stops, result.scenario, TRACKING_ALLOWANCE_M, hold)
+    planned = f"planned for {hold.describe()}"
+    if check["warning"] is None:
+        print(f"gcs-planner: note: {planned}: every capture fits", file=sys.stderr)
+        return
+    if not args.allow_risky:
+        from gcs_planner.core.choose import RiskyRouteError
+
+        raise RiskyRouteError(f"{planned}: {check['warning']}; not flown: pass --allow-risky")
+    print(f"gcs-planner: warning: {planned}: {check['warning']}", file=sys.stderr)
 
 
 def _settings(args: argparse.Namespace, runs: int) -> DryRunSettings:

@@ -23,12 +23,14 @@ from gcs_planner.cli.vehicle_from import (
     apply_vehicle_from,
     derive_envelope,
 )
+from gcs_planner.core.replan import DEFAULT_POLICY_LEVELS
 from gcs_planner.mission.param_files import render_setup
 from gcs_planner.mission.vehicle_setup import needs as setup_needs
 from gcs_planner.mission.vehicle_setup import setup_lines, setup_to_dict
 from gcs_planner.runtime.atomic import check_output_dir
 
 if TYPE_CHECKING:
+    from gcs_planner.aircraft.altitude_hold import AltitudeHold
     from gcs_planner.aircraft.reserve import DerivedReserve
     from gcs_planner.core.planner import Plan
     from gcs_planner.core.route import Route
@@ -47,7 +49,28 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     add_vehicle_from_argument(p)
     add_envelope_arguments(p)
     add_from_state_arguments(p)
+    p.add_argument(
+        "--endurance",
+        metavar="MINUTES",
+        help="the minutes of flight the aircraft has (default the scenario's [vehicle] "
+        "endurance, else unlimited): only routes whose flight time in the design wind is within "
+        'it are planned (docs/model.md, "Endurance in the plan")',
+    )
     p.add_argument("--json", action="store_true", help="print one JSON object, nothing else")
+    p.add_argument(
+        "--aircraft",
+        metavar="NAME",
+        help="a JSBSim airframe (the project's aerosonde, or one the jsbsim package ships): the "
+        "cruise airspeed, bank and climb/sink rates not given otherwise come from its trims at "
+        "the scenario's highest point, within the autopilot's limits (docs/jsbsim.md)",
+    )
+    p.add_argument(
+        "--turbulence",
+        metavar="SIGMA_W|LEVEL",
+        help="design vertical turbulence (Dryden, MIL-F-8785C: sigma_w m/s or light, moderate, "
+        "severe): each capture gets a vertical allowance for the autopilot's altitude-hold error "
+        "in it (docs/model.md); default the scenario's [environment] turbulence, else none",
+    )
     p.add_argument(
         "--out",
         type=Path,
@@ -70,10 +93,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--policy-levels",
         type=int,
-        default=1,
+        default=DEFAULT_POLICY_LEVELS,
         metavar="N",
         help="with --policy, replan failure branches again at their own unreliable points, N "
-        "levels deep (default 1: the route's own failures)",
+        f"levels deep (default {DEFAULT_POLICY_LEVELS}: the route's own failures and its "
+        "branches'; 1: the route's own failures only)",
     )
     p.add_argument(
         "--switch-time",
@@ -118,20 +142,42 @@ def run(args: argparse.Namespace) -> int:
     # The autopilot the plan is for (ArduPilot unless --autopilot): its path follower sets the
     # straight runs at the landmarks, and the vehicle setup names its parameters.
     autopilot = args.autopilot or DEFAULT_AUTOPILOT
+    if args.aircraft is not None:
+        # The airframe's own trims fill the autopilot terms left unset (issue 52).
+        from gcs_planner.aircraft.airframe_trim import (
+            apply_airframe_trims,
+            highest_altitude,
+            with_angle_flags,
+        )
+
+        apply_airframe_trims(args, highest_altitude(scenario), autopilot, scenario)
+        scenario = with_angle_flags(args, scenario)  # climbs cut to the airframe's
     scenario = derive_envelope(args, scenario, wind_text=args.wind, flown_by=autopilot)
     scenario = apply_from_state(args, scenario)
+    scenario = _with_endurance(args, scenario)
+    hold = _design_hold(args, scenario, autopilot)
+    if hold is not None:  # each capture's vertical allowance, kept to in the search
+        from gcs_planner.core.capture import with_design_turbulence
+
+        scenario = with_design_turbulence(scenario, hold)
     room = None
     if args.policy:
         scenario, room = _switch_room(scenario, switch_seconds)
     result = plan_from_args(args, scenario)
     plan_dict = plan_json.plan_to_dict(result)
+    if hold is not None:
+        from gcs_planner.aircraft.profile import TRACKING_ALLOWANCE_M
+        from gcs_planner.core.capture import turbulence_capture
+
+        stops = result.route.stops
+        plan_dict["capture"] = turbulence_capture(stops, scenario, TRACKING_ALLOWANCE_M, hold)
     setup = setup_needs(plan_dict, autopilot, design_wind_speed(args, scenario))
     plan_dict["setup"] = setup_to_dict(setup, autopilot)
     text = plan_json.dumps_dict(plan_dict)
     if args.json:
         sys.stdout.write(text)
     else:
-        print(render(result))
+        print(render(result, plan_dict["capture"]))
         print("\n" + "\n".join(setup_lines(setup, autopilot)))
     if not args.out:
         return 0
@@ -197,6 +243,16 @@ def run(args: argparse.Namespace) -> int:
 
         print(f"gcs-planner: warning: {DEFAULT_ORIGIN_WARNING}", file=sys.stderr)
     return 0
+
+
+def _with_endurance(args: argparse.Namespace, scenario: Scenario) -> Scenario:
+    """The scenario with the endurance of --endurance, else of its [vehicle] endurance."""
+    from dataclasses import replace
+
+    from gcs_planner.dryrun.endurance import vehicle_endurance
+
+    endurance = vehicle_endurance(args.endurance, args.scenario)
+    return scenario if endurance is None else replace(scenario, endurance=endurance)
 
 
 def write_outputs(
@@ -314,22 +370,53 @@ def reserve_check_line(result: Plan) -> list[str]:
     ]
 
 
-def _capture_lines(result: Plan) -> list[str]:
+def _design_hold(
+    args: argparse.Namespace, scenario: Scenario, autopilot: str
+) -> AltitudeHold | None:
+    """``--turbulence`` (else the scenario's [environment] turbulence) through ``autopilot``'s
+    altitude loop as shipped: the design the captures are given their vertical allowance for."""
+    from gcs_planner.aircraft.altitude_hold import design_hold
+    from gcs_planner.dryrun.air import flown_turbulence
+
+    eas = scenario.envelope.eas if scenario.envelope is not None else scenario.cruise_airspeed
+    return design_hold(flown_turbulence(args.turbulence, args.scenario), autopilot, eas)
+
+
+def _capture_lines(result: Plan, c: dict | None = None) -> list[str]:
     from gcs_planner.mission.plan_json import capture_of
 
-    c = capture_of(result)
+    c = capture_of(result) if c is None else c
+    if c.get("turbulence"):
+        t = c["turbulence"]
+        worst = max((p["vertical_allowance_m"] for p in t["points"].values()), default=0.0)
+        head = [f"turbulence: {t['describe']}; at most {worst:.2f} m"]
+    else:
+        head = []
     if c["warning"]:
-        return [f"warning: {c['warning']}"]
+        return [*head, f"warning: {c['warning']}"]
     if c["worst_point"] is None:
-        return []
+        return head
     return [
+        *head,
         f"capture: every correction point fits its {c['capture_radius_m']:g} m capture radius "
         f"(worst {c['worst_point']}: {c['worst_need_m']:.2f} m of error on arrival, the worst over "
-        f"the correction outcomes, and tracking allowance, {c['error_unit_m']:g} m per error unit)"
+        f"the correction outcomes, and tracking allowance, {c['error_unit_m']:g} m per error unit)",
     ]
 
 
-def render(result: Plan) -> str:
+def _endurance_lines(result: Plan) -> list[str]:
+    """The chosen route's flight time in the design wind, against the endurance if given."""
+    from gcs_planner.core.flight_time import route_minutes
+
+    minutes = route_minutes(result.scenario, result.route)
+    text = f"flight time: {minutes:,.1f} min ({minutes / 60:.2f} h) in the design wind"
+    endurance = result.scenario.endurance
+    if endurance is not None:
+        text += f", within the endurance of {endurance:g} min ({endurance - minutes:,.1f} left)"
+    return [text]
+
+
+def render(result: Plan, capture: dict | None = None) -> str:
     s = result.scenario
     p = s.params
     out = [
@@ -347,7 +434,8 @@ def render(result: Plan) -> str:
         reserve_line(p.reserve, s.reserve_basis),
         *reserve_check_line(result),
         *(f"warning: {w}" for w in result.warnings),
-        *_capture_lines(result),
+        *_capture_lines(result, capture),
+        *_endurance_lines(result),
         f"optimality: {result.statement}",
         "",
         f"Pareto front ({len(result.routes)} route{'' if len(result.routes) == 1 else 's'}; "

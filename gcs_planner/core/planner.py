@@ -14,7 +14,8 @@ from gcs_planner.core.bnb import DEFAULT_MAX_LABELS, PROB_EPS
 from gcs_planner.core.budget import DEFAULT_TIME_LIMIT, Budget, ProgressCallback
 from gcs_planner.core.choose import DEFAULT_MIN_PROBABILITY, choose_index, default_objectives
 from gcs_planner.core.choose import choose as choose_route
-from gcs_planner.core.engines import bnb_engine, straight_engine
+from gcs_planner.core.endurance_front import within_endurance
+from gcs_planner.core.engines import EngineResult, bnb_engine, straight_engine
 from gcs_planner.core.route import Route
 from gcs_planner.errors import InfeasibleError
 from gcs_planner.geometry.legs import scenario_leg_model
@@ -120,13 +121,33 @@ def plan(
     if max_corrections is not None and max_corrections < 0:
         raise ValueError(f"max_corrections must be >= 0, not {max_corrections}")
     use_probability = "probability" in objectives
+
     # The layered straight search starts from rest; a state mid-flight (errors at A, see
     # core/from_state.py) is planned by the branch and bound, whose first label carries them.
-    if use_probability or scenario_leg_model(scenario).carries_heading or not scenario.from_rest:
-        budget = Budget(max_labels, time_limit, progress)
-        result = bnb_engine(scenario, use_probability, max_corrections, budget)
-    else:
-        result = straight_engine(scenario, max_corrections)
+    def run_engine() -> EngineResult:
+        turns = scenario_leg_model(scenario).carries_heading
+        if use_probability or turns or not scenario.from_rest:
+            budget = Budget(max_labels, time_limit, progress)
+            return bnb_engine(scenario, use_probability, max_corrections, budget)
+        return straight_engine(scenario, max_corrections)
+
+    if scenario.capture_vertical is not None:  # every capture fits (core/capture_front.py)
+        from gcs_planner.core.capture_front import within_captures
+
+        def run_within() -> EngineResult:
+            if scenario.endurance is None:
+                return run_engine()
+            return within_endurance(
+                scenario, run_engine, use_probability, max_corrections, max_labels, time_limit
+            )
+
+        result = within_captures(scenario, run_within, use_probability, max_corrections, max_labels)
+    elif scenario.endurance is None:
+        result = run_engine()
+    else:  # flight time a resource: the front within the endurance (core/endurance_front.py)
+        result = within_endurance(
+            scenario, run_engine, use_probability, max_corrections, max_labels, time_limit
+        )
     if not result.routes:
         raise InfeasibleError(f"{scenario.name}: {result.statement}")
     found = result.routes

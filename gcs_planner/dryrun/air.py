@@ -33,3 +33,17 @@ def flown_turbulence(text: str | None, scenario: str | Path | None) -> Turbulenc
 
 def _present(turbulence: Turbulence) -> Turbulence | None:
     return turbulence if turbulence.present else None
+
+
+DESIGN_FLAG = "--design-turbulence"
+
+
+def design_turbulence(text: str | None, flown: Turbulence | None) -> Turbulence | None:
+    """The turbulence the dry run's plan is made for: ``--design-turbulence`` (0: none), else
+    the turbulence flown, as ``--design-wind`` defaults to ``--wind``."""
+    if text is None:
+        return flown
+    try:
+        return _present(parse_turbulence(text))
+    except ValueError as exc:
+        raise InputError(str(exc), field=DESIGN_FLAG) from None

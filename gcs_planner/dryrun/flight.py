@@ -27,7 +27,7 @@ from gcs_planner.link.vehicle_check import Shortfall, shortfalls
 from gcs_planner.mission.vehicle_setup import ParameterNeed
 from gcs_planner.scenario.model import Parameters
 from gcs_planner.sim import replay as replay_mod
-from gcs_planner.sim.guidance import AutopilotParams
+from gcs_planner.sim.guidance import NOT_FLOWN, AutopilotParams
 from gcs_planner.sim.vehicle import MockVehicle
 
 # The planned path's sampling for the deviation (the figure is within half of it).
@@ -124,9 +124,18 @@ def fly_stored_mission(
     return Flight(replayed, autopilot, tuple(short), tuple(envelope_shortfalls), flown_wind)
 
 
+def never_started(replayed: replay_mod.ReplayReport) -> bool:
+    """Whether the flight was refused before it started: the airframe cannot fly the mission
+    (sim/guidance.py ``fly``: a leg beyond its ceiling, climb or bank, or no trim at A)."""
+    return replayed.flight is not None and replayed.flight.ended == NOT_FLOWN
+
+
 def rows_of(replayed: replay_mod.ReplayReport, route: Route) -> list[DryRunRow]:
     """Every correction the flight made, failed or was lost at, and every landmark of the
-    mission it missed on the way, in the order flown."""
+    mission it missed on the way, in the order flown; none when the flight never started (the
+    airframe cannot fly the mission: nothing was met or missed)."""
+    if never_started(replayed):
+        return []
     planned = {s.id: s for s in route.stops[1:-1]}
     misses = {e.id: e.miss for e in replayed.encounters}
     rows = [_row(c, planned, misses.get(c.id, 0.0)) for c in replayed.run.corrections]
@@ -139,9 +148,10 @@ def rows_of(replayed: replay_mod.ReplayReport, route: Route) -> list[DryRunRow]:
 def lost_runs_of(
     replayed: replay_mod.ReplayReport, route: Route, params: Parameters
 ) -> tuple[LostRunRow, ...]:
-    """The Monte Carlo's lost runs, each said to be lost by the flight or by chance."""
+    """The Monte Carlo's lost runs, each said to be lost by the flight or by chance; none when
+    the flight never started (nothing was flown to be lost)."""
     mc = replayed.monte_carlo
-    if mc is None:
+    if mc is None or never_started(replayed):
         return ()
     return tuple(
         LostRunRow(r.run, r.reason, r.missed_ids, r.failed,

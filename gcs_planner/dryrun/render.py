@@ -147,6 +147,12 @@ def _flight_lines(r: DryRunReport) -> list[str]:
         f"from the planned path {r.max_deviation:.1f} m (3D), {r.max_deviation_at:,.0f} m from "
         f"A; acceptance radius {r.acceptance_radius:g} m, capture radius {r.capture_radius:g} m",
     ]
+    if r.airframe_limits:
+        # Refused before it started (sim/guidance.py fly): nothing flown, met or missed.
+        out[-1] = (
+            f"flight: NOT FLOWN: {r.flavour} refused the mission before the flight started "
+            f"(the airframe cannot fly it: below); planned {r.planned_length:,.1f} m"
+        )
     if r.endurance is not None:
         left = r.endurance - r.flight_seconds / 60
         judged = f"had {left:.1f} min to spare"
@@ -186,15 +192,17 @@ def _met_lines(r: DryRunReport) -> list[str]:
     """What the flight missed, where it was lost, whether it met the planned points, and the
     world it flew in with what the plan assumed of it."""
     out = []
-    if r.missed:
+    if r.airframe_limits:
+        pass  # never flown: nothing missed, nothing lost on the way
+    elif r.missed:
         out.append(
             "missed: "
             + ", ".join(f"{m.kind} {m.point} by {m.miss:.1f} m" for m in r.missed)
             + f" (outside the {r.capture_radius:g} m capture radius: no correction)"
         )
-    if not r.arrived:
+    if not r.arrived and not r.airframe_limits:
         out.append(f"flown {r.flown_length:,.1f} m before the vehicle was lost")
-    if not r.corrections_as_planned:
+    if not r.corrections_as_planned and not r.airframe_limits:
         out.append("corrections: NOT the planned points in the planned order (see the rows)")
     out.append(
         f"world: {r.wind}; autopilot {r.autopilot}; the aircraft steers its "
@@ -211,6 +219,8 @@ def _runs_lines(r: DryRunReport) -> list[str]:
     without runs)."""
     if not (r.runs > 0 and r.success_rate is not None and r.success_ci is not None):
         return []
+    if r.airframe_limits:
+        return [f"runs: none of the {r.runs} flown: the airframe cannot fly the mission (above)"]
     low, high = r.success_ci
     if r.reserve > 0:  # the plan's probability is a floor: held to limits less the reserve
         verdict = "kept" if r.probability_within_ci else "NOT kept (above the interval)"
@@ -316,6 +326,8 @@ def _table(r: DryRunReport) -> str:
         f"{'v margin':>8} {'h margin':>8} {'planned v':>9} {'planned h':>9}  outcome"
     )
     lines = [head]
+    if r.airframe_limits:
+        return "corrections: none: the flight never started (the airframe cannot fly the mission)"
     for row in r.rows:
         kind = row.kind + ("*" if row.unreliable else "")
         if row.outcome == "missed":

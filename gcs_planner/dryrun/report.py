@@ -20,6 +20,7 @@ from gcs_planner.dryrun.flight import (
     as_planned,
     lost_runs_of,
     max_deviation,
+    never_started,
     rows_of,
     seeded_flight_lost,
     stretch_overrun,
@@ -336,7 +337,9 @@ def _runs_fields(world: DryRunWorld, settings: DryRunSettings, flight: Flight) -
         "confidence": None if mc is None else mc.confidence,
         "flight_losses": flight_losses,
         "endurance_losses": sum(r.out_of_endurance for r in lost_runs),
-        "correction_losses": 0 if mc is None else mc.runs - mc.successes - flight_losses,
+        "correction_losses": (
+            0 if mc is None or never_started(replayed) else mc.runs - mc.successes - flight_losses
+        ),
         "runs_flown": False if mc is None else mc.flown,
         "flight_lost": seeded_flight_lost(replayed, route, params),
         "lost_runs": lost_runs,

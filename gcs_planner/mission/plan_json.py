@@ -95,6 +95,18 @@ def reserve_of(plan: Plan) -> dict[str, Any]:
     return out
 
 
+def endurance_of(plan: Plan) -> dict[str, Any]:
+    """The endurance planned for and the flight minutes of the chosen route and the front."""
+    from gcs_planner.core.flight_time import route_minutes
+
+    minutes = [route_minutes(plan.scenario, r) for r in plan.routes]
+    return {
+        "minutes": plan.scenario.endurance,
+        "chosen_flight_minutes": minutes[plan.chosen],
+        "front_flight_minutes": minutes,
+    }
+
+
 def plan_to_dict(plan: Plan) -> dict[str, Any]:
     s = plan.scenario
     origin = (
@@ -130,6 +142,9 @@ def plan_to_dict(plan: Plan) -> dict[str, Any]:
             # design wind (None: stated directly or assumed).
             "envelope": None if s.envelope is None else s.envelope.to_dict(),
         },
+        # The minutes of flight the aircraft has (None: unlimited) and the flight time of each
+        # front route in the design wind (core/flight_time.py); the dry run judges against it.
+        "endurance": endurance_of(plan),
         "warnings": list(plan.warnings),
         "objectives": list(plan.objectives),
         "front": [

@@ -143,7 +143,7 @@ def needs(plan: dict, firmware: str, wind: float = 0.0) -> list[ParameterNeed]:
     if radius is None:
         radius = _number(params.get("turn_radius"))
     if radius is None or radius <= 0:
-        return out + pitch
+        return out + pitch + _altitude_loop_need(plan)
     bank = _number(env.get("bank_limit_deg")) if env else None
     if bank is None or not 0 < bank < 90:
         bank = math.degrees(math.atan(ground * ground / (G * radius)))
@@ -180,7 +180,26 @@ def needs(plan: dict, firmware: str, wind: float = 0.0) -> list[ParameterNeed]:
     )
     if ap.switches_early:
         out.append(_px4_acceptance(ap, plan, eas, wind))
-    return out + pitch
+    return out + pitch + _altitude_loop_need(plan)
+
+
+def _altitude_loop_need(plan: dict) -> list[ParameterNeed]:
+    """A plan for a design turbulence gave each capture a vertical allowance for the altitude
+    loop's height error at its time constant (core/capture.py, aircraft/altitude_hold.py): a
+    slower loop holds the altitude less closely (ArduPlane TECS_TIME_CONST, AP_TECS.cpp
+    ``_update_pitch``; PX4 FW_T_ALT_TC, TECS.cpp), so the setup holds it at most there."""
+    capture = plan.get("capture") if isinstance(plan.get("capture"), dict) else {}
+    loop = capture.get("turbulence") if isinstance(capture.get("turbulence"), dict) else None
+    if not loop or not loop.get("loop_param"):
+        return []
+    tau = _number(loop.get("time_constant_s"))
+    if tau is None or tau <= 0:
+        return []
+    why = (
+        f"the captures' vertical allowance is for the height error of a {tau:g} s loop in the "
+        "plan's design turbulence"
+    )
+    return [ParameterNeed(str(loop["loop_param"]), None, tau, why, most=tau)]
 
 
 def _pitch_needs(ap: Autopilot, rate: float, slowest_tas: float) -> list[ParameterNeed]:

@@ -195,6 +195,12 @@ class Scenario:
     # horizontal reset (the probability model's units): (0, 0) at a mission's start; a state
     # after a failed fix when planning from it (docs/model.md, "Contingency policies").
     initial_errors: tuple[float, float] = (0.0, 0.0)
+    # The minutes of flight the aircraft has (``--endurance``, ``[vehicle] endurance``): the
+    # planner keeps only routes whose flight time in the design wind is within it (None: any).
+    endurance: float | None = None
+    # Per point, the vertical allowance (m) of a capture there for the design turbulence
+    # (core/capture_front.py; None: no turbulence planned for, captures not constrained).
+    capture_vertical: tuple[float, ...] | None = None
     _index: dict[str, int] = field(default_factory=dict, repr=False)
 
     def __post_init__(self) -> None:

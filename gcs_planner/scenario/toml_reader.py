@@ -42,7 +42,12 @@ TOP_KEYS = (
 # so is the endurance (minutes of flight: the dry run judges each flight's time against it,
 # gcs_planner/dryrun/endurance.py).
 # "firmware" is the former name of "autopilot", still read.
-AUTOPILOT_KEYS = ("max_climb_rate", "max_sink_rate", "autopilot", "firmware", "endurance")
+# The battery's energy (Wh), the power at cruise (W) and the fraction of the energy kept in
+# reserve give the endurance when it is not stated (gcs_planner/dryrun/endurance.py).
+AUTOPILOT_KEYS = (
+    "max_climb_rate", "max_sink_rate", "autopilot", "firmware", "endurance",
+    "battery_wh", "cruise_power_w", "battery_reserve",
+)  # fmt: skip
 # [environment]: the design wind ("SPEED[@FROM_DEG]" or a number of m/s), the design gust (m/s
 # per horizontal axis: the derived flight reserve covers it), metres of position error per error
 # unit, the landmarks' capture radius (metres, 3D), and the vertical turbulence the aircraft
@@ -353,6 +358,10 @@ def _term(value: object, key: str, table: str, file: str, text: str) -> tuple[ob
         except ValueError as exc:
             raise fail(str(exc)) from None
         return value, line
+    if key == "battery_reserve":
+        if not _is_number(value) or not 0.0 <= float(value) < 1.0:  # type: ignore[arg-type]
+            raise fail(f"must be a fraction of the energy in [0, 1) (got {value!r})")
+        return float(value), line  # type: ignore[arg-type]
     if key == "gust":
         if not _is_number(value) or not 0.0 <= float(value) <= 50.0:  # type: ignore[arg-type]
             raise fail(f"must be a speed in [0, 50] m/s (got {value!r})")

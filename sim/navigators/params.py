@@ -59,6 +59,7 @@ class AutopilotParams:
     airspeed_max: float | None = None  # m/s: AIRSPEED_MAX / FW_AIRSPD_MAX
     altitude_time_constant: float | None = None  # s: TECS_TIME_CONST / FW_T_ALT_TC
     pitch_limit: float | None = None  # deg: TECS_PITCH_MAX (PTCH_LIM_MAX_DEG) / FW_P_LIM_MAX
+    ground_speed_floor: float | None = None  # m/s: MIN_GNDSPD_CM / 100, FW_GND_SPD_MIN
 
     def __post_init__(self) -> None:
         shipped = _limits(self.autopilot, self.autopilot.defaults)
@@ -80,6 +81,10 @@ class AutopilotParams:
         merged.update({k: float(v) for k, v in params.items() if _usable(v)})
         # A pitch limit may be 0 (ArduPlane: TECS_PITCH_MAX 0 takes PTCH_LIM_MAX_DEG).
         merged.update({k: float(params[k]) for k in ap.altitude_loop[1:] if _at_least_0(params, k)})
+        # So may the ground-speed floor (0: off).
+        floor = ap.ground_speed_floor[0]
+        if floor and _at_least_0(params, floor):
+            merged[floor] = float(params[floor])
         limits = _limits(ap, merged)
         radius = float(params.get(ap.loiter_radius_param, DEFAULT_LOITER_RADIUS_M))
         acceptance = merged[ap.acceptance_param]
@@ -172,6 +177,9 @@ def _limits(ap: Autopilot, p: dict[str, float]) -> dict[str, float]:
         "airspeed_min": p[low],
         "airspeed_max": p[high],
         **_altitude_loop(ap, p),
+        "ground_speed_floor": p[ap.ground_speed_floor[0]] * ap.ground_speed_floor[1]
+        if ap.ground_speed_floor[0]
+        else 0.0,
     }
 
 

@@ -89,7 +89,9 @@ class NavigatorState:
         climb = float(self.ap.climb_rate or 5.0)
         sink = float(self.ap.sink_rate or 5.0)
         pitch = 90.0 if self.ap.pitch_limit is None else float(self.ap.pitch_limit)
-        return Envelope(float(airspeed), bank, climb, sink, pitch)
+        floor = float(self.ap.ground_speed_floor or 0.0)
+        most = float(self.ap.airspeed_max or math.inf)
+        return Envelope(float(airspeed), bank, climb, sink, pitch, floor, most)
 
     def eas2tas(self, z: float) -> float:
         return atmosphere.eas2tas(z + self.alt_offset)

@@ -48,19 +48,23 @@ def test_the_flight_ends_where_its_endurance_runs_out():
 
 @pytest.mark.parametrize("truth", [False, True], ids=["estimate", "truth"])
 def test_past_the_endurance_every_run_is_lost_by_the_flight_and_named(tmp_path, capsys, truth):
-    """The 24 km line takes about 12 minutes: with 5 minutes every run runs out before B, by
-    the flight (on the estimate each run flown; on the truth one flight for all), and the
-    verdict names the endurance; with the scenario's 60 minutes it arrives."""
+    """The 24 km line takes about 12 minutes in still air, 18 in a 10 m/s headwind: planned for
+    still air within 14 minutes, every run flown in the headwind runs out before B, by the
+    flight (on the estimate each run flown; on the truth one flight for all), and the verdict
+    names the endurance; with the scenario's 60 minutes it arrives. The plan keeps to the
+    endurance: 5 minutes is refused before flying, naming it."""
     path = str(short_line(tmp_path, "\n[vehicle]\nendurance = 60\n"))
     argv = ["dry-run", path, "--runs", "3", "--json", "--quiet"]
     argv += ["--navigate-on-truth"] if truth else []
-    rc = main([*argv, "--endurance", "5"])
+    assert main([*argv, "--endurance", "5"]) == 3
+    assert "endurance of 5 min" in capsys.readouterr().err
+    rc = main([*argv, "--endurance", "14", "--design-wind", "0", "--wind", "10@90"])
     captured = capsys.readouterr()
     d = json.loads(captured.out)
     assert rc == EXIT_LOST and not d["ok"] and d["verified"]
-    assert d["endurance"] == 5.0 and d["flight_losses"] == 3 and d["endurance_losses"] == 3
+    assert d["endurance"] == 14.0 and d["flight_losses"] == 3 and d["endurance_losses"] == 3
     assert all("endurance" in r["reason"] for r in d["lost_runs"])
-    assert "5 min endurance" in captured.err
+    assert "14 min endurance" in captured.err
     rc = main(argv)
     d = json.loads(capsys.readouterr().out)
     assert rc == 0 and d["ok"] and d["endurance"] == 60.0 and d["endurance_losses"] == 0
