@@ -9,6 +9,34 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from support.paths import DATA  # noqa: E402 - found through the path set above
 
 
+@pytest.hookimpl(tryfirst=True)
+def pytest_sessionstart(session: pytest.Session) -> None:
+    """With test processes (``-n``), compile numba's kernels once before they start.
+
+    A fresh clone has no kernel in numba's cache, and each xdist worker would compile the same
+    kernels at its first plan or flight, all of them at once (README's ``-n 4`` on two cores
+    compiles each four times). Here the controller compiles them once, with the project's own
+    ``gcs-planner compile`` (gcs_planner/runtime/precompile.py), before xdist starts the workers
+    (its own sessionstart runs last); the workers load them from the cache. Nothing happens when
+    every kernel is cached, in a worker, or without ``-n``. The fresh-cache tests of
+    tests/runtime compile into caches of their own on purpose.
+    """
+    config = session.config
+    if hasattr(config, "workerinput") or not getattr(config.option, "numprocesses", None):
+        return
+    from gcs_planner.runtime.precompile import compile_kernels, missing
+
+    if not missing():
+        return
+    terminal = config.pluginmanager.get_plugin("terminalreporter")
+    say = terminal.write_line if terminal else (lambda text: None)
+    say("numba's kernels are not cached: compiling them once for every test process ...")
+    try:
+        compile_kernels(say=lambda text: None)
+    except Exception as exc:  # noqa: BLE001 - the tests that need a kernel compile it and fail
+        say(f"compiling the kernels before the tests failed ({exc}); each process compiles them")
+
+
 @pytest.fixture(scope="session")
 def dataset_paths() -> dict[int, Path]:
     paths = {1: DATA / "dataset1.xlsx", 2: DATA / "dataset2.xlsx"}

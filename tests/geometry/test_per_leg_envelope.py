@@ -149,7 +149,9 @@ def test_the_front_with_a_per_leg_envelope_equals_enumeration() -> None:
         rng = np.random.default_rng(4_200 + seed)
         climb, sink = rng.uniform(6, 12, 2)
         wind = float(rng.choice([0.0, 5.0]))
-        base = tall_scenario(seed, "airplane", 400.0, True)
+        # 3 or 4 points (16 or 65 routes), not 4 or 5 (65 or 326): as many draws, each a fifth
+        # of the enumeration, and the per-leg envelope still changes 7 fronts of 30.
+        base = tall_scenario(seed, "airplane", 400.0, True, points=(3, 4))
         scenario = enveloped(base, 25.0, 30.0, float(climb), float(sink), wind)
         assert scenario_leg_model(scenario).envelope is not None
         want = assert_plans_enumeration(scenario, f"seed {seed}")

@@ -89,8 +89,9 @@ def uncertain_straight_scenario(seed: int) -> Scenario:
     )
 
 
-def climbing_scenario(seed: int) -> Scenario:
-    """Turns of several radii (or none) and climb limits, B well above or below A."""
+def climbing_scenario(seed: int, max_points: int = 5) -> Scenario:
+    """Turns of several radii (or none) and climb limits, B well above or below A; 2 to 5
+    correction points, at most ``max_points`` (the same draws whatever it is)."""
     rng = np.random.default_rng(seed)
     params = contest_params(
         turn_radius=float(rng.choice([0.0, 200.0, 800.0])),
@@ -101,7 +102,7 @@ def climbing_scenario(seed: int) -> Scenario:
     # large altitude differences for the distances, so that helices (or with R = 0,
     # infeasible legs) occur
     scenario = random_scenario(
-        int(rng.integers(2, 6)),
+        min(int(rng.integers(2, 6)), max_points),
         seed,
         params=params,
         box=(16_000, 4_000, 6_000),
@@ -126,12 +127,14 @@ def sparse_scenario(seed: int) -> Scenario:
     )
 
 
-def tall_scenario(seed: int, leg_model: str, radius: float, limited: bool) -> Scenario:
-    """4 or 5 correction points (6 for every twelfth seed with R = 0: 1,957 routes), half
-    unreliable, in a corridor 30 to 45 km long with dataset 1's limits (so that most routes
-    need a V and an H correction), altitudes spread over 15 % of its length, A at one end of
-    that range; climb and descent limits of 5 to 25 degrees when ``limited`` (the same
-    points either way)."""
+def tall_scenario(
+    seed: int, leg_model: str, radius: float, limited: bool, points: tuple[int, int] = (4, 5)
+) -> Scenario:
+    """``points`` correction points, the fewer or the more (4 or 5 by default; 6 for every
+    twelfth seed with R = 0: 1,957 routes), half unreliable, in a corridor 30 to 45 km long
+    with dataset 1's limits (so that most routes need a V and an H correction), altitudes
+    spread over 15 % of its length, A at one end of that range; climb and descent limits of 5
+    to 25 degrees when ``limited`` (the same points either way)."""
     rng = np.random.default_rng(seed)
     climb, descent = rng.uniform(5.0, 25.0, 2)
     if not limited:
@@ -143,7 +146,8 @@ def tall_scenario(seed: int, leg_model: str, radius: float, limited: bool) -> Sc
         max_descent_angle=float(descent),
     )
     length = float(rng.uniform(30_000, 45_000))
-    n = 6 if radius == 0 and seed % 12 == 5 else int(rng.integers(4, 6))
+    # Two choices whatever ``points`` are, so that the draws after it are the same.
+    n = 6 if radius == 0 and seed % 12 == 5 else int(rng.integers(points[0], points[0] + 2))
     box = (length, length * rng.uniform(0.05, 0.2), 1.0)
     flat = random_scenario(n, seed, params=params, box=box, unreliable_fraction=0.5)
     xyz = flat.xyz.copy()
