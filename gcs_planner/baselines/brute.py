@@ -13,6 +13,10 @@ With ``Scenario.capture_vertical`` (a design turbulence) a route must also fit e
 arriving within the limits (the unreliable points' failures clipped to r) passes within the
 capture radius, its vertical error plus the point's vertical allowance and the tracking
 allowance added as ``capture_check`` adds them.
+
+With ``Scenario.endurance`` a route's flight time in the design wind (``flight_time``'s leg
+times, summed leg by leg as ``route_minutes`` sums them) must be within it (docs/model.md,
+"Endurance in the plan"); a prefix already beyond it is dropped (flight time only grows).
 """
 
 from __future__ import annotations
@@ -23,6 +27,7 @@ import numpy as np
 
 from gcs_planner.aircraft.profile import TRACKING_ALLOWANCE_M
 from gcs_planner.baselines import Front
+from gcs_planner.core.flight_time import leg_seconds
 from gcs_planner.scenario.model import Kind, Scenario
 
 
@@ -65,6 +70,11 @@ def brute_force_front(scenario: Scenario, max_corrections: int | None = None) ->
 
     vertical = scenario.capture_vertical
     residual = params.residual_m
+    endurance = math.inf if scenario.endurance is None else float(scenario.endurance)
+
+    def flown_for(seconds: float, i: int, j: int) -> float:
+        """The seconds of flight after the leg i -> j (no ground speed: forever)."""
+        return seconds + leg_seconds(scenario, i, j, dist[i][j])
 
     def outcomes(j: int, states: frozenset, d: float) -> frozenset | None:
         """The correction outcomes after arriving at ``j``, None when a capture does not fit."""
@@ -92,12 +102,13 @@ def brute_force_front(scenario: Scenario, max_corrections: int | None = None) ->
                 out.add((min(v, residual), h) if kinds[j] == Kind.V else (v, min(h, residual)))
         return frozenset(out)
 
-    def visit(i: int, dv: float, dh: float, length: float, states: frozenset) -> None:
+    def visit(i: int, dv: float, dh: float, length: float, states: frozenset, s: float) -> None:
         row = dist[i]
         # B ends the route: record it, never extend past it.
         d = row[end]
         lim_v, lim_h = limits[end]
-        if dv + d <= lim_v and dh + d <= lim_h and outcomes(end, states, d) is not None:
+        in_time = endurance == math.inf or flown_for(s, i, end) / 60.0 <= endurance
+        if dv + d <= lim_v and dh + d <= lim_h and in_time and outcomes(end, states, d) is not None:
             k = len(path) - 1
             total = length + d
             if k not in best or total < best[k][0]:
@@ -115,15 +126,18 @@ def brute_force_front(scenario: Scenario, max_corrections: int | None = None) ->
             after = outcomes(j, states, d)
             if after is None:
                 continue
+            seconds = 0.0 if endurance == math.inf else flown_for(s, i, j)
+            if seconds / 60.0 > endurance:
+                continue
             if kinds[j] == Kind.V:
                 arrive_v = 0.0
             else:
                 arrive_h = 0.0
             used[j] = True
             path.append(j)
-            visit(j, arrive_v, arrive_h, length + d, after)
+            visit(j, arrive_v, arrive_h, length + d, after, seconds)
             path.pop()
             used[j] = False
 
-    visit(start, 0.0, 0.0, 0.0, frozenset([(0.0, 0.0)]))
+    visit(start, 0.0, 0.0, 0.0, frozenset([(0.0, 0.0)]), 0.0)
     return front_from_best(best)

@@ -12,9 +12,11 @@ from dataclasses import dataclass, field
 
 from gcs_planner.core.bnb import DEFAULT_MAX_LABELS, PROB_EPS
 from gcs_planner.core.budget import DEFAULT_TIME_LIMIT, Budget, ProgressCallback
+from gcs_planner.core.capture_front import captures_fit
 from gcs_planner.core.choose import DEFAULT_MIN_PROBABILITY, choose_index, default_objectives
 from gcs_planner.core.choose import choose as choose_route
-from gcs_planner.core.endurance_front import within_endurance
+from gcs_planner.core.constrained_front import within_constraints
+from gcs_planner.core.endurance_front import endurance_limit
 from gcs_planner.core.engines import EngineResult, bnb_engine, straight_engine
 from gcs_planner.core.route import Route
 from gcs_planner.errors import InfeasibleError
@@ -122,32 +124,28 @@ def plan(
         raise ValueError(f"max_corrections must be >= 0, not {max_corrections}")
     use_probability = "probability" in objectives
 
+    # One budget for the whole plan: the engine's search and the constrained front's share
+    # its CPU seconds, so ``time_limit`` bounds the plan (each search its own labels).
+    budget = Budget(max_labels, time_limit, progress)
+
     # The layered straight search starts from rest; a state mid-flight (errors at A, see
     # core/from_state.py) is planned by the branch and bound, whose first label carries them.
     def run_engine() -> EngineResult:
         turns = scenario_leg_model(scenario).carries_heading
         if use_probability or turns or not scenario.from_rest:
-            budget = Budget(max_labels, time_limit, progress)
             return bnb_engine(scenario, use_probability, max_corrections, budget)
         return straight_engine(scenario, max_corrections)
 
-    if scenario.capture_vertical is not None:  # every capture fits (core/capture_front.py)
-        from gcs_planner.core.capture_front import within_captures
-
-        def run_within() -> EngineResult:
-            if scenario.endurance is None:
-                return run_engine()
-            return within_endurance(
-                scenario, run_engine, use_probability, max_corrections, max_labels, time_limit
-            )
-
-        result = within_captures(scenario, run_within, use_probability, max_corrections, max_labels)
-    elif scenario.endurance is None:
-        result = run_engine()
-    else:  # flight time a resource: the front within the endurance (core/endurance_front.py)
-        result = within_endurance(
-            scenario, run_engine, use_probability, max_corrections, max_labels, time_limit
+    # Constraints the engines do not carry (core/constrained_front.py): the endurance, the
+    # captures in a design turbulence. The front of all routes first; the search only when a
+    # route of it breaks one.
+    constraints = [c for c in (endurance_limit(scenario), captures_fit(scenario)) if c]
+    if constraints:
+        result = within_constraints(
+            scenario, run_engine, constraints, use_probability, max_corrections, budget
         )
+    else:
+        result = run_engine()
     if not result.routes:
         raise InfeasibleError(f"{scenario.name}: {result.statement}")
     found = result.routes

@@ -15,9 +15,8 @@ import math
 import numpy as np
 import pytest
 from support.enumeration import THREE, TWO, all_routes, assert_fronts_close, pareto, planned_front
-from support.scenarios import tall_scenario
+from support.scenarios import tall_scenario, windy_envelope
 
-from gcs_planner.aircraft.profile import DerivedEnvelope
 from gcs_planner.core.bnb import flown_route
 from gcs_planner.core.flight_time import ground_speeds, route_minutes, seconds_to_b
 from gcs_planner.core.planner import plan
@@ -32,17 +31,7 @@ def windy(seed: int, leg_model: str, radius: float):  # noqa: ANN201 - a Scenari
     (the envelope carries the wind only: no part of it is per leg, so the legs are unchanged)."""
     rng = np.random.default_rng(9_000 + seed)
     scenario = tall_scenario(seed, leg_model, radius, limited=bool(seed % 2))
-    eas = float(rng.uniform(10.0, 20.0))
-    envelope = DerivedEnvelope(
-        eas=eas,
-        bank_deg=45.0,
-        climb_rate=5.0,
-        sink_rate=5.0,
-        wind=float(rng.uniform(0.5, 0.9)) * eas,
-        wind_from=float(rng.uniform(0.0, 360.0)),
-        altitude=float(scenario.xyz[:, 2].max()),
-        autopilot=None,
-    )
+    envelope = windy_envelope(rng, float(scenario.xyz[:, 2].max()))
     return dataclasses.replace(scenario, envelope=envelope)
 
 

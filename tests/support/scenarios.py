@@ -227,3 +227,22 @@ def flags_of(sc: Scenario) -> list[str]:
     for name in names:
         out += [f"--{name.replace('_', '-')}", repr(float(getattr(p, name)))]
     return [*out, "--reserve", "0", "--min-probability", "0"]
+
+
+def windy_envelope(rng: np.random.Generator, altitude: float):  # noqa: ANN201 - DerivedEnvelope
+    """An envelope carrying only a design wind of 0.5 to 0.9 of an EAS of 10 to 20 m/s, from a
+    drawn direction (nothing of it per leg, so the legs are unchanged): flight time far from a
+    multiple of the length (core/flight_time.py)."""
+    from gcs_planner.aircraft.profile import DerivedEnvelope
+
+    eas = float(rng.uniform(10.0, 20.0))
+    return DerivedEnvelope(
+        eas=eas,
+        bank_deg=45.0,
+        climb_rate=5.0,
+        sink_rate=5.0,
+        wind=float(rng.uniform(0.5, 0.9)) * eas,
+        wind_from=float(rng.uniform(0.0, 360.0)),
+        altitude=altitude,
+        autopilot=None,
+    )
