@@ -1,3 +1,4 @@
+import subprocess
 import sys
 from pathlib import Path
 
@@ -31,10 +32,40 @@ def pytest_sessionstart(session: pytest.Session) -> None:
     terminal = config.pluginmanager.get_plugin("terminalreporter")
     say = terminal.write_line if terminal else (lambda text: None)
     say("numba's kernels are not cached: compiling them once for every test process ...")
+    # The installed copy's too, beside this one's: from the checkout's root `python -m pytest`
+    # imports the source tree, while the tests' `gcs-planner` commands run the installed package
+    # (a non-editable install, as CI's), and numba caches each file's kernels by its path.
+    installed = _installed_copy_elsewhere()
+    other = None
+    if installed is not None:
+        entry = Path(sys.executable).with_name("gcs-planner")
+        other = subprocess.Popen(
+            [str(entry), "compile"], cwd=installed.parent.parent, stdout=subprocess.DEVNULL
+        )
     try:
         compile_kernels(say=lambda text: None)
     except Exception as exc:  # noqa: BLE001 - the tests that need a kernel compile it and fail
         say(f"compiling the kernels before the tests failed ({exc}); each process compiles them")
+    if other is not None and other.wait() != 0:
+        say("compiling the installed package's kernels failed; its commands compile them")
+
+
+def _installed_copy_elsewhere() -> Path | None:
+    """The installed package's folder when it is not the one imported here (None for an
+    editable install): asked of the interpreter outside the checkout, where the working folder
+    on sys.path cannot shadow it."""
+    import gcs_planner
+
+    asked = subprocess.run(
+        [sys.executable, "-c", "import gcs_planner; print(gcs_planner.__file__)"],
+        cwd=Path(sys.executable).parent,
+        capture_output=True,
+        text=True,
+    )
+    if asked.returncode != 0:
+        return None
+    found = Path(asked.stdout.strip()).resolve()
+    return found.parent if found != Path(gcs_planner.__file__).resolve() else None
 
 
 @pytest.fixture(scope="session")

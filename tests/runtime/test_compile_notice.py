@@ -127,8 +127,15 @@ sys.exit(code)
 
 def compiles_of(args: list[str], env: dict[str, str]) -> list[str]:
     """The project's kernels numba compiled while ``gcs-planner ARGS`` ran (stdout's last line)."""
+    # Run outside the checkout: `python -c` puts the working folder first on sys.path, and from
+    # the checkout's root it would import the source tree where `gcs-planner compile` imported
+    # the installed package (a non-editable install: CI's), whose kernels numba caches apart.
     done = subprocess.run(
-        [sys.executable, "-c", _COUNT, *args], env=env, capture_output=True, text=True
+        [sys.executable, "-c", _COUNT, *args],
+        env=env,
+        capture_output=True,
+        text=True,
+        cwd=Path(env["NUMBA_CACHE_DIR"]).parent,
     )
     assert done.returncode == 0, done.stderr[-3000:]
     return json.loads(done.stdout.strip().splitlines()[-1])
