@@ -97,13 +97,9 @@ def _highest(lo: float, hi: float, ok, tol: float) -> float:  # noqa: ANN001 - p
 
 
 def _lowest(lo: float, hi: float, ok, tol: float) -> float:  # noqa: ANN001 - predicate
-    """The lowest x in [lo, hi] with ok(x), ok(hi) known true, ok monotone (bisection)."""
-    if ok(lo):
-        return lo
-    while hi - lo > tol:
-        mid = 0.5 * (lo + hi)
-        lo, hi = (lo, mid) if ok(mid) else (mid, hi)
-    return hi
+    """The lowest x in [lo, hi] with ok(x), ok(hi) known true, ok monotone: the highest of the
+    mirrored predicate."""
+    return -_highest(-hi, -lo, lambda x: ok(-x), tol)
 
 
 def _steepest(fdm, altitude: float, eas: float) -> tuple[float, float]:  # noqa: ANN001

@@ -12,7 +12,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 from gcs_planner.sim.turbulence import Turbulence
-from support.enumeration import THREE, TWO, all_routes, pareto
+from support.enumeration import THREE, TWO, enumerate_front
 from support.scenarios import turning_scenario, uncertain_straight_scenario
 
 from gcs_planner.aircraft.altitude_hold import AltitudeHold
@@ -22,7 +22,6 @@ from gcs_planner.core.bnb import flown_route
 from gcs_planner.core.capture import capture_check, turbulence_capture, with_design_turbulence
 from gcs_planner.core.capture_front import route_fits
 from gcs_planner.core.planner import plan
-from gcs_planner.core.probability import success_probability
 from gcs_planner.errors import InfeasibleError
 from gcs_planner.scenario.model import Kind, Scenario
 
@@ -126,19 +125,7 @@ def test_the_constraint_bites_in_the_random_sample():
 
 def _enumerated(sc: Scenario, probability: bool) -> list[tuple]:
     """Every simple route flown, kept when feasible (or arriving) and every capture fits."""
-    values = []
-    for pts in all_routes(sc):
-        route = flown_route(sc, pts)
-        if not route_fits(sc, route):
-            continue
-        if probability:
-            legs = [s.leg for s in route.stops[1:]]
-            p = success_probability(sc, pts, legs).probability
-            if p > 0:
-                values.append((round(route.length, 6), route.corrections, round(-p, 12)))
-        elif route.feasible:
-            values.append((round(route.length, 6), route.corrections, 0.0))
-    return pareto(values)
+    return enumerate_front(sc, probability, keep=lambda route: route_fits(sc, route))
 
 
 @pytest.mark.parametrize("seed", range(40))

@@ -6,13 +6,14 @@ from __future__ import annotations
 
 import functools
 import itertools
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 
 import numpy as np
 
 from gcs_planner.core.bnb import Options, bnb_front, flown_route
 from gcs_planner.core.planner import plan
 from gcs_planner.core.probability import propagate, success_probability
+from gcs_planner.core.route import Route
 from gcs_planner.errors import InfeasibleError
 from gcs_planner.geometry.legs import scenario_leg_model
 from gcs_planner.scenario.model import Kind, Scenario
@@ -43,11 +44,16 @@ def pareto(points: list[tuple]) -> list[tuple]:
     return sorted(keep, key=lambda t: (t[1], t[0], t[2]))
 
 
-def enumerate_front(scenario: Scenario, probability: bool) -> list[tuple]:
-    """The front of every simple route, each flown under the scenario's leg model."""
+def enumerate_front(
+    scenario: Scenario, probability: bool, keep: Callable[[Route], bool] | None = None
+) -> list[tuple]:
+    """The front of every simple route, each flown under the scenario's leg model (only the
+    routes ``keep`` admits, when given)."""
     values = []
     for pts in all_routes(scenario):
         route = flown_route(scenario, pts)
+        if keep is not None and not keep(route):
+            continue
         if probability:
             legs = [s.leg for s in route.stops[1:]]
             p = success_probability(scenario, pts, legs).probability
