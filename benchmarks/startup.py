@@ -104,12 +104,18 @@ def _after_a_first_plan(cache: Path) -> dict[str, str]:
     return env
 
 
-def run_startup(runs: int) -> list[Timing]:
+def run_startup(runs: int, fresh_cache: bool = True) -> list[Timing]:
     """Median wall and CPU time of the floor and of each command over ``runs`` interleaved
-    rounds, with numba's cache filled as a first plan fills it (:func:`_after_a_first_plan`)."""
+    rounds, with numba's cache filled as a first plan fills it (:func:`_after_a_first_plan`);
+    ``fresh_cache`` False takes the cache as it is instead (a smoke run: filling a fresh one
+    compiles every kernel, a minute of CPU)."""
     # pip compiles an installed package's bytecode; an editable checkout under
     # PYTHONDONTWRITEBYTECODE would recompile every module at every start instead.
     compileall.compile_dir(str(Path(gcs_planner.__file__).parent), quiet=1)
+    if not fresh_cache:
+        from gcs_planner.runtime import background_compile
+
+        return _rounds(runs, {**os.environ, background_compile.VARIABLE: "0"})
     with tempfile.TemporaryDirectory(prefix="gcs-planner-startup-") as cache:
         env = _after_a_first_plan(Path(cache))
         return _rounds(runs, env)
