@@ -65,15 +65,9 @@ from gcs_planner.sim.navigators.px4 import (
 )
 from gcs_planner.sim.navigators.steering import L1_DAMPING, L1_PERIOD_S
 from gcs_planner.sim.point_mass_kernel import wrap
-from gcs_planner.sim.turbulence import (
-    FT,
-    LOW_ALTITUDE_FT,
-    LOWEST_HEIGHT_FT,
-    MEDIUM_ALTITUDE_FT,
-    SCALE_LENGTH_HIGH_FT,
-    SQRT3,
-)
+from gcs_planner.sim.turbulence import SQRT3
 from gcs_planner.sim.turbulence import dryden_step as _dryden_step_py
+from gcs_planner.sim.turbulence import scale_length_w as _scale_length_w_py
 from numba import njit
 
 
@@ -222,23 +216,11 @@ def gust(ux: float, uy: float, gusts: Gusts, dt: float, k: int) -> tuple[float, 
     return ux, uy, k
 
 
-@njit(cache=True, inline="always")
-def scale_length_w(altitude_m: float) -> float:
-    """sim/turbulence.py scale_length_w."""
-    h = max(altitude_m / FT, LOWEST_HEIGHT_FT)
-    if h <= LOW_ALTITUDE_FT:
-        length = h
-    elif h <= MEDIUM_ALTITUDE_FT:
-        share = (h - LOW_ALTITUDE_FT) / (MEDIUM_ALTITUDE_FT - LOW_ALTITUDE_FT)
-        length = LOW_ALTITUDE_FT + share * (SCALE_LENGTH_HIGH_FT - LOW_ALTITUDE_FT)
-    else:
-        length = SCALE_LENGTH_HIGH_FT
-    return length * FT
-
-
-# The Dryden filter's step compiled from its one statement (sim/turbulence.py, which the Python
-# navigator runs): the two paths fly the same formulas because they are one function.
+# The Dryden filter's step and its scale length compiled from their one statement each
+# (sim/turbulence.py, which the Python navigator runs): the two paths fly the same formulas
+# because they are one function.
 dryden_step = njit(cache=True, inline="always")(_dryden_step_py)
+scale_length_w = njit(cache=True, inline="always")(_scale_length_w_py)
 
 
 @njit(cache=True, inline="always")
