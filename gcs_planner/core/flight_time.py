@@ -21,6 +21,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from gcs_planner.aircraft.atmosphere import density_ratios
+from gcs_planner.core.route import Route
 from gcs_planner.geometry.leg_envelope import wind_towards
 from gcs_planner.scenario.model import Scenario
 
@@ -85,11 +86,10 @@ def route_seconds(scenario: Scenario, points: Sequence[int], lengths: Sequence[f
     )
 
 
-def route_minutes(scenario: Scenario, route: object) -> float:
+def route_minutes(scenario: Scenario, route: Route) -> float:
     """Flight time (minutes) of a planned route (its stops' legs) in the design wind."""
-    stops = route.stops  # type: ignore[attr-defined]
-    lengths = [s.leg.length if s.leg is not None else 0.0 for s in stops[1:]]
-    return route_seconds(scenario, route.points, lengths) / 60.0  # type: ignore[attr-defined]
+    lengths = [s.leg.length if s.leg is not None else 0.0 for s in route.stops[1:]]
+    return route_seconds(scenario, route.points, lengths) / 60.0
 
 
 def seconds_to_b(scenario: Scenario) -> np.ndarray:
