@@ -1,4 +1,5 @@
-import subprocess
+import importlib.machinery
+import importlib.util
 import sys
 from pathlib import Path
 
@@ -6,6 +7,34 @@ import pytest
 
 # The tests' folder on the path, so that a test in any folder under it imports ``support``.
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+
+def _prefer_the_installed_package() -> None:
+    """Import the installed gcs_planner, not the source tree beside the tests, when the install
+    is a copy (CI's non-editable `pip install '.[test]'`).
+
+    From the checkout's root `python -m pytest` (and pyproject's ``pythonpath``, for
+    benchmarks/) put the source tree first on sys.path, while the tests' `gcs-planner` commands
+    run the installed copy. numba caches each file's kernels by the file's path, so the two
+    copies would each be compiled, once before the tests and again in them; and the tests would
+    check in process a copy the commands do not run. With an editable install (a developer's)
+    the installed package is the source tree and nothing changes."""
+    root = str(Path(__file__).resolve().parents[1])
+    elsewhere = [p for p in sys.path if p not in ("", ".") and Path(p).resolve() != Path(root)]
+    spec = importlib.machinery.PathFinder.find_spec("gcs_planner", elsewhere)
+    if spec is None or spec.origin is None:
+        return
+    if Path(spec.origin).resolve().parent.parent == Path(root) or "gcs_planner" in sys.modules:
+        return
+    # Only this name is taken from the install: its submodules follow its __path__, and the
+    # rest of sys.path (benchmarks/, tests/support) is left as it is.
+    package = importlib.util.module_from_spec(spec)
+    sys.modules["gcs_planner"] = package
+    assert spec.loader is not None
+    spec.loader.exec_module(package)
+
+
+_prefer_the_installed_package()
 
 from support.paths import DATA  # noqa: E402 - found through the path set above
 
@@ -32,40 +61,10 @@ def pytest_sessionstart(session: pytest.Session) -> None:
     terminal = config.pluginmanager.get_plugin("terminalreporter")
     say = terminal.write_line if terminal else (lambda text: None)
     say("numba's kernels are not cached: compiling them once for every test process ...")
-    # The installed copy's too, beside this one's: from the checkout's root `python -m pytest`
-    # imports the source tree, while the tests' `gcs-planner` commands run the installed package
-    # (a non-editable install, as CI's), and numba caches each file's kernels by its path.
-    installed = _installed_copy_elsewhere()
-    other = None
-    if installed is not None:
-        entry = Path(sys.executable).with_name("gcs-planner")
-        other = subprocess.Popen(
-            [str(entry), "compile"], cwd=installed.parent.parent, stdout=subprocess.DEVNULL
-        )
     try:
         compile_kernels(say=lambda text: None)
     except Exception as exc:  # noqa: BLE001 - the tests that need a kernel compile it and fail
         say(f"compiling the kernels before the tests failed ({exc}); each process compiles them")
-    if other is not None and other.wait() != 0:
-        say("compiling the installed package's kernels failed; its commands compile them")
-
-
-def _installed_copy_elsewhere() -> Path | None:
-    """The installed package's folder when it is not the one imported here (None for an
-    editable install): asked of the interpreter outside the checkout, where the working folder
-    on sys.path cannot shadow it."""
-    import gcs_planner
-
-    asked = subprocess.run(
-        [sys.executable, "-c", "import gcs_planner; print(gcs_planner.__file__)"],
-        cwd=Path(sys.executable).parent,
-        capture_output=True,
-        text=True,
-    )
-    if asked.returncode != 0:
-        return None
-    found = Path(asked.stdout.strip()).resolve()
-    return found.parent if found != Path(gcs_planner.__file__).resolve() else None
 
 
 @pytest.fixture(scope="session")
