@@ -1,5 +1,6 @@
 import importlib.machinery
 import importlib.util
+import subprocess
 import sys
 from pathlib import Path
 
@@ -61,10 +62,27 @@ def pytest_sessionstart(session: pytest.Session) -> None:
     terminal = config.pluginmanager.get_plugin("terminalreporter")
     say = terminal.write_line if terminal else (lambda text: None)
     say("numba's kernels are not cached: compiling them once for every test process ...")
+    # In two processes side by side (numba compiles on one core): the search here, the straight
+    # legs and the flight in another interpreter importing the same copy of the package.
+    import gcs_planner
+
+    beside = subprocess.Popen(
+        [sys.executable, "-c", _COMPILE_THE_REST],
+        cwd=Path(gcs_planner.__file__).resolve().parents[1],
+        stdout=subprocess.DEVNULL,
+    )
     try:
-        compile_kernels(say=lambda text: None)
+        compile_kernels(say=lambda text: None, parts=("search",))
     except Exception as exc:  # noqa: BLE001 - the tests that need a kernel compile it and fail
         say(f"compiling the kernels before the tests failed ({exc}); each process compiles them")
+    if beside.wait() != 0:
+        say("compiling the straight legs' and flight's kernels failed; each process compiles them")
+
+
+_COMPILE_THE_REST = (
+    "from gcs_planner.runtime.precompile import compile_kernels\n"
+    "compile_kernels(say=lambda text: None, parts=('straight', 'flight'))\n"
+)
 
 
 @pytest.fixture(scope="session")

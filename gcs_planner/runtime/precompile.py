@@ -12,7 +12,7 @@ flight kernels.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Collection
 
 from gcs_planner.runtime.compile_notice import kernel_cached
 
@@ -33,8 +33,19 @@ def missing() -> list[str]:
     return [f"{m}.{f}" for m, f, _ in KERNELS if not kernel_cached(m, f)]
 
 
-def compile_kernels(say: Callable[[str], None] = print) -> list[tuple[str, float]]:
-    """Compile (or load from the cache) every kernel of ``KERNELS``; returns (kernel, seconds)."""
+# The compile in parts that share no kernel, so that two processes can compile them side by side.
+PARTS = ("search", "straight", "flight")
+
+
+def compile_kernels(
+    say: Callable[[str], None] = print, parts: Collection[str] = PARTS
+) -> list[tuple[str, float]]:
+    """Compile (or load from the cache) the kernels of ``KERNELS``: those of ``parts`` (of
+    ``PARTS``: the search and its probes, the straight legs' two, the dry run's flight), all by
+    default; returns (kernel, seconds)."""
+    unknown = set(parts) - set(PARTS)
+    if unknown:
+        raise ValueError(f"no such part of the compile: {sorted(unknown)}; the parts: {PARTS}")
     from gcs_planner.core.bnb import Options, bnb_front
     from gcs_planner.core.search import straight_front
     from gcs_planner.scenario.generate import random_scenario
@@ -46,10 +57,11 @@ def compile_kernels(say: Callable[[str], None] = print) -> list[tuple[str, float
     params = Parameters(25, 15, 20, 25, 30, 0.001, turn_radius=200.0, p_success=0.8)
     box = (40_000, 10_000, 500)
     small = random_scenario(14, 2, params=params, box=box, unreliable_fraction=0.3)
-    for name, options in (
+    searches = (
         ("search", Options(trial=0, compiled_legs_from=-1, probe_from=10**9)),
         ("probe", Options(trial=0, compiled_legs_from=-1, probe_from=0)),
-    ):
+    )
+    for name, options in searches if "search" in parts else ():
         say(f"compiling {name} ...")
         t0 = time.perf_counter()
         bnb_front(small, probability=True, max_labels=20_000, options=options)
@@ -58,15 +70,17 @@ def compile_kernels(say: Callable[[str], None] = print) -> list[tuple[str, float
     # and the layered search, compiled here on a small map.
     straight = Parameters(25, 15, 20, 25, 30, 0.001, turn_radius=0.0)
     big = random_scenario(40, 0, params=straight, box=(60_000, 20_000, 500))
-    for name, focus in (("fewest_corrections", True), ("layered_search", False)):
+    straights = (("fewest_corrections", True), ("layered_search", False))
+    for name, focus in straights if "straight" in parts else ():
         say(f"compiling {name} ...")
         t0 = time.perf_counter()
         straight_front(big, compiled=True, focus=focus)
         done.append((name, time.perf_counter() - t0))
-    say("compiling the dry run's flight ...")
-    t0 = time.perf_counter()
-    _fly_once()
-    done.append(("flight", time.perf_counter() - t0))
+    if "flight" in parts:
+        say("compiling the dry run's flight ...")
+        t0 = time.perf_counter()
+        _fly_once()
+        done.append(("flight", time.perf_counter() - t0))
     return done
 
 
