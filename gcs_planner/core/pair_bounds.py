@@ -19,6 +19,13 @@ R s. Over the range [H_lo, H_hi] that H can take, the flown length sqrt((H + 2 p
 is least at H_lo unless a step of the helix count k lies in the range (then at the length that
 just needs no more turns). The result is never below the heading-free bound either.
 
+With runs ("Straight at every landmark", docs/model.md) a leg first flies s_out straight on
+from Pi and turns from there (its turn start S is s_out from Pi), and arrives on a tangent of
+at least s_in: T then lies within 2R + s_out of Pi, so the cone's half-angle is
+asin((2R + s_out) / h_ij), and the next leg's H = s_out + the CS length from Pj + s_out u(psi)
+changes with psi at a rate of at most 2R + s_out (the turn start moves s_out dpsi), and is at
+least s_out + s_in (its run-out and run-in).
+
 The cost-to-go over pairs (i -> j) with these legs, G2_(i,j)(e, m), is then the ordinary one
 over a graph whose nodes are the arcs of the reach graph.
 """
@@ -93,11 +100,14 @@ class PairBounds:
         return self.G.by_corrections(node, e)
 
 
-def cone_half_angles(h: np.ndarray, radius: float) -> np.ndarray:
+def cone_half_angles(h: np.ndarray, radius: float, run_out: float = 0.0) -> np.ndarray:
     """Per leg of horizontal length h: the largest angle between the heading at its end and its
-    horizontal chord, whatever the heading it starts with (pi where h <= 2R: any)."""
-    far = h > 2.0 * radius * (1.0 + 1e-12)
-    ratio = np.where(far, 2.0 * radius / np.where(far, h, 1.0), 0.0)
+    horizontal chord, whatever the heading it starts with (pi where h <= 2R + s_out: any). The
+    tangent point lies within 2R of the turn start, which lies ``run_out`` from the leg's start
+    (airplane.py, ``AirplaneLeg``: run-out, helix, arc, tangent)."""
+    reach = 2.0 * radius + run_out
+    far = h > reach * (1.0 + 1e-12)
+    ratio = np.where(far, reach / np.where(far, h, 1.0), 0.0)
     return np.where(far, np.arcsin(ratio), math.pi)
 
 
@@ -130,28 +140,37 @@ def pair_leg_bounds(
 ) -> np.ndarray:
     """lb(i, j, t) for each triple: the least airplane leg j -> t over the headings a route
     arriving at j from i can have, never below ``heading_free`` (the leg's heading-free bound)."""
-    R = model.radius
+    R, run_out = model.radius, model.run_out
+    # Every leg after the first leaves its point with a heading: its horizontal path holds its
+    # run-out and a tangent of at least its run-in (geometry/airplane_fan.py, ``_horizontal``).
+    runs = run_out + model.run_in
     come = xyz[j, :2] - xyz[i, :2]
-    cone = cone_half_angles(np.hypot(come[:, 0], come[:, 1]), R)
+    cone = cone_half_angles(np.hypot(come[:, 0], come[:, 1]), R, run_out)
     go = xyz[t, :2] - xyz[j, :2]
     h = np.hypot(go[:, 0], go[:, 1])
     dz = xyz[t, 2] - xyz[j, 2]
-    usable = (cone < math.pi) & (h > 2.0 * R * (1.0 + 1e-9))
+    usable = (cone < math.pi) & (h > (2.0 * R + run_out) * (1.0 + 1e-9))
     out = heading_free.astype(float).copy()
+    if runs > 0.0:
+        out = np.maximum(out, np.sqrt(runs * runs + dz * dz) * (1.0 - _ROUNDING))
     if not usable.any():
         return out
     idx = np.flatnonzero(usable)
     centre = np.arctan2(come[idx, 1], come[idx, 0])
     half = cone[idx]
-    spacing = 2.0 * half / (SAMPLES - 1)
+    # H changes with psi at a rate of at most 2R + s_out: a sample is at most half a spacing away.
+    slack = (2.0 * R + run_out) * half / (SAMPLES - 1)
     h_min = np.full(len(idx), np.inf)
     h_max = np.full(len(idx), -np.inf)
     for s in np.linspace(-1.0, 1.0, SAMPLES):
-        H = horizontal_lengths(go[idx], centre + s * half, R)
+        psi = centre + s * half
+        w = go[idx] - run_out * np.column_stack([np.cos(psi), np.sin(psi)])
+        H = run_out + horizontal_lengths(w, psi, R)
         np.minimum(h_min, H, out=h_min)
         np.maximum(h_max, H, out=h_max)
-    lo = np.maximum(h_min - R * spacing, h[idx])  # H is never below the chord
-    hi = h_max + R * spacing
+    # H is never below the chord, nor below its runs
+    lo = np.maximum(np.maximum(h_min - slack, h[idx]), runs)
+    hi = h_max + slack
     need = needed_horizontal(dz[idx], model.max_climb_angle, model.max_descent_angle)
     # k(H) = ceil((need - slack - H) / 2 pi R) where positive; H + 2 pi R k(H) is least where
     # k steps down (= need - slack), otherwise at the range's low end.

@@ -195,13 +195,9 @@ class AirplaneLegs:
     @property
     def turns_in_bounds(self) -> bool:
         # The pair relaxation (core/pair_bounds.py) bounds the heading cone and the turn of the
-        # CS path from the point itself; a run-out moves the turn off the point, so with runs
-        # the search goes without it (exact still, only less pruned).
-        # It also takes one radius for every leg.
-        return (
-            self.radius > 0 and self.run_in == 0.0 and self.run_out == 0.0
-            and self.envelope is None
-        )  # fmt: skip
+        # CS path from the turn start, s_out straight on from the point (its cone widens by
+        # the run-out). It takes one radius and one pair of limits for every leg.
+        return self.radius > 0 and self.envelope is None
 
     def kernel_legs(self) -> KernelLegs | None:
         return KernelLegs(
