@@ -195,7 +195,9 @@ def test_upload_by_ftp_over_a_radio_with_burst_loss():
 
 
 def test_a_5_s_fade_in_the_middle_of_a_burst_read_is_survived():
-    items = _mission(400)
+    # 150 items (5,710 bytes), the fade from byte 2,500: a read that gives up after 1.5 s of
+    # silence fails here; the bytes around the fade are only the way in and out.
+    items = _mission(150)
     with _over_radio(loss=0.0, seed=3) as (vehicle, r, client):
         vehicle.missions.commit(items)
         faded = threading.Event()
@@ -204,7 +206,7 @@ def test_a_5_s_fade_in_the_middle_of_a_burst_read_is_survived():
             deadline = time.monotonic() + 300.0
             while time.monotonic() < deadline:
                 b = vehicle.ftp._burst
-                if b is not None and b.offset > 3000:
+                if b is not None and b.offset > 2500:
                     r.fade(5.0)
                     faded.set()
                     return
@@ -434,7 +436,8 @@ def test_a_crc_that_differs_or_is_not_answered_leaves_the_verdict_to_the_read_ba
 
 
 def test_a_5_s_fade_in_the_middle_of_an_ftp_upload_is_survived():
-    items = _mission(400)
+    # 150 items: a write that gives up after 1.5 s of silence fails here, as with more.
+    items = _mission(150)
     half = len(encode_mission(items)) // 2
     with _over_radio(loss=0.0, seed=5) as (vehicle, r, client):
         faded = threading.Event()

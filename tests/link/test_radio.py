@@ -205,27 +205,30 @@ def _fade_when(condition, radio: SikRadio, seconds: float, done: threading.Event
 
 
 def test_a_5_s_fade_in_the_middle_of_an_upload_is_survived():
-    items = _mission(50)
+    # 24 items, the fade from the 10th: the fade is what is survived (a client that gives up
+    # after 2 s of silence fails here), the items around it only the way in and out.
+    items = _mission(24)
     with _over_radio(loss=0.02, seed=2) as (vehicle, r, client):
         faded = threading.Event()
 
         def halfway() -> bool:
             up = vehicle.missions.upload
-            return up is not None and len(up.items) >= 20
+            return up is not None and len(up.items) >= 10
 
         watcher = threading.Thread(target=_fade_when, args=(halfway, r, 5.0, faded), daemon=True)
         watcher.start()
         report = client.upload_verified(items)
         watcher.join(timeout=5.0)
         assert faded.is_set()
-        assert report.items == 50 and _holds(vehicle, items)
+        assert report.items == 24 and _holds(vehicle, items)
         # The fade was survived by resending, not by a flood of copies.
         assert 0 < report.retries < 40
 
 
 def test_a_5_s_fade_in_the_middle_of_the_read_back_is_survived():
-    # 60 items: the upload before it, one TDM round an item, is only the way to a read-back.
-    items = _mission(60)
+    # 24 items: the upload before it, one TDM round an item, is only the way to a read-back
+    # long enough for the fade to fall in its middle.
+    items = _mission(24)
     with _over_radio(loss=0.0, seed=4) as (vehicle, r, client):
         faded = threading.Event()
         lost_before = r.counts.packets_lost
@@ -249,7 +252,7 @@ def test_a_5_s_fade_in_the_middle_of_the_read_back_is_survived():
         faded_during = faded.is_set()  # the fade began before the read-back ended
         watcher.join(timeout=5.0)
         assert faded_during and r.counts.packets_lost > lost_before
-        assert report.items == 60 and _holds(vehicle, items)
+        assert report.items == 24 and _holds(vehicle, items)
 
 
 # The read-back decides when the end of the upload is uncertain ---------------------------------

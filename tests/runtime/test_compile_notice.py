@@ -7,6 +7,7 @@ import json
 import os
 import pickle
 import pty
+import shutil
 import subprocess
 import sys
 import time
@@ -53,49 +54,114 @@ def run_on_terminal(args: list[str], env: dict[str, str]) -> tuple[int, str, str
     return proc.wait(timeout=600), b"".join(chunks).decode("utf-8", "replace"), out
 
 
-def test_a_fresh_cache_gets_one_notice_on_a_terminal(tmp_path: Path) -> None:
-    """The one test that compiles: NUMBA_CACHE_DIR an empty folder, stderr a terminal; the
-    first plan is proven as every later one (its time limit does not count the compile:
-    tests/runtime/test_work_clock.py). Then `gcs-planner compile` in the same cache compiles
-    what the plan did not need, and a second one finds nothing left: one compile of every kernel for
-    both tests (each took a minute or more of CI alone)."""
+def _kernel_folders() -> list[Path]:
+    """The folders of the kernels' sources as `gcs-planner` imports them: asked of the
+    interpreter outside the checkout, where the working folder on sys.path cannot shadow an
+    installed (non-editable, CI's) package; numba caches each file's kernels by its path."""
+    code = "import importlib.util as u; print(*(u.find_spec(m).origin for m in %r), sep='\\n')"
+    modules = sorted({module for module, _ in compile_notice.KERNELS})
+    asked = subprocess.run(
+        [sys.executable, "-c", code % modules],
+        cwd=Path(sys.executable).parent,
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    return sorted({Path(line).parent for line in asked.stdout.split()})
+
+
+def _copy_cache_but(stem: str, cache: Path) -> None:
+    """Copy the warm cache's entries (numba's index and data files) of every kernel source into
+    ``cache`` (a NUMBA_CACHE_DIR of its own), all but those of the source file ``stem``."""
+    for folder in _kernel_folders():
+        # Where numba keeps them now: the first of its folders that holds any (NUMBA_CACHE_DIR,
+        # else the source's __pycache__ before the user-wide cache, whose older entries numba
+        # does not read then), and the sub-folder it looks in under the new NUMBA_CACHE_DIR.
+        target = cache / _sub_folder(folder)
+        for entry in _warm_entries(folder):
+            if not entry.name.startswith(stem + "."):
+                target.mkdir(parents=True, exist_ok=True)
+                shutil.copy2(entry, target / entry.name)
+
+
+def _sub_folder(folder: Path) -> str:
+    """The sub-folder numba keeps ``folder``'s kernels in under a NUMBA_CACHE_DIR: the last of
+    its folders is one (NUMBA_CACHE_DIR's or the user-wide cache's)."""
+    return compile_notice._cache_dirs(folder / "x.py")[-1].name
+
+
+def _warm_entries(folder: Path) -> list[Path]:
+    """numba's cache files (index and data) for the kernel sources in ``folder``, from the
+    folder numba reads them from."""
+    for found in compile_notice._cache_dirs(folder / "x.py"):
+        entries = sorted(found.glob("*.nb[ic]"))
+        if entries:
+            return entries
+    return []
+
+
+@pytest.fixture(scope="module")
+def compiled(tmp_path_factory: pytest.TempPathFactory) -> str:
+    """`gcs-planner compile` in the session's own cache (the default NUMBA_CACHE_DIR, which the
+    tests' session start fills with -n): it says what was missing, compiles it, and ends with
+    every kernel cached. Its stdout."""
     assert ENTRY.exists(), f"{ENTRY} missing: install the package (pip install -e .)"
+    done = subprocess.run(
+        [str(ENTRY), "compile"],
+        cwd=tmp_path_factory.mktemp("compile"),
+        capture_output=True,
+        text=True,
+    )
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.startswith("not compiled yet: "), done.stdout
+    assert "every kernel is in numba's cache" in done.stdout, done.stdout
+    return done.stdout
+
+
+def test_a_fresh_cache_gets_one_notice_on_a_terminal(tmp_path: Path, compiled: str) -> None:
+    """The one test that compiles a kernel on purpose, the smallest: NUMBA_CACHE_DIR a folder
+    of its own holding every kernel but the airplane legs' (copied from the warm cache), stderr
+    a terminal; the plan compiles that one, says so once, first, and is proven as every later
+    one (its time limit does not count the compile: tests/runtime/test_work_clock.py)."""
     scenario = small_scenario(tmp_path / "points.csv")
+    cache = tmp_path / "numba-cache"
+    _copy_cache_but("airplane_kernel", cache)
+    before = {p.name for p in cache.rglob("*.nbi")}
+    assert any(n.startswith("search_kernel.search-") for n in before), before
     # (GCS_PLANNER_COMPILE=always: compiled at once, not planned in Python first; see
     # tests/runtime/test_first_run.py for the default.)
-    env = {
-        **os.environ,
-        "NUMBA_CACHE_DIR": str(tmp_path / "numba-cache"),
-        "GCS_PLANNER_COMPILE": "always",
-    }
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(cache), "GCS_PLANNER_COMPILE": "always"}
     # The default time limit (60 s of work, the compile not counted): a fixed 10 s was missed
     # by the search itself on a machine busy with four processes on two cores.
     args = [str(ENTRY), "plan", str(scenario), *PARAMS]
     code, err, out = run_on_terminal(args, env)
     assert code == 0, err
     assert "optimality: exact" in out, out
-    # The run must have compiled (numba wrote its index files), or a missing notice proves nothing.
-    compiled = list((tmp_path / "numba-cache").rglob("*.nbi"))
-    assert compiled, "the plan compiled no kernel: pick a scenario that needs the compiled search"
+    # The run must have compiled (numba wrote the missing kernel's index), or a missing notice
+    # proves nothing.
+    new = {p.name for p in cache.rglob("*.nbi")} - before
+    assert any(n.startswith("airplane_kernel.airplane_lengths-") for n in new), new
     assert err.count(NOTICE) == 1, err
     # The notice comes first, a line of its own, before any progress display.
     assert err.lstrip().startswith("gcs-planner: " + NOTICE), err
 
-    # `gcs-planner compile` fills the rest of the cache, and then has nothing left to do.
-    env.pop("GCS_PLANNER_COMPILE")
-    first = subprocess.run([str(ENTRY), "compile"], env=env, capture_output=True, text=True)
-    assert first.returncode == 0, first.stderr
-    assert "every kernel is in numba's cache" in first.stdout
-    names = sorted(p.name for p in (tmp_path / "numba-cache").rglob("*.nbi"))
-    for kernel in ("search_kernel.search-", "probe_kernel.probe-", "kernel.fewest_corrections-"):
-        assert any(n.startswith(kernel) for n in names), (kernel, names)
-    again = subprocess.run([str(ENTRY), "compile"], env=env, capture_output=True, text=True)
-    assert again.returncode == 0 and "none (all cached)" in again.stdout, again.stdout
 
-    # After `gcs-planner compile` a dry run (plan, upload, the vehicle's flight, the replay)
-    # compiles nothing: the flight kernels are the compile's too (issue 54).
-    compiled = compiles_of([*DRY_RUN, str(EXAMPLE), "--quiet"], env)
-    assert compiled == [], compiled
+def test_after_compile_a_dry_run_compiles_nothing(tmp_path: Path, compiled: str) -> None:
+    """After `gcs-planner compile` (every kernel the commands use, search and flight), a dry
+    run (plan, upload, the vehicle's flight, the replay) compiles nothing (issue 54), in the
+    same cache."""
+    names = {p.name for folder in _kernel_folders() for p in _warm_entries(folder)}
+    for kernel in ("search_kernel.search-", "probe_kernel.probe-", "kernel.fewest_corrections-"):
+        assert any(n.startswith(kernel) for n in names), (kernel, sorted(names))
+    # A later process finds nothing left to compile (what a second `gcs-planner compile` says
+    # as "none (all cached)"), read without loading numba.
+    code = "from gcs_planner.runtime.precompile import missing; print(missing())"
+    left = subprocess.run(
+        [sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, check=True
+    )
+    assert left.stdout.strip() == "[]", left.stdout
+    compiled_now = compiles_of([*DRY_RUN, str(EXAMPLE), "--quiet"], dict(os.environ), tmp_path)
+    assert compiled_now == [], compiled_now
 
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "missions" / "example" / "scenario.toml"
@@ -125,7 +191,7 @@ sys.exit(code)
 """
 
 
-def compiles_of(args: list[str], env: dict[str, str]) -> list[str]:
+def compiles_of(args: list[str], env: dict[str, str], cwd: Path) -> list[str]:
     """The project's kernels numba compiled while ``gcs-planner ARGS`` ran (stdout's last line)."""
     # Run outside the checkout: `python -c` puts the working folder first on sys.path, and from
     # the checkout's root it would import the source tree where `gcs-planner compile` imported
@@ -135,15 +201,14 @@ def compiles_of(args: list[str], env: dict[str, str]) -> list[str]:
         env=env,
         capture_output=True,
         text=True,
-        cwd=Path(env["NUMBA_CACHE_DIR"]).parent,
+        cwd=cwd,
     )
     assert done.returncode == 0, done.stderr[-3000:]
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
 def test_no_notice_off_a_terminal(tmp_path: Path) -> None:
-    """A pipe gets nothing, even with an empty cache (logs and CI keep clean stderr); the plan
-    is the same small one, so this costs no compile when its cache is warm."""
+    """A pipe gets nothing, even with an empty cache (logs and CI keep clean stderr)."""
     assert not compile_notice.maybe_notify(open(os.devnull, "w"))
 
 
