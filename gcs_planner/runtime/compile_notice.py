@@ -104,7 +104,9 @@ def uncached_seconds() -> float:
 
 
 def notice_text(seconds: float) -> str:
-    return f"gcs-planner: compiling its kernels once (numba), about {seconds:.0f} s"
+    # One kernel left can take under a second: "about 0 s" would read as nothing at all.
+    about = f"about {seconds:.0f} s" if seconds >= 1.5 else "a second or so"
+    return f"gcs-planner: compiling its kernels once (numba), {about}"
 
 
 class _Notice:
