@@ -116,7 +116,7 @@ def test_both_constraints_at_once_equal_brute_force_on_straight_legs():
 
 @pytest.mark.parametrize("seed", range(30))
 def test_both_constraints_with_turns_and_probability_equal_enumeration(seed):
-    sc = _windy_turbulent(turning_scenario(seed, 200.0), seed, 4.0)
+    sc = _windy_turbulent(turning_scenario(seed, 200.0, max_points=4), seed, 4.0)
     for objectives in (TWO, THREE):
         routes = _routes(sc, "probability" in objectives)
         minutes = _endurance(routes, seed)

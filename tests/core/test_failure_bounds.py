@@ -25,13 +25,13 @@ from gcs_planner.geometry.legs import AirplaneLegs
 from gcs_planner.scenario.model import Kind
 
 
-def scenarios():
+def scenarios(seeds: range = range(20)):
     """Straight legs with many unreliable points, turns of several radii, and airplane legs
-    with large altitude differences (helices) under several climb limits (at most 4 correction
-    points: 65 routes each to fly, not 326)."""
-    for seed in range(20):
-        yield uncertain_straight_scenario(seed)
-        yield turning_scenario(seed, radius=[200.0, 1500.0, 4000.0][seed % 3])
+    with large altitude differences (helices) under several climb limits (each at most 4
+    correction points: 65 routes each to fly, not 326; the same draws)."""
+    for seed in seeds:
+        yield uncertain_straight_scenario(seed, max_points=4)
+        yield turning_scenario(seed, [200.0, 1500.0, 4000.0][seed % 3], max_points=4)
         yield climbing_scenario(seed, max_points=4)
 
 
@@ -89,7 +89,7 @@ def test_failure_bounds_never_exceed_a_continuation_that_keeps_that_much_mass() 
 
 def test_the_relaxation_front_floors_every_route_by_corrections_and_probability() -> None:
     checked = 0
-    for scenario in scenarios():
+    for scenario in scenarios(range(30)):  # of at most 4 points: more of them
         if scenario.params.turn_radius <= 0:
             continue
         ctx = _Context(scenario, True, None)
@@ -157,8 +157,11 @@ def test_fronts_with_the_failure_bounds_from_the_first_label_equal_enumeration(m
     at_once = Options(failure_bounds_per_arc=0.0)
     nonempty = 0
     for seed in range(24):
+        # at most 4 correction points (65 routes to fly, not 326), the same draws
         scenario = (
-            make(seed) if make is climbing_scenario else make(seed, [200.0, 1500.0][seed % 2])
+            make(seed, max_points=4)
+            if make is climbing_scenario
+            else make(seed, [200.0, 1500.0][seed % 2], max_points=4)
         )
         _, want = assert_front_equals_enumeration(scenario, True, seed, at_once)
         nonempty += bool(want)

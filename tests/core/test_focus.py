@@ -75,18 +75,20 @@ def test_fewest_corrections_is_the_walk_relaxations_and_bounds_simple_routes(mak
     assert feasible >= 30
 
 
-@pytest.mark.parametrize("walk_bound", [True, False], ids=["walk-bound", "ellipsoids"])
+# The two ways of focusing the test below compares (``bounds_are_chords`` as it is, or False).
+WAYS = ("walk-bound", "ellipsoids")
+
+
 @pytest.mark.parametrize(
     ("make", "seeds"), [(dense_scenario, 120), (corridor_scenario, 600), (mixed_scenario, 120)]
 )
-def test_focused_front_equals_the_search_over_all_points(
-    make, seeds, walk_bound, monkeypatch
-) -> None:
-    """Both ways of focusing: bounded by the fewest-corrections walk where it is a route, and
-    by ellipsoids of growing slack (what runs where it is not, made to run everywhere here)."""
-    if not walk_bound:
-        monkeypatch.setattr(straight_search, "bounds_are_chords", lambda scenario: False)
-    focused = grown = revisits = 0
+def test_focused_front_equals_the_search_over_all_points(make, seeds, monkeypatch) -> None:
+    """Both ways of focusing: bounded by the fewest-corrections walk where it is a route
+    ("walk-bound"), and by ellipsoids of growing slack (what runs where it is not, made to run
+    everywhere here: "ellipsoids"), each against one search over all points per scenario."""
+    focused = dict.fromkeys(WAYS, 0)
+    grown = dict.fromkeys(WAYS, 0)
+    revisits = dict.fromkeys(WAYS, 0)
     for seed in range(seeds):
         scenario = make(seed)
         rng = np.random.default_rng(seed + 7)
@@ -96,27 +98,41 @@ def test_focused_front_equals_the_search_over_all_points(
         if seed % 5 == 2:
             kw["max_corrections"] = int(rng.integers(1, 8))
         whole = straight_front(scenario, focus=False, **kw)
-        # Given the scenario's own graph (as the three-objective search's floor is), or not.
-        graph = build_reach_graph(scenario) if seed % 3 == 0 else None
-        ours = straight_front(scenario, graph, focus=True, **kw)
-        assert [(fp.corrections, fp.points) for fp in ours.front] == [
-            (fp.corrections, fp.points) for fp in whole.front
-        ], seed
-        np.testing.assert_allclose(
-            [fp.length for fp in ours.front], [fp.length for fp in whole.front], atol=1e-6
-        )
-        assert (ours.why_infeasible is None) == bool(ours.front)
-        revisits += bool(ours.stats.critical)
-        if ours.stats.points < scenario.n:
-            focused += 1
-            ab = float(np.linalg.norm(scenario.xyz[scenario.start] - scenario.xyz[scenario.end]))
-            if whole.front[0].length > ab * (1 + FOCUS_SLACK) + 1.0:
-                grown += 1  # the first ellipsoid missed the fewest-corrections route
+        for way in WAYS:
+            with monkeypatch.context() as patch:
+                if way == "ellipsoids":
+                    patch.setattr(straight_search, "bounds_are_chords", lambda scenario: False)
+                # Given the scenario's own graph (as the three-objective search's floor is), or
+                # not.
+                graph = build_reach_graph(scenario) if seed % 3 == 0 else None
+                ours = straight_front(scenario, graph, focus=True, **kw)
+            what = (seed, way)
+            assert [(fp.corrections, fp.points) for fp in ours.front] == [
+                (fp.corrections, fp.points) for fp in whole.front
+            ], what
+            np.testing.assert_allclose(
+                [fp.length for fp in ours.front],
+                [fp.length for fp in whole.front],
+                atol=1e-6,
+                err_msg=str(what),
+            )
+            assert (ours.why_infeasible is None) == bool(ours.front), what
+            revisits[way] += bool(ours.stats.critical)
+            if ours.stats.points < scenario.n:
+                focused[way] += 1
+                ab = float(
+                    np.linalg.norm(scenario.xyz[scenario.start] - scenario.xyz[scenario.end])
+                )
+                if whole.front[0].length > ab * (1 + FOCUS_SLACK) + 1.0:
+                    grown[way] += 1  # the first ellipsoid missed the fewest-corrections route
     # The sample must exercise what it claims to: searches focused, some after growing.
-    if make is dense_scenario:
-        assert focused >= 25 and (walk_bound or grown >= 10), (focused, grown)
-    if make is corridor_scenario:
-        assert focused >= 15 and revisits >= 1, (focused, revisits)
+    for way in WAYS:
+        if make is dense_scenario:
+            assert focused[way] >= 25 and (way == "walk-bound" or grown[way] >= 10), (
+                way, focused, grown,
+            )  # fmt: skip
+        if make is corridor_scenario:
+            assert focused[way] >= 15 and revisits[way] >= 1, (way, focused, revisits)
 
 
 def test_contest_box_is_searched_over_a_few_percent_of_its_points() -> None:

@@ -7,8 +7,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from support.enumeration import enumerate_straight_front
 from support.scenarios import long_corridor_scenario, uncertain_straight_scenario
+from support.straight_walk import walked_straight_front
 
 from gcs_planner.core.bnb import Found, bnb_front
 from gcs_planner.core.bnb.incumbents import _Incumbents
@@ -60,7 +60,7 @@ def test_cut_short_searches_miss_no_route_shorter_than_their_open_bound() -> Non
     cases += [(long_corridor_scenario(seed, n=40), "search") for seed in range(4)]
     for scenario, how in cases:
         if how is None:
-            exact = [(w[0], w[1], -w[2]) for w in enumerate_straight_front(scenario)]
+            exact = [(w[0], w[1], -w[2]) for w in walked_straight_front(scenario)]
             labels = None
         else:
             full = bnb_front(scenario, probability=True, max_labels=None)

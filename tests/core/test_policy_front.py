@@ -3,6 +3,7 @@ policy (each evaluated exactly), and the replanned front against the route front
 
 from __future__ import annotations
 
+import functools
 import itertools
 
 import numpy as np
@@ -70,6 +71,21 @@ def _policy_scenario(seed: int, radius: float) -> Scenario:
     return random_scenario(n, seed, params=params, box=box, unreliable_fraction=0.6)
 
 
+@functools.cache
+def _flown(seed: int, radius: float) -> tuple:
+    """``_policy_scenario(seed, radius)``, every simple route of it flown, and each route's value
+    as a policy: once per test process for the tests below, which draw the same scenarios."""
+    sc = _policy_scenario(seed, radius)
+    routes = tuple(flown_route(sc, pts) for pts in all_routes(sc))
+    return sc, routes, tuple(evaluate(sc, Policy.from_route(sc, r)) for r in routes)
+
+
+@functools.cache
+def _exact_front(seed: int, radius: float) -> list:
+    """``exact_policy_front`` of ``_policy_scenario(seed, radius)``, once per test process."""
+    return exact_policy_front(_policy_scenario(seed, radius))
+
+
 @pytest.mark.parametrize("radius", [0.0, 800.0])
 def test_exact_policy_front_equals_brute_force(radius: float) -> None:
     """Over every policy of tiny scenarios (brute force, each evaluated exactly), the dynamic
@@ -93,16 +109,14 @@ def test_exact_policy_front_equals_brute_force(radius: float) -> None:
             (round(triples[i][0], 6), triples[i][1], round(triples[i][2], 12))
             for i in pareto(triples)
         )
-        got_points = exact_policy_front(sc)
+        got_points = _exact_front(seed, radius)
         got = _values(pt.value for pt in got_points)
         assert [g[1:] for g in got] == [w[1:] for w in want], seed
         np.testing.assert_allclose([g[0] for g in got], [w[0] for w in want], rtol=1e-9)
         compared += bool(want)
         # How often a policy is strictly better than every route, and how its branches go.
-        routes = [flown_route(sc, pts) for pts in all_routes(sc)]
-        best_route = max(
-            (evaluate(sc, Policy.from_route(sc, r)).probability for r in routes), default=0.0
-        )
+        _, _, values = _flown(seed, radius)
+        best_route = max((v.probability for v in values), default=0.0)
         best = max(got_points, key=lambda pt: pt.value.probability, default=None)
         if best is not None and best.value.probability > best_route + PROB_EPS:
             beats_routes += 1
@@ -125,10 +139,8 @@ def test_the_best_policy_beats_every_route_where_a_failure_has_somewhere_to_go()
     likely policy arrives strictly more often than any route, branching at a failed fix."""
     beats = branching = 0
     for seed in range(150):  # the brute-force test above covers 300 more
-        sc = _policy_scenario(seed, 0.0)
-        front = exact_policy_front(sc)
-        routes = [flown_route(sc, pts) for pts in all_routes(sc)]
-        values = [evaluate(sc, Policy.from_route(sc, r)) for r in routes]
+        front = _exact_front(seed, 0.0)
+        _, _, values = _flown(seed, 0.0)
         for v in values:
             if v.probability > 0.0:
                 assert any(_weakly(pt.value, v) for pt in front), seed
@@ -158,20 +170,19 @@ def _points(node: Policy) -> list[int]:
 def test_replanned_front_dominates_the_route_front_and_is_dominated_by_the_exact() -> None:
     strictly = 0
     for seed in range(150):
-        sc = _policy_scenario(seed, 0.0)
-        routes = [flown_route(sc, pts) for pts in all_routes(sc)]
-        routes = [r for r in routes if evaluate(sc, Policy.from_route(sc, r)).probability > 0]
-        if not routes:
+        sc, flown, every_value = _flown(seed, 0.0)
+        arriving = [(r, v) for r, v in zip(flown, every_value, strict=True) if v.probability > 0]
+        if not arriving:
             continue
+        routes = [r for r, _ in arriving]
         policies = [replan_on_failure(sc, r).policy for r in routes]
         approx = replanned_front(sc, routes, policies)
-        exact = exact_policy_front(sc)
-        for r in routes:
-            v = evaluate(sc, Policy.from_route(sc, r))
+        exact = _exact_front(seed, 0.0)
+        for _, v in arriving:
             assert any(_weakly(pt.value, v) for pt in approx), seed
         for pt in approx:
             assert any(_weakly(e.value, pt.value) for e in exact), seed
-        best_route = max(evaluate(sc, Policy.from_route(sc, r)).probability for r in routes)
+        best_route = max(v.probability for _, v in arriving)
         strictly += max(pt.value.probability for pt in approx) > best_route + PROB_EPS
     assert strictly > 0
 

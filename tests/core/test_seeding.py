@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 import numpy as np
-from support.enumeration import enumerate_straight_front
 from support.scenarios import uncertain_straight_scenario
+from support.straight_walk import walked_straight_front
 
 from gcs_planner.core.bnb import bnb_front
 from gcs_planner.core.probability import success_probability
@@ -42,7 +42,7 @@ def test_fronts_seeded_with_certain_routes_equal_enumeration() -> None:
         result = bnb_front(scenario, probability=True, max_labels=10**6, seeds=seeds)
         assert result.optimal
         got = [(round(f.length, 6), f.corrections, round(-f.probability, 12)) for f in result.front]
-        want = enumerate_straight_front(scenario)
+        want = walked_straight_front(scenario)
         assert [g[1:] for g in got] == [w[1:] for w in want], seed
         np.testing.assert_allclose([g[0] for g in got], [w[0] for w in want], atol=1e-6)
         nonempty += bool(want)

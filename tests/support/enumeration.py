@@ -19,6 +19,7 @@ from gcs_planner.geometry.legs import scenario_leg_model
 from gcs_planner.scenario.model import Kind, Scenario
 
 from .scenarios import probed_scenario
+from .shared_results import shared_front
 
 TWO = ("length", "corrections")
 THREE = ("length", "corrections", "probability")
@@ -192,8 +193,12 @@ def dfs_front(scenario: Scenario, probability: bool) -> list[tuple[float, int, f
 @functools.cache
 def probed_front(seed: int, legs: str, probability: bool) -> list[tuple[float, int, float]]:
     """``dfs_front`` of ``probed_scenario(seed, legs)``, enumerated once per test session (the
-    tests of the probes and of the compiled searches ask for the same scenarios)."""
-    return dfs_front(probed_scenario(seed, legs), probability)
+    tests of the probes and of the compiled searches ask for the same scenarios), and shared
+    with the run's other test processes (support/shared_results.py)."""
+    question = (seed, legs, probability)
+    return shared_front(
+        "probed_front", question, lambda: dfs_front(probed_scenario(seed, legs), probability)
+    )
 
 
 def front_of(result, probability: bool) -> list[tuple[float, int, float]]:  # noqa: ANN001

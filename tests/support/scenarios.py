@@ -49,12 +49,13 @@ def mixed_scenario(seed: int, n_min: int = 2, n_max: int = 7) -> Scenario:
     return random_scenario(n, seed, params=params, box=box)
 
 
-def turning_scenario(seed: int, radius: float) -> Scenario:
-    """Two to five correction points, half unreliable, turns of ``radius``, dataset 1's limits."""
+def turning_scenario(seed: int, radius: float, max_points: int = 5) -> Scenario:
+    """Two to five correction points (at most ``max_points``: the same draws whatever it is),
+    half unreliable, turns of ``radius``, dataset 1's limits."""
     rng = np.random.default_rng(seed)
     params = contest_params(turn_radius=radius, fail_residual=float(rng.uniform(2, 15)))
     return random_scenario(
-        int(rng.integers(2, 6)),
+        min(int(rng.integers(2, 6)), max_points),
         seed,
         params=params,
         box=(30_000, 8_000, 1_500),
@@ -62,10 +63,11 @@ def turning_scenario(seed: int, radius: float) -> Scenario:
     )
 
 
-def uncertain_straight_scenario(seed: int) -> Scenario:
-    """Small straight-leg scenarios with many unreliable points, dense or corridor-sparse."""
+def uncertain_straight_scenario(seed: int, max_points: int = 5) -> Scenario:
+    """Small straight-leg scenarios with many unreliable points, dense or corridor-sparse; 1 to
+    5 correction points, at most ``max_points`` (the same draws whatever it is)."""
     rng = np.random.default_rng(10_000 + seed)
-    n = int(rng.integers(1, 6))
+    n = min(int(rng.integers(1, 6)), max_points)
     a1, a2, b1, b2 = rng.uniform(6, 30, 4)
     params = Parameters(
         a1,
@@ -128,9 +130,13 @@ def sparse_scenario(seed: int) -> Scenario:
 
 
 def tall_scenario(
-    seed: int, leg_model: str, radius: float, limited: bool, points: tuple[int, int] = (4, 5)
+    seed: int,
+    leg_model: str,
+    radius: float,
+    limited: bool,
+    points: tuple[int, int] | None = None,
 ) -> Scenario:
-    """``points`` correction points, the fewer or the more (4 or 5 by default; 6 for every
+    """``points`` correction points, the fewer or the more (by default 4 or 5, and 6 for every
     twelfth seed with R = 0: 1,957 routes), half unreliable, in a corridor 30 to 45 km long
     with dataset 1's limits (so that most routes need a V and an H correction), altitudes
     spread over 15 % of its length, A at one end of that range; climb and descent limits of 5
@@ -147,7 +153,9 @@ def tall_scenario(
     )
     length = float(rng.uniform(30_000, 45_000))
     # Two choices whatever ``points`` are, so that the draws after it are the same.
-    n = 6 if radius == 0 and seed % 12 == 5 else int(rng.integers(points[0], points[0] + 2))
+    six = points is None and radius == 0 and seed % 12 == 5
+    fewest = 4 if points is None else points[0]
+    n = 6 if six else int(rng.integers(fewest, fewest + 2))
     box = (length, length * rng.uniform(0.05, 0.2), 1.0)
     flat = random_scenario(n, seed, params=params, box=box, unreliable_fraction=0.5)
     xyz = flat.xyz.copy()
