@@ -1,7 +1,10 @@
 import importlib.machinery
 import importlib.util
+import os
+import shutil
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 import pytest
@@ -38,6 +41,17 @@ def _prefer_the_installed_package() -> None:
 _prefer_the_installed_package()
 
 from support.paths import DATA  # noqa: E402 - found through the path set above
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    """One folder per run for the reference fronts the test processes share
+    (tests/support/shared_results.py): made by the first process (xdist's controller, before
+    it starts the workers, who inherit it) and removed at its end, so no run reads another's."""
+    if hasattr(config, "workerinput") or os.environ.get("GCS_PLANNER_TEST_RESULTS"):
+        return
+    folder = tempfile.mkdtemp(prefix="gcs-planner-test-results-")
+    os.environ["GCS_PLANNER_TEST_RESULTS"] = folder
+    config.add_cleanup(lambda: shutil.rmtree(folder, ignore_errors=True))
 
 
 @pytest.hookimpl(tryfirst=True)

@@ -40,7 +40,7 @@ def shared_front(
     name: str, question: tuple, compute: Callable[[], list[tuple]]
 ) -> list[tuple[float, int, float]]:
     """``compute()``'s front of (length, corrections, -probability) tuples, read from the disk
-    when a process of this run (or of an earlier run on the same sources) made it; written
+    when another process of this run made it (tests/conftest.py gives each run a folder); written
     whole or not at all (a temporary file renamed), so a process never reads half a front."""
     key = hashlib.sha256(f"{_sources_digest()}|{name}|{question!r}".encode()).hexdigest()
     path = _folder() / f"{name}-{key[:32]}.json"
