@@ -17,7 +17,9 @@ straight of the derived run-in before it and run-out after it."""
 
 from __future__ import annotations
 
+import copy
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -44,6 +46,26 @@ OBJECTIVES = {"three": ("length", "corrections", "probability"),
 # highest point's: cli/vehicle_from.py says why); the planner proves it and says so (a direction
 # changes nothing: it is held from any).
 INFEASIBLE = {(2, "px4", 5.0), (2, "px4", 10.0)}
+
+
+@pytest.fixture(scope="module", autouse=True)
+def workbooks_read_once():
+    """Each contest workbook read once for the module, not once per wind (openpyxl's read is
+    a good part of each case): the same cells, copied for each reader."""
+    from gcs_planner.scenario import xlsx
+
+    read = xlsx.read_workbook_cells
+    cells: dict[Path, object] = {}
+
+    def read_once(path: Path):  # noqa: ANN202 - xlsx.read_workbook_cells's CellTable
+        key = Path(path).resolve()
+        if key not in cells:
+            cells[key] = read(path)
+        return copy.deepcopy(cells[key])
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(xlsx, "read_workbook_cells", read_once)
+        yield
 
 
 def towards(env: DerivedEnvelope) -> np.ndarray:
@@ -100,27 +122,28 @@ def needs_in_wind(
     mid = unit[1:] + unit[:-1]
     vertex_track = np.arctan2(mid[:, 1], mid[:, 0])
     vertex_slope = (slope[1:] + slope[:-1]) / 2
-    climb = sink = tan_bank = 0.0
-    for to in directions:
-        wx, wy = env.wind * math.cos(to), env.wind * math.sin(to)
-        _, _, zdot = wind_triangle(track, slope, tas, wx, wy)
-        climb = max(climb, float(zdot.max(initial=0.0)))
-        sink = max(sink, float(-zdot.min(initial=0.0)))
-        vg, cc, _ = wind_triangle(vertex_track, vertex_slope, tas, wx, wy)
-        tan_bank = max(tan_bank, float((kappa * vg * vg / (G * cc)).max(initial=0.0)))
+    # Every direction at once: a row of the wind triangle's arrays per direction.
+    to = np.asarray(directions, dtype=float)[:, None]
+    wx, wy = env.wind * np.cos(to), env.wind * np.sin(to)
+    _, _, zdot = wind_triangle(track, slope, tas, wx, wy)
+    climb = float(zdot.max(initial=0.0))
+    sink = float(-zdot.min(initial=0.0))
+    vg, cc, _ = wind_triangle(vertex_track, vertex_slope, tas, wx, wy)
+    tan_bank = float((kappa * vg * vg / (G * cc)).max(initial=0.0))
     return climb, sink, math.degrees(math.atan(tan_bank))
 
 
 def wind_triangle(
-    track: np.ndarray, slope: np.ndarray, tas: float, wx: float, wy: float
+    track: np.ndarray, slope: np.ndarray, tas: float, wx: np.ndarray, wy: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(ground speed, cos of the crab angle, vertical rate) flying ``track`` (radians) at
-    ``slope`` over the ground, ``tas`` through the air, in the wind (wx, wy)."""
+    ``slope`` over the ground, ``tas`` through the air, in the wind (wx, wy): numbers, or
+    columns of one wind per row (the arrays then have a row per wind)."""
     along = wx * np.cos(track) + wy * np.sin(track)
     across = -wx * np.sin(track) + wy * np.cos(track)
     # With the climb: horizontal airspeed sqrt(TAS^2 - zdot^2), a fixed point reached in a few
     # rounds (the slopes are under 17 degrees).
-    horizontal = np.full_like(track, tas)
+    horizontal = np.full(np.broadcast_shapes(track.shape, np.shape(wx)), tas)
     for _ in range(8):
         cos_crab = np.sqrt(np.maximum(1.0 - (across / horizontal) ** 2, 1e-12))
         ground = horizontal * cos_crab + along

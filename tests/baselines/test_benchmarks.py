@@ -15,6 +15,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from support.scenarios import corridor_scenario, mixed_scenario
 
+from benchmarks import run as benchmarks_run
 from benchmarks.fronts import compare
 from benchmarks.paper import check_mapping, map_rows
 from benchmarks.paper_routes import PAPER_ROUTES
@@ -118,10 +119,23 @@ def test_measure_kills_a_run_past_the_limit() -> None:
     assert len(done.front) >= 1
 
 
-def test_quick_mode_writes_results_and_plot(tmp_path: Path, dataset_paths) -> None:
+def test_quick_mode_writes_results_and_plot(tmp_path: Path, dataset_paths, monkeypatch) -> None:
+    # Section 8 (start-up, whole processes) is the one section not run here: quick mode calls
+    # startup_section(1, False), exactly what README's `python -m benchmarks` runs as
+    # `--startup --runs 1 --warm-cache` in tests/docs/test_documented_commands.py
+    # (test_documented_command[README.md:...]); run twice, it would start its six processes twice.
+    calls: list[tuple[int, bool]] = []
+
+    def start_up(runs: int, fresh_cache: bool = True) -> str:
+        calls.append((runs, fresh_cache))
+        return "## 8. Start-up: run by the documentation's test"
+
+    monkeypatch.setattr(benchmarks_run, "startup_section", start_up)
     main(["--quick", "--out", str(tmp_path)])
+    assert calls == [(1, False)]
     text = (tmp_path / "RESULTS.md").read_text(encoding="utf-8")
-    for heading in ("## 1.", "## 2.", "## 3.", "## 4.", "## 5.", "Machine:"):
+    for heading in ("## 1.", "## 2.", "## 3.", "## 4.", "## 5.", "## 6.", "## 7.", "## 8.",
+                    "## 9.", "## 10.", "Machine:"):  # fmt: skip
         assert heading in text
     assert "front = exact" in text
     assert "DIFFERS" not in text and "BEATS" not in text

@@ -15,6 +15,7 @@ from pathlib import Path
 import pytest
 from gcs_planner.sim.vehicle import free_udp_port
 from support.paths import MISSIONS
+from support.undrawn_pictures import leave_pictures_undrawn
 
 from gcs_planner.cli import main
 from gcs_planner.errors import InputError
@@ -153,7 +154,9 @@ def coast_plan(tmp_path_factory) -> Path:
     """plan.json of the coast mission with the default objectives (length, corrections and
     probability: it has unreliable points), written once by `plan --out`."""
     out = tmp_path_factory.mktemp("coast") / "out"
-    assert main(["plan", str(COAST), "--quiet", "--out", str(out)]) == 0
+    with pytest.MonkeyPatch.context() as patch:
+        leave_pictures_undrawn(patch)  # only plan.json is read
+        assert main(["plan", str(COAST), "--quiet", "--out", str(out)]) == 0
     return out / "plan.json"
 
 

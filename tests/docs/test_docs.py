@@ -11,6 +11,7 @@ from pathlib import Path
 
 import pytest
 from support.paths import REPO
+from support.undrawn_pictures import leave_pictures_undrawn
 
 from gcs_planner.cli import main
 
@@ -146,8 +147,9 @@ def test_points_snippets_plan_what_the_text_says(tmp_path, capsys):
 # --- the safe default: a likely-lost route is exported only when asked ----------------------
 
 
-def test_a_likely_lost_route_is_not_exported_unasked(tmp_path, capsys):
+def test_a_likely_lost_route_is_not_exported_unasked(tmp_path, capsys, monkeypatch):
     points = missions_snippets(tmp_path)["points.csv"]
+    leave_pictures_undrawn(monkeypatch)  # the threshold is the subject here
     # With two objectives the front holds only the route through the unreliable H1 (P 0.8).
     two = [str(points), *DATASET1, "--objectives", "length,corrections"]
     out = tmp_path / "out"

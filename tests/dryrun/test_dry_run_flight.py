@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 
 import pytest
+from support.undrawn_pictures import leave_pictures_undrawn
 
 from gcs_planner.cli import main
 from gcs_planner.core.planner import plan
@@ -153,7 +154,9 @@ def test_steep_cs3d_mission_is_caught_through_mock_vehicle_and_upload_processes(
 
     workbook = str(dataset_paths[2])
     out = tmp_path / "steep"
-    assert main(["plan", workbook, *FLAGS, "--leg-model", "cs3d", "--out", str(out)]) == 0
+    with pytest.MonkeyPatch.context() as patch:
+        leave_pictures_undrawn(patch)  # the mission, its setup and its flight are the subject
+        assert main(["plan", workbook, *FLAGS, "--leg-model", "cs3d", "--out", str(out)]) == 0
     mission = tmp_path / "mission.plan"
     assert main(["export", str(out / "plan.json"), "--format", "plan", "--acceptance-radius",
                  "1", "--out", str(mission)]) == 0  # fmt: skip

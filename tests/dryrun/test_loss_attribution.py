@@ -18,14 +18,22 @@ from gcs_planner.core.bnb import flown_route
 from gcs_planner.core.probability import success_probability
 from gcs_planner.dryrun.run import lost_by_the_flight
 
+# The routes flown pass at most this many points between A and B: of the 4 or 5 points of a
+# tall scenario, the routes through 4 or 5 are nearly all infeasible (6 % of the feasible ones
+# over the 40 seeds below) yet are most of the routes to fly; through 2 or 3, 40 seeds give
+# over a hundred feasible routes, some forty of them with two or more unreliable points.
+MOST_POINTS = 3
+
 
 def _routes(seed: int, first: int | None = None):
     """The feasible routes of a tall random scenario planned without a reserve (the
-    probability model and the aircraft's limits then agree), shortest chains first; only the
-    ``first`` of them when given (the others are not flown)."""
+    probability model and the aircraft's limits then agree) through at most MOST_POINTS
+    points, shortest chains first; only the ``first`` of them when given (the others are not
+    flown)."""
     scenario = tall_scenario(seed, "airplane", 400.0, False).with_params(reserve=0.0)
     out = []
-    for points in all_routes(scenario):
+    shallow = itertools.takewhile(lambda r: len(r) <= MOST_POINTS + 2, all_routes(scenario))
+    for points in shallow:
         route = flown_route(scenario, points)
         if route.feasible:
             out.append(route)

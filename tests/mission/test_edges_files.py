@@ -13,6 +13,7 @@ from pathlib import Path
 
 import pytest
 from support.missions import make_plan
+from support.undrawn_pictures import leave_pictures_undrawn
 
 from gcs_planner.cli import main
 from gcs_planner.errors import InputError
@@ -103,9 +104,10 @@ def test_a_plan_that_lost_its_origin_is_not_exported_to_the_default_one(tmp_path
 
 
 def test_a_plan_without_an_origin_says_so_and_exports_at_the_default(
-    tmp_path, scenario_csv, capsys
+    tmp_path, scenario_csv, capsys, monkeypatch
 ):
     out = tmp_path / "out"
+    leave_pictures_undrawn(monkeypatch)  # the origin is the subject here
     assert main(["plan", str(scenario_csv), *FLAGS[:-2], "--out", str(out)]) == 0  # no --origin
     data = json.loads((out / "plan.json").read_text())
     assert data["scenario"]["origin"] is None and data["scenario"]["origin_is_default"] is True
@@ -206,7 +208,9 @@ def test_write_atomic_reports_a_folder_in_the_way(tmp_path):
 # --- plan --out is written as one folder ------------------------------------------------------
 
 
-def test_plan_out_writes_every_file_and_replaces_an_earlier_run(tmp_path, scenario_csv, capsys):
+def test_plan_out_writes_every_file_and_replaces_an_earlier_run(
+    tmp_path, scenario_csv, capsys, monkeypatch
+):
     out = tmp_path / "out"
     assert main(["plan", str(scenario_csv), *FLAGS, "--out", str(out)]) == 0
     assert sorted(p.name for p in out.iterdir()) == OUT_FILES
@@ -214,7 +218,10 @@ def test_plan_out_writes_every_file_and_replaces_an_earlier_run(tmp_path, scenar
     assert out.stat().st_mode & 0o777 == mode
     assert all(p.stat().st_mode & 0o777 == mode & 0o666 for p in out.iterdir())
     (out / "plan.json").write_text("stale")
+    # The pictures were drawn above; the second run is about the folder it replaces.
+    asked = leave_pictures_undrawn(monkeypatch)
     assert main(["plan", str(scenario_csv), *FLAGS, "--out", str(out)]) == 0
+    assert sorted(asked) == ["error_budget_png", "front_png", "route_png"]
     assert json.loads((out / "plan.json").read_text())["format"] == "gcs-planner-plan"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["line.csv", "out"]
 
@@ -251,6 +258,7 @@ def test_an_interrupted_plan_out_leaves_the_previous_folder(
     tmp_path, scenario_csv, monkeypatch, capsys
 ):
     out = tmp_path / "out"
+    leave_pictures_undrawn(monkeypatch)  # the folder left as it was is the subject here
     assert main(["plan", str(scenario_csv), *FLAGS, "--out", str(out)]) == 0
     before = {p.name: p.read_bytes() for p in out.iterdir()}
     _interrupt_at_kml(monkeypatch)

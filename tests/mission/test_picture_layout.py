@@ -240,9 +240,11 @@ def test_3d_view_only_for_small_scenarios(dataset2_plan):
     assert any(ax.name == "3d" for ax in route_figure(make_plan()).axes)
     assert any(ax.name == "3d" for ax in route_figure(dataset2_plan).axes)
 
-    s = random_scenario(20_000, 1, params=DATASET1).with_params(turn_radius=0.0)
-    assert s.n > THREE_D_MAX_POINTS
-    route = [0, *sorted(range(1, s.n - 1), key=lambda i: s.xyz[i, 0])[::2000], s.n - 1]
+    # One point over the limit (its correction points, A and B): the smallest cloud without
+    # a 3D view, which a limit off by one would still draw in 3D.
+    s = random_scenario(THREE_D_MAX_POINTS - 1, 1, params=DATASET1).with_params(turn_radius=0.0)
+    assert s.n == THREE_D_MAX_POINTS + 1
+    route = [0, *sorted(range(1, s.n - 1), key=lambda i: s.xyz[i, 0])[:: s.n // 10], s.n - 1]
     plan = make_plan(s, (route,))
     fig = route_figure(plan)
     assert all(ax.name != "3d" for ax in fig.axes)

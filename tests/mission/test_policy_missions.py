@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 from support.policies import random_policy
 from support.scenarios import contingency_scenario, flags_of, write_scenario_csv
+from support.undrawn_pictures import leave_pictures_undrawn
 
 from gcs_planner.cli import main
 from gcs_planner.core.bnb import flown_route
@@ -298,7 +299,7 @@ def test_unreadable_policy_file(tmp_path) -> None:
 # plan --policy
 
 
-def test_plan_policy_writes_every_mission_and_the_file(tmp_path, capsys) -> None:
+def test_plan_policy_writes_every_mission_and_the_file(tmp_path, capsys, monkeypatch) -> None:
     sc, _, _ = _replanned(167)
     csv = write_scenario_csv(sc, tmp_path / "sc.csv")
     out = tmp_path / "out"
@@ -326,8 +327,11 @@ def test_plan_policy_writes_every_mission_and_the_file(tmp_path, capsys) -> None
     assert json.loads((out / "primary.plan").read_text()) == json.loads(
         (out / "mission.plan").read_text()
     )
-    # A second run replaces the folder it wrote (its branch files included).
+    # A second run replaces the folder it wrote (its branch files included); the pictures, drawn
+    # above, are not what it is about.
+    asked = leave_pictures_undrawn(monkeypatch)
     assert main(["plan", str(csv), *flags_of(sc), "--out", str(out), "--policy", *risky]) == 0
+    assert {"tree_png", "policy_front_png", "route_png"} <= set(asked)
 
 
 def test_plan_policy_needs_out(tmp_path, capsys) -> None:
@@ -337,7 +341,7 @@ def test_plan_policy_needs_out(tmp_path, capsys) -> None:
     assert "--policy" in capsys.readouterr().err
 
 
-def test_plan_policy_beyond_brute_force_and_bad_levels(tmp_path, capsys) -> None:
+def test_plan_policy_beyond_brute_force_and_bad_levels(tmp_path, capsys, monkeypatch) -> None:
     """15 correction points (beyond brute force and the exact policy front): the branches are
     planned by the planner and the policy front says it is not proven; a bad --policy-levels
     writes nothing and leaves an earlier folder as it was."""
@@ -348,6 +352,7 @@ def test_plan_policy_beyond_brute_force_and_bad_levels(tmp_path, capsys) -> None
     csv = write_scenario_csv(sc, tmp_path / "big.csv")
     out = tmp_path / "out"
     args = ["plan", str(csv), *flags_of(sc), "--out", str(out), "--policy", "--allow-risky"]
+    leave_pictures_undrawn(monkeypatch)  # the branches and the refusal are the subject here
     assert main([*args, "--policy-levels", "2"]) == 0
     printed = capsys.readouterr().out
     assert "policy front (the non-dominated of the front's routes" in printed
@@ -380,6 +385,7 @@ def test_a_branch_likely_missed_is_exported_only_when_asked(tmp_path, capsys, mo
     sc, _, _ = _replanned(167)
     csv = write_scenario_csv(sc, tmp_path / "sc.csv")
     out = tmp_path / "out"
+    leave_pictures_undrawn(monkeypatch)  # the refusal and the files are the subject here
     missed = "point 8 is likely missed"
     monkeypatch.setattr(
         policy_export, "_capture_warning", lambda s, pts: missed if 8 in pts else None

@@ -13,6 +13,7 @@ import pytest
 from gcs_planner.sim.navigators.params import AutopilotParams
 from gcs_planner.sim.vehicle import MockVehicle, free_udp_port
 from pymavlink.mavparm import MAVParmDict
+from support.undrawn_pictures import leave_pictures_undrawn
 
 from gcs_planner.aircraft.profile import tas_from_eas
 from gcs_planner.cli import main
@@ -28,11 +29,13 @@ EXAMPLE = "missions/example/scenario.toml"
 def coast_plans(tmp_path_factory) -> dict[str, Path]:
     """plan --out of the coast example for each autopilot (ArduPilot: the default)."""
     out = {}
-    for firmware in ("ardupilot", "px4"):
-        folder = tmp_path_factory.mktemp(firmware) / "coast"
-        extra = [] if firmware == "ardupilot" else ["--autopilot", "px4"]
-        assert main(["plan", COAST, "--out", str(folder), "--quiet", *extra]) == 0
-        out[firmware] = folder
+    with pytest.MonkeyPatch.context() as patch:
+        leave_pictures_undrawn(patch)  # the setup and the missions are read, not the pictures
+        for firmware in ("ardupilot", "px4"):
+            folder = tmp_path_factory.mktemp(firmware) / "coast"
+            extra = [] if firmware == "ardupilot" else ["--autopilot", "px4"]
+            assert main(["plan", COAST, "--out", str(folder), "--quiet", *extra]) == 0
+            out[firmware] = folder
     return out
 
 
@@ -192,10 +195,11 @@ def test_arduplane_ignores_and_px4_clamps_a_speed_outside_its_range():
     assert set_up.commanded_airspeed(25.0) == 25.0
 
 
-def test_a_stated_envelope_is_set_up_for_its_design_wind(tmp_path):
+def test_a_stated_envelope_is_set_up_for_its_design_wind(tmp_path, monkeypatch):
     """plan --wind 5 of the coast (angles stated, not derived): the setup climbs at the
     angles over the fastest ground speed, TAS + 5, as a downwind leg flies them."""
     out = tmp_path / "windy"
+    leave_pictures_undrawn(monkeypatch)  # the setup is the subject here
     assert main(["plan", COAST, "--wind", "5", "--out", str(out), "--quiet"]) == 0
     plan = json.loads((out / "plan.json").read_text())
     vg = tas_from_eas(25.0, max(p["z"] for p in plan["points"])) + 5.0

@@ -15,6 +15,7 @@ import pytest
 from gcs_planner.sim.live_flight import passed_within
 from gcs_planner.sim.vehicle import MockVehicle, free_udp_port
 from support.policy_scenario import policy_missions, policy_scenario, write_scenario
+from support.undrawn_pictures import leave_pictures_undrawn
 
 from gcs_planner.cli import main
 from gcs_planner.core.switch_room import DEFAULT_SWITCH_TIME_S, ONBOARD_SWITCH_TIME_S
@@ -96,9 +97,10 @@ def test_an_applet_that_calls_what_the_mock_does_not_provide_stops_and_is_named(
     assert not run.arrived and run.link_failed and "ahrs" in run.why
 
 
-def test_plan_writes_the_onboard_files_and_dry_run_flies_them(tmp_path, capsys) -> None:
+def test_plan_writes_the_onboard_files_and_dry_run_flies_them(tmp_path, capsys, monkeypatch):
     toml = write_scenario(tmp_path, p_success=0.5)
     out = tmp_path / "out"
+    leave_pictures_undrawn(monkeypatch)  # the onboard files and their flight are the subject
     rc = main(["plan", str(toml), "--policy", "--out", str(out), "--min-probability", "0",
                "--allow-risky"])  # fmt: skip
     assert rc == 0

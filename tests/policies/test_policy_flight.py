@@ -6,8 +6,9 @@ cannot be uploaded leaves a whole mission on the vehicle; a silent vehicle is no
 
 The scenario (tests/support/policy_scenario.py) is 8 km of straight legs: the primary is lost
 when the fix at P fails, the branch arrives. The vehicle flies 20 simulated seconds per wall
-second: the ground station's window after the report at P is the 4 km to B, some 6 s of wall
-time.
+second where the ground station may act (after the report at P: the 4 km to B, some 6 s of wall
+time); elsewhere, with nothing for it to do, in the dry run's time warp (CRUISE), as
+`dry-run --policy --cruise-time-scale` flies (sim/live_vehicle.py).
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ import pytest
 from gcs_planner.sim.live_flight import passed_within
 from gcs_planner.sim.vehicle import MockVehicle, free_udp_port
 from support.policy_scenario import policy_missions, policy_scenario, write_scenario
+from support.undrawn_pictures import leave_pictures_undrawn
 
 from gcs_planner.cli import main
 from gcs_planner.link.connection import open_link
@@ -33,6 +35,10 @@ SCALE = 20.0
 # The flights whose verdict hangs on a switch made in time fly slower: the window after the
 # report at P (until the aircraft passes abeam V2, 2 km on) is then 8 s of wall time.
 SWITCH_SCALE = 10.0
+# The time scale while no failed or missed fix awaits the ground station: the take-off and the
+# legs up to P (and, with every fix made, the whole flight) take a fraction of a second of wall
+# time; from a failed fix on, the vehicle flies at the honest scale until the switch has settled.
+CRUISE = 1000.0
 CAPTURE = 5.0
 
 
@@ -78,7 +84,9 @@ def _fly(p_success: float, loss: float = 0.0, scale: float = SCALE):
     vehicle = MockVehicle(
         f"udpin:127.0.0.1:{port}", scenario=scenario, live=True, speedup=scale,
         navigate_on_estimate=False, faults_in=faults, faults_out=faults, fault_seed=5,
+        cruise_speedup=CRUISE,
     )  # fmt: skip
+    vehicle.watch_points = frozenset(s.point for s in policy.switches)
     lines: list[str] = []
     with vehicle:
         link = open_link(f"udpout:127.0.0.1:{port}")
@@ -200,7 +208,9 @@ def test_a_branch_that_cannot_be_uploaded_leaves_a_whole_mission(
     path = policy_file(policy)
     port = free_udp_port()
     vehicle = MockVehicle(f"udpin:127.0.0.1:{port}", scenario=scenario, flavour=firmware,
-                          live=True, speedup=SCALE, navigate_on_estimate=False)  # fmt: skip
+                          live=True, speedup=SCALE, navigate_on_estimate=False,
+                          cruise_speedup=CRUISE)  # fmt: skip
+    vehicle.watch_points = frozenset(s.point for s in policy.switches)
     with vehicle:
         rc = main(["fly", path, "--connect", f"udpout:127.0.0.1:{port}", "--start",
                    "--transfer", "mission", "--timeout", "0.5", "--quiet"])  # fmt: skip
@@ -301,7 +311,7 @@ def test_dry_run_refuses_a_policy_not_for_its_scenario(policy_file, tmp_path, ca
     assert rc == 2 and err.count("\n") == 1 and said in err and "switches[0]" in err
 
 
-def test_plan_policy_then_dry_run_it_end_to_end(tmp_path, capsys):
+def test_plan_policy_then_dry_run_it_end_to_end(tmp_path, capsys, monkeypatch):
     """The exporter's policy.json read by the dry run (no stand-in): planned where P's fix
     takes half the time (the shortest route passes P and is replanned on failure to V3), then
     flown twice where every fix fails, through the mid-flight switch at 5 % loss."""
@@ -310,13 +320,14 @@ def test_plan_policy_then_dry_run_it_end_to_end(tmp_path, capsys):
     planned = write_scenario(tmp_path / "plan", p_success=0.5)
     flown = write_scenario(tmp_path / "fly", p_success=0.0)
     out = tmp_path / "out"
+    leave_pictures_undrawn(monkeypatch)  # policy.json and its flight are the subject here
     rc = main(["plan", str(planned), "--choose", "shortest", "--min-probability", "0",
                "--out", str(out), "--policy"])  # fmt: skip
     assert rc == 0
     assert "switch: primary item" in capsys.readouterr().out
     rc = main(["dry-run", str(flown), "--policy", str(out / "policy.json"), "--runs", "2",
-               "--loss", "0.05", "--time-scale", str(SWITCH_SCALE), "--navigate-on-truth",
-               "--json"])  # fmt: skip
+               "--loss", "0.05", "--time-scale", str(SWITCH_SCALE), "--cruise-time-scale",
+               str(CRUISE), "--navigate-on-truth", "--json"])  # fmt: skip
     d = json.loads(capsys.readouterr().out)
     assert rc == 0 and d["successes"] == 2, d
     assert d["probability"] == 1.0
