@@ -54,50 +54,6 @@ def pytest_configure(config: pytest.Config) -> None:
     config.add_cleanup(lambda: shutil.rmtree(folder, ignore_errors=True))
 
 
-# Tests that keep a test process busy for many seconds of wall time (radios and lossy links
-# waited out, clusters of processes started, the benchmark's quick run, the largest enumerations).
-# With `-n` they go first: xdist hands out the first quarter of the tests one by one to each
-# process in turn and the rest as processes free up, so started first they are spread over the
-# processes and the short tests fill the gaps; met last, one of them would be the run's tail
-# while the other processes sit idle. Only the order changes: a test missing here runs all the
-# same, later.
-LONG_FIRST = (
-    "tests/baselines/test_benchmarks.py::test_quick_mode",
-    "tests/sweep/test_sweep_cluster.py::test_terminal_ctrl_c",
-    "tests/sweep/test_sweep_benchmark.py::",
-    "tests/docs/test_documented_commands.py::test_documented_command[docs/sweeps.md",
-    "tests/link/test_radio.py::",
-    "tests/sim/test_mock_px4.py::test_100_items",
-    "tests/core/test_proof_pair_runs.py::test_fronts",
-    "tests/link/test_link_client.py::test_a_30_item_mission_at_30_percent_loss",
-    "tests/policies/test_policy_flight_defects.py::",
-    "tests/mission/test_edges_files.py::test_a_file_size_limit",
-    "tests/core/test_cost_to_go_kernel.py::test_compiled_layers",
-    "tests/sweep/test_sweep_cluster.py::test_a_worker_with_another",
-    "tests/sweep/test_sweep_cluster.py::test_cli_on_a_separately_started",
-    "tests/sweep/test_sweep_cluster.py::test_min_workers_waits",
-    "tests/link/test_ftp_backoff.py::",
-    "tests/link/test_ftp.py::test_a_5_s_fade",
-    "tests/link/test_ftp.py::test_upload_by_ftp_over_a_radio",
-    "tests/core/test_default_budget.py::test_a_corridor",
-    "tests/core/test_probes.py::test_fronts_with_probes",
-    "tests/core/test_search_kernel.py::test_compiled_searches",
-    "tests/sim/test_flight_kernel.py::",
-    "tests/runtime/test_first_run.py::",
-    "tests/policies/test_policy_flight.py::",
-)
-
-
-def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
-    """With test processes (``-n``), the tests of ``LONG_FIRST`` first, in their own order (in
-    xdist's workers, whose collection it schedules, and in its controller alike)."""
-    if not (hasattr(config, "workerinput") or getattr(config.option, "numprocesses", None)):
-        return
-    first = [item for item in items if item.nodeid.startswith(LONG_FIRST)]
-    rest = [item for item in items if not item.nodeid.startswith(LONG_FIRST)]
-    items[:] = first + rest
-
-
 @pytest.hookimpl(tryfirst=True)
 def pytest_sessionstart(session: pytest.Session) -> None:
     """With test processes (``-n``), compile numba's kernels once before they start.
