@@ -12,6 +12,7 @@ import jsbsim  # noqa: F401
 import pytest
 from gcs_planner.sim import atmosphere  # noqa: E402
 from gcs_planner.sim.jsbsim_trim import FT, _new_fdm, available_aircraft, trim  # noqa: E402
+from support.coast_copy import coast_copy
 from support.paths import MISSIONS
 
 from gcs_planner.aircraft.airframe_trim import (  # noqa: E402
@@ -130,18 +131,7 @@ def test_the_envelope_figures_come_from_the_airframe_s_trims():
 def _unstated(tmp_path, lift: float = 0.0, scale: float = 1.0, keep_vehicle: bool = False):
     """missions/coast without its stated envelope ([vehicle]; with it, ``keep_vehicle``), its
     altitudes scaled by ``scale`` and lifted by ``lift`` m: the plan derives an envelope."""
-    text = (COAST / "scenario.toml").read_text()
-    (tmp_path / "scenario.toml").write_text(
-        text if keep_vehicle else text[: text.index("[vehicle]")]
-    )
-    lines = (COAST / "landmarks.csv").read_text().splitlines()
-    out = [lines[0]]
-    for line in lines[1:]:
-        f = line.split(",")
-        f[3] = f"{float(f[3]) * scale + lift:.2f}"
-        out.append(",".join(f))
-    (tmp_path / "landmarks.csv").write_text("\n".join(out) + "\n")
-    return tmp_path / "scenario.toml"
+    return coast_copy(tmp_path, scale=scale, lift=lift, keep_vehicle=keep_vehicle)
 
 
 def _planned(capsys, path, *flags):

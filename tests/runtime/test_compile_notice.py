@@ -3,6 +3,7 @@ a kernel is not cached, one line, and the check itself loads no numba."""
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import os
 import pickle
@@ -55,19 +56,11 @@ def run_on_terminal(args: list[str], env: dict[str, str]) -> tuple[int, str, str
 
 
 def _kernel_folders() -> list[Path]:
-    """The folders of the kernels' sources as `gcs-planner` imports them: asked of the
-    interpreter outside the checkout, where the working folder on sys.path cannot shadow an
-    installed (non-editable, CI's) package; numba caches each file's kernels by its path."""
-    code = "import importlib.util as u; print(*(u.find_spec(m).origin for m in %r), sep='\\n')"
-    modules = sorted({module for module, _ in compile_notice.KERNELS})
-    asked = subprocess.run(
-        [sys.executable, "-c", code % modules],
-        cwd=Path(sys.executable).parent,
-        capture_output=True,
-        text=True,
-        check=True,
-    )
-    return sorted({Path(line).parent for line in asked.stdout.split()})
+    """The folders of the kernels' sources as `gcs-planner` imports them (numba caches each
+    file's kernels by its path): the tests import the same copy of the package as the command
+    does, the installed one where it is a copy (tests/conftest.py)."""
+    modules = {module for module, _ in compile_notice.KERNELS}
+    return sorted({Path(importlib.util.find_spec(m).origin).parent for m in modules})
 
 
 def _copy_cache_but(stem: str, cache: Path) -> None:

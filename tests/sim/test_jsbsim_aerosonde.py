@@ -12,6 +12,7 @@ import pytest
 from gcs_planner.sim import guidance  # noqa: E402
 from gcs_planner.sim.jsbsim_airframe import FlightModel, LegNeed  # noqa: E402
 from gcs_planner.sim.navigators.base import NavCommand  # noqa: E402
+from support.coast_copy import coast_copy
 from support.paths import MISSIONS
 
 from gcs_planner.aircraft.airframe_trim import airframe_trims  # noqa: E402
@@ -25,15 +26,7 @@ COAST = MISSIONS / "coast" / "scenario.toml"
 
 def _low_coast(tmp_path):
     """missions/coast at a quarter of its altitudes (51-842 m), its [vehicle] as stated."""
-    (tmp_path / "scenario.toml").write_text(COAST.read_text())
-    lines = (COAST.parent / "landmarks.csv").read_text().splitlines()
-    out = [lines[0]]
-    for line in lines[1:]:
-        f = line.split(",")
-        f[3] = f"{float(f[3]) * 0.25:.2f}"
-        out.append(",".join(f))
-    (tmp_path / "landmarks.csv").write_text("\n".join(out) + "\n")
-    return tmp_path / "scenario.toml"
+    return coast_copy(tmp_path, scale=0.25)
 
 
 def test_the_aerosonde_flies_the_coastal_mission_planned_within_its_climb(tmp_path, capsys):
