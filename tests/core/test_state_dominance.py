@@ -8,34 +8,10 @@ from __future__ import annotations
 
 import random
 
-import numpy as np
 import pytest
-from scipy.optimize import linprog
+from support.transport import movable
 
 from gcs_planner.core.bnb.dominance import _stochastically_dominates
-
-
-def _movable(d1: dict, d2: dict) -> float:
-    """The most of d2's mass that can be moved onto d1's states lying below it."""
-    s1, s2 = list(d1.items()), list(d2.items())
-    pairs = [
-        (i, j)
-        for i, ((v2, h2), _) in enumerate(s2)
-        for j, ((v1, h1), _) in enumerate(s1)
-        if v1 <= v2 and h1 <= h2
-    ]
-    if not pairs:
-        return 0.0
-    rows, caps = [], []
-    for i, (_, m2) in enumerate(s2):  # each state of d2 gives at most its mass
-        rows.append([1.0 if a == i else 0.0 for a, _ in pairs])
-        caps.append(m2)
-    for j, (_, m1) in enumerate(s1):  # each state of d1 takes at most its mass
-        rows.append([1.0 if b == j else 0.0 for _, b in pairs])
-        caps.append(m1)
-    res = linprog(-np.ones(len(pairs)), A_ub=rows, b_ub=caps, bounds=(0, None), method="highs")
-    assert res.status == 0
-    return -float(res.fun)
 
 
 def _distribution(rng: random.Random, size: int, grid: int, total: float) -> dict:
@@ -68,7 +44,7 @@ def test_dominance_between_distributions_equals_the_transport_lp(seed: int) -> N
         d2 = _distribution(rng, rng.randint(1, 12), grid, 1.0)
         if rng.random() < 0.6:
             d2 = _worsened(rng, d1, grid)
-        shortfall = sum(d2.values()) - _movable(d1, d2)
+        shortfall = sum(d2.values()) - movable(d1, d2)
         if 1e-9 < shortfall < 1e-6:
             continue  # near the tolerance the LP's own rounding decides
         expected = shortfall <= 1e-9
