@@ -4,21 +4,31 @@ geometry, and the search under them against enumeration of every simple route.""
 from __future__ import annotations
 
 import math
+import sys
 
 import numpy as np
 import pytest
+from support import enumeration
 from support.enumeration import (
     all_routes,
     assert_front_equals_enumeration,
     enumerate_front,
     pareto,
 )
+from support.flown_route_memo import remember_flown_routes
 from support.scenarios import climbing_scenario
 
 from gcs_planner.core.bnb import flown_route
 from gcs_planner.core.planner import plan
 from gcs_planner.geometry.airplane import airplane_leg, airplane_legs, lower_bounds
 from gcs_planner.geometry.trajectory import scenario_trajectory
+
+
+@pytest.fixture(scope="module", autouse=True)
+def routes_flown_once():
+    """The enumerations below fly every route of the same seeded scenarios (60 of at most 4
+    correction points) in four tests: each route is flown once for the module."""
+    yield from remember_flown_routes(enumeration, sys.modules[__name__])
 
 
 def fly(leg, step: float = 0.25) -> dict:

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import io
 import itertools
+from collections.abc import Iterator
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -39,6 +40,16 @@ def dataset2_plan(dataset_paths) -> dict:
     """Dataset 2 (327 points) planned as the users who reported overprinted labels did."""
     scenario = load_scenario(dataset_paths[2], {**DS2, "turn_radius": 0.0})
     return plan_json.plan_to_dict(plan_scenario(scenario))
+
+
+@pytest.fixture(scope="module")
+def dataset2_figures(dataset2_plan) -> Iterator[dict]:
+    """Dataset 2's route and error budget figures, drawn once for the module: the tests below
+    measure several properties of the same drawing (none of them draws on it)."""
+    figures = {draw: draw(dataset2_plan) for draw in (route_figure, error_budget_figure)}
+    yield figures
+    for fig in figures.values():
+        plt.close(fig)
 
 
 def crowded_scenario(n_route: int = 40, n_other: int = 200, seed: int = 3) -> Scenario:
@@ -116,8 +127,8 @@ def close_figures():
 
 
 @pytest.mark.parametrize("draw", [route_figure, error_budget_figure, front_figure])
-def test_no_label_overprints_another_on_dataset2(dataset2_plan, draw):
-    fig = draw(dataset2_plan)
+def test_no_label_overprints_another_on_dataset2(dataset2_plan, dataset2_figures, draw):
+    fig = dataset2_figures[draw] if draw in dataset2_figures else draw(dataset2_plan)
     n = assert_no_overprint(fig)
     route = dataset2_plan["front"][dataset2_plan["chosen"]]["route"]
     if draw is not front_figure:  # every id of the route is shown in these views
@@ -137,8 +148,8 @@ def test_no_label_overprints_another_on_a_crowded_route(draw):
         assert "no room" in titles
 
 
-def test_labels_stay_inside_their_axes(dataset2_plan):
-    fig = route_figure(dataset2_plan)
+def test_labels_stay_inside_their_axes(dataset2_figures):
+    fig = dataset2_figures[route_figure]
     fig.canvas.draw()
     renderer = fig.canvas.get_renderer()
     for ax in fig.axes:
@@ -149,9 +160,9 @@ def test_labels_stay_inside_their_axes(dataset2_plan):
             assert frame.y0 <= box.y0 and box.y1 <= frame.y1
 
 
-def test_route_labels_are_drawn_at_the_saved_positions(dataset2_plan):
+def test_route_labels_are_drawn_at_the_saved_positions(dataset2_figures):
     """The layout is fixed before the labels are placed: saving moves nothing."""
-    fig = route_figure(dataset2_plan)
+    fig = dataset2_figures[route_figure]
     before = label_boxes(fig)
     fig.savefig(io.BytesIO(), format="png", dpi=DPI)
     after = label_boxes(fig)
@@ -191,8 +202,10 @@ def assert_cropped(ax, xs, ys, margin: float = 0.1):
     assert ys.min() - y0 <= margin * span and y1 - ys.max() <= margin * span
 
 
-def test_route_plan_view_is_cropped_to_the_points_with_equal_scales(dataset2_plan):
-    fig = route_figure(dataset2_plan)
+def test_route_plan_view_is_cropped_to_the_points_with_equal_scales(
+    dataset2_plan, dataset2_figures
+):
+    fig = dataset2_figures[route_figure]
     ax = axes_titled(fig, "plan view")
     xyz = np.array([[p["x"], p["y"]] for p in dataset2_plan["points"]]) / 1000
     track = trajectory_local(dataset2_plan) / 1000
@@ -204,8 +217,8 @@ def test_route_plan_view_is_cropped_to_the_points_with_equal_scales(dataset2_pla
     assert box.width == pytest.approx(box.height, rel=0.02)
 
 
-def test_error_budget_plan_view_is_cropped_to_the_route(dataset2_plan):
-    fig = error_budget_figure(dataset2_plan)
+def test_error_budget_plan_view_is_cropped_to_the_route(dataset2_plan, dataset2_figures):
+    fig = dataset2_figures[error_budget_figure]
     ax = axes_titled(fig, "plan view")
     track = trajectory_local(dataset2_plan) / 1000
     assert_cropped(ax, track[:, 0], track[:, 1], 0.06)
@@ -236,9 +249,9 @@ def test_flat_map_is_stretched_and_says_so():
 # --- no 3D view where it cannot be read ----------------------------------------------------
 
 
-def test_3d_view_only_for_small_scenarios(dataset2_plan):
+def test_3d_view_only_for_small_scenarios(dataset2_figures):
     assert any(ax.name == "3d" for ax in route_figure(make_plan()).axes)
-    assert any(ax.name == "3d" for ax in route_figure(dataset2_plan).axes)
+    assert any(ax.name == "3d" for ax in dataset2_figures[route_figure].axes)
 
     # One point over the limit (its correction points, A and B): the smallest cloud without
     # a 3D view, which a limit off by one would still draw in 3D.
