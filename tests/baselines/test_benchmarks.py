@@ -8,6 +8,7 @@ the sparse ones where only walks that revisit a point are feasible.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -131,6 +132,19 @@ def test_quick_mode_writes_results_and_plot(tmp_path: Path, dataset_paths, monke
         return "## 8. Start-up: run by the documentation's test"
 
     monkeypatch.setattr(benchmarks_run, "startup_section", start_up)
+    # `--quick` as users run it, its cases cut to the smallest that still run every section:
+    # one scaling size (120: the smaller has no route; each method timed, compared, drawn),
+    # one NSGA-II seed, two sweep cells (still two rounds and the separate cluster), a short
+    # corridor. Each measurement is a fresh process, which is most of what this test costs.
+    parse = benchmarks_run.parse
+
+    def smallest(argv):
+        cfg, profile_only, startup_only = parse(argv)
+        assert cfg.sizes == [60, 120] and cfg.nsga_seeds == 2 and cfg.sweep_scenarios == 4
+        small = replace(cfg, sizes=[120], nsga_seeds=1, sweep_scenarios=2, corridor_sizes=(200,))
+        return small, profile_only, startup_only
+
+    monkeypatch.setattr(benchmarks_run, "parse", smallest)
     main(["--quick", "--out", str(tmp_path)])
     assert calls == [(1, False)]
     text = (tmp_path / "RESULTS.md").read_text(encoding="utf-8")

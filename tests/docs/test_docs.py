@@ -11,6 +11,7 @@ from pathlib import Path
 
 import pytest
 from support.paths import REPO
+from support.shared_commands import run_once
 from support.undrawn_pictures import leave_pictures_undrawn
 
 from gcs_planner.cli import main
@@ -56,14 +57,20 @@ def test_readme_python_example_runs(tmp_path, monkeypatch):
     assert result.route.probability >= 0.99 and result.threshold_met
 
 
-def test_readme_first_command_plans_the_example_as_installed(tmp_path):
+def test_readme_first_command_plans_the_example_as_installed(tmp_path, monkeypatch):
     (setup,) = [b for b in blocks(REPO / "README.md", "sh") if "pip install . &&" in b]
-    command = setup.strip().split(" && ")[-1].split()
+    text = setup.strip().split(" && ")[-1]
+    command = text.split()
     assert command[:2] == ["gcs-planner", "plan"]
     (tmp_path / "missions").symlink_to(REPO / "missions")
-    done = run_script(*command[1:], cwd=tmp_path)
+    written = command[command.index("--out") + 1]
+    assert written.startswith("out/")
+    # The installed script, run once in this test run: test_documented_commands.py's
+    # README.md:13 runs the same command and shares its plan (tests/support/shared_commands.py).
+    run = lambda: run_script(*command[1:], cwd=tmp_path)  # noqa: E731
+    done = run_once(text, tmp_path, {written.removeprefix("out/")}, run)
     assert done.returncode == 0, done.stderr
-    out = tmp_path / command[command.index("--out") + 1]
+    out = tmp_path / written
     names = {p.name for p in out.iterdir()}
     assert {"mission.plan", "plan.json", "error_budget.png", "front.png", "route.png"} <= names
     plan = json.loads((out / "plan.json").read_text())
@@ -76,8 +83,9 @@ def test_readme_first_command_plans_the_example_as_installed(tmp_path):
     # README's export line reads that plan.json.
     (using,) = [b for b in blocks(REPO / "README.md", "sh") if "gcs-planner export" in b]
     (export,) = [line for line in using.splitlines() if line.startswith("gcs-planner export")]
-    done = run_script(*export.split()[1:], cwd=tmp_path)
-    assert done.returncode == 0, done.stderr
+    # In this process: README.md:106 of test_documented_commands.py runs it as installed.
+    monkeypatch.chdir(tmp_path)
+    assert main(export.split()[1:]) == 0
     assert (tmp_path / "mission.waypoints").read_text().startswith("QGC WPL 110")
 
 

@@ -8,7 +8,10 @@ repository. A command exits 0 unless its line ends in a comment `# exit N`. A bl
 a background job (`... &`, a mock vehicle or a Dask cluster) runs as one bash script, each
 command checked in turn. A command that reads `out/X` first runs the documented command that
 writes it (README's first command writes `out/coast`), so each test stands alone and any order
-works, on any xdist worker. Ids are `file:line`, so a failure names the documentation's line.
+works, on any xdist worker. Each command (or block) runs once in a test run, in the first test
+process that needs it; the others take its exit code, output and `out/...` folders
+(tests/support/shared_commands.py). Ids are `file:line`, so a failure names the documentation's
+line.
 
 What is not run as written is said here, each with its reason:
 
@@ -45,6 +48,7 @@ from pathlib import Path
 
 import pytest
 from support.paths import REPO, SHARED, TESTS
+from support.shared_commands import run_once
 
 DOCS = [REPO / "README.md", *sorted((REPO / "docs").glob("*.md")), REPO / "missions" / "README.md"]
 RUNS = int(os.environ.setdefault("GCS_PLANNER_DOCS_RUNS", "5"))
@@ -217,7 +221,9 @@ class Workspace:
     def run(self, command: Command) -> subprocess.CompletedProcess:
         """Run `command` once in this workspace, after the commands that write what it reads."""
         command = runnable(command)
-        key = command.id if command.script else strip_comment(command.text)
+        # A block by its text, a command by its text as run: each runs once in the whole run
+        # (tests/support/shared_commands.py), whichever test process needs it first.
+        key = command.text if command.script else strip_comment(command.text)
         if key in self.done:
             return self.done[key]
         for root in sorted(command.reads()):
@@ -227,8 +233,12 @@ class Workspace:
                 f"{command.id} reads out/{root}, written by {producer.id}, which failed:\n"
                 + report(producer, done)
             )
+        self.done[key] = run_once(key, self.repo, command.writes(), lambda: self.bash(command))
+        return self.done[key]
+
+    def bash(self, command: Command) -> subprocess.CompletedProcess:
         script = as_script(command) if command.script else rewrite(command.text, free_ports())
-        self.done[key] = subprocess.run(
+        return subprocess.run(
             ["bash", "-c", script],
             cwd=self.repo,
             env=self.env(),
@@ -236,7 +246,6 @@ class Workspace:
             text=True,
             timeout=TIMEOUT_S,
         )
-        return self.done[key]
 
 
 def runnable(command: Command) -> Command:
