@@ -1,7 +1,17 @@
-"""The sweep on a real dask.distributed cluster (worker processes on 127.0.0.1, no mocks): the
-same rows as planning each cell alone, a failing cell recorded while the rest finish, --resume
-running no finished cell twice, a killed worker's cells run again with nothing lost, and the
-command line on its own local cluster and on a separately started scheduler.
+"""The sweep on a real dask.distributed cluster (on 127.0.0.1, no mocks): the same rows as
+planning each cell alone, a failing cell recorded while the rest finish, --resume running no
+finished cell twice, a killed worker's cells run again with nothing lost, and the command line
+on its own local cluster and on a separately started scheduler.
+
+Where the subject is the sweep's own logic (rows, resume, failures, task sizes, progress) the
+cluster is one of worker threads in this process, shared by the module: what the sweep does
+with its results does not depend on where its workers run, and a worker process costs seconds
+of CPU to start. Separate processes are started where they are the subject: a worker killed, a
+worker of another version, Ctrl-C on the terminal's process group, the sweep's own forked
+workers, and a scheduler and workers started with the `dask` command; one worker where two
+are not the subject. A command line's bad input is checked in this process (``main``), its
+exit code and one line the same as a subprocess's; Dask's own failures (no workers, a
+scheduler out of reach) are checked in a real subprocess, whose whole stderr is one line.
 
 No timing is asserted; every wait is for an event, with a generous deadline.
 """
@@ -14,8 +24,10 @@ import signal
 import socket
 import subprocess
 import sys
+import threading
 import time
 from collections import Counter
+from collections.abc import Callable
 from pathlib import Path
 
 import cloudpickle
@@ -23,12 +35,15 @@ import pytest
 from distributed import LocalCluster
 from support import sweep_tasks
 from support.paths import MISSIONS, TESTS
+from support.said import Said
 
+from gcs_planner.cli import main
 from gcs_planner.core.planner import plan
 from gcs_planner.errors import InputError
 from gcs_planner.scenario.generate import DATASET1, random_scenario
 from gcs_planner.scenario.readers import load_scenario
 from gcs_planner.sweep import expand, read_results, read_spec, run_sweep, runner
+from gcs_planner.sweep.runner import SweepResult
 from gcs_planner.sweep.table import PARQUET, ResultTable
 
 cloudpickle.register_pickle_by_value(sweep_tasks)
@@ -39,16 +54,31 @@ DEADLINE_S = 300.0
 SMALL_BOX = "[40000, 20000, 2000]"
 
 
-@pytest.fixture(scope="module")
-def cluster():
-    with LocalCluster(
-        n_workers=2,
+def threaded_cluster(workers: int) -> LocalCluster:
+    """A scheduler and ``workers`` workers of one thread each, all in this process."""
+    return LocalCluster(
+        n_workers=workers,
         threads_per_worker=1,
-        processes=True,
+        processes=False,
+        protocol="tcp",  # other processes reach it too: a command, a `dask worker`
         host="127.0.0.1",
         dashboard_address="127.0.0.1:0",
-    ) as c:
+    )
+
+
+@pytest.fixture(scope="module")
+def cluster():
+    """Two worker threads in this process, for the tests of the sweep's own logic."""
+    with threaded_cluster(2) as c:
         yield c
+
+
+@pytest.fixture(scope="module")
+def empty_scheduler():
+    """A scheduler in this process that never has a worker, reached by a command's subprocess
+    over 127.0.0.1 as any other."""
+    with threaded_cluster(0) as c:
+        yield c.scheduler_address
 
 
 def write_spec(tmp_path: Path, text: str, name: str = "spec.toml") -> Path:
@@ -211,11 +241,13 @@ def test_resume_runs_no_finished_cell_twice(tmp_path: Path, cluster) -> None:
     assert logged_keys(log) == ran
 
 
-def test_a_killed_worker_s_cells_are_run_again_and_nothing_is_lost(tmp_path: Path, cluster) -> None:
+def test_a_killed_worker_s_cells_are_run_again_and_nothing_is_lost(tmp_path: Path) -> None:
+    # Worker processes, one to kill: the sweep's own local cluster (forked workers, whose
+    # nanny starts a new one), not the module's threads.
     log, marker = tmp_path / "ran.log", tmp_path / "killed"
     task = functools.partial(sweep_tasks.killing_once, victim=2, marker=str(marker), log=str(log))
     spec_path = small_spec(tmp_path, seeds=4)
-    result = run_sweep(spec_path, tmp_path / "out", scheduler=cluster.scheduler_address, task=task)
+    result = run_sweep(spec_path, tmp_path / "out", task=task)
     assert marker.exists()  # the victim did kill its worker
     killed_pid = int(marker.read_text())
     assert (result.ran, result.failed) == (10, 0)
@@ -310,7 +342,7 @@ def saved_cells(out: Path) -> int:
 
 
 def test_terminal_ctrl_c_stops_saves_and_resume_gives_the_uninterrupted_table(
-    tmp_path: Path, cluster
+    tmp_path: Path, cluster, capsys: pytest.CaptureFixture
 ) -> None:
     # A terminal's Ctrl-C reaches the whole process group: the command and its local cluster's
     # worker processes. 40 cells of 400 points (some 0.2 s each): work left after the first
@@ -340,15 +372,16 @@ def test_terminal_ctrl_c_stops_saves_and_resume_gives_the_uninterrupted_table(
     assert f"interrupted, {len(done_first)} cells saved, resume with --resume" in err
     assert "Traceback" not in err and "KeyboardInterrupt" not in err, err
 
-    again = subprocess.run(
-        cli(str(spec_path), "--out", str(out), "--resume"),
-        capture_output=True,
-        text=True,
-        timeout=DEADLINE_S,
-    )
-    assert again.returncode == 0, again.stderr
-    assert f"{len(done_first)} already done" in again.stdout
-    assert f"{cells - len(done_first)} cells run" in again.stdout
+    # The resume is the command again, in this process: the table it completes is the subject,
+    # not where its cells run (the module's cluster).
+    code = main(
+        ["sweep", str(spec_path), "--out", str(out), "--resume",
+         "--scheduler", cluster.scheduler_address]
+    )  # fmt: skip
+    again = capsys.readouterr()
+    assert code == 0, again.err
+    assert f"{len(done_first)} already done" in again.out
+    assert f"{cells - len(done_first)} cells run" in again.out
     rows = read_results(out)
     keys = by_cell(rows)
     assert len(keys) == cells and all(r["status"] == "ok" for r in rows)
@@ -363,40 +396,18 @@ def test_terminal_ctrl_c_stops_saves_and_resume_gives_the_uninterrupted_table(
     assert comparable(rows) == comparable(read_results(whole))
 
 
-def start_scheduler(tmp_path: Path) -> tuple[subprocess.Popen, str]:
-    """A `dask scheduler` on 127.0.0.1 started as a user would, and its address."""
-    import json
-
-    scheduler_file = tmp_path / "scheduler.json"
-    proc = subprocess.Popen(
-        [str(BIN / "dask"), "scheduler", "--host", "127.0.0.1", "--port", "0",
-         "--no-dashboard", "--scheduler-file", str(scheduler_file)],
-        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=with_test_tasks(),
+def test_a_scheduler_without_workers_stops_the_sweep_with_a_message(
+    tmp_path: Path, empty_scheduler: str
+) -> None:
+    # The address as a cluster's job script exports it, for Dask and for the sweep.
+    done = subprocess.run(
+        cli(str(small_spec(tmp_path)), "--out", str(tmp_path / "out"),
+            "--no-workers-timeout", "3"),
+        capture_output=True,
+        text=True,
+        timeout=DEADLINE_S,
+        env={**os.environ, "DASK_SCHEDULER_ADDRESS": empty_scheduler},
     )  # fmt: skip
-    try:
-        wait_for(scheduler_file.exists, "the scheduler file", proc)
-        wait_for(lambda: "address" in scheduler_file.read_text(), "the scheduler's address")
-        return proc, json.loads(scheduler_file.read_text())["address"]
-    except BaseException:
-        proc.kill()
-        raise
-
-
-def test_a_scheduler_without_workers_stops_the_sweep_with_a_message(tmp_path: Path) -> None:
-    scheduler, address = start_scheduler(tmp_path)
-    try:
-        # The address as a cluster's job script exports it, for Dask and for the sweep.
-        done = subprocess.run(
-            cli(str(small_spec(tmp_path)), "--out", str(tmp_path / "out"),
-                "--no-workers-timeout", "3"),
-            capture_output=True,
-            text=True,
-            timeout=DEADLINE_S,
-            env={**os.environ, "DASK_SCHEDULER_ADDRESS": address},
-        )  # fmt: skip
-    finally:
-        scheduler.terminate()
-        scheduler.wait(timeout=60)
     assert done.returncode == 4, done.stderr
     assert done.stderr.count("\n") == 1, done.stderr
     assert "no Dask worker for 3 s" in done.stderr
@@ -421,7 +432,7 @@ def test_cli_on_a_separately_started_scheduler_and_workers(tmp_path: Path) -> No
         assert address.startswith("tcp://127.0.0.1:")
         procs.append(
             subprocess.Popen(
-                [str(BIN / "dask"), "worker", address, "--nworkers", "2", "--nthreads", "1",
+                [str(BIN / "dask"), "worker", address, "--nworkers", "1", "--nthreads", "1",
                  "--host", "127.0.0.1", "--no-dashboard"],
                 stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
             )
@@ -463,18 +474,22 @@ def test_cli_on_a_separately_started_scheduler_and_workers(tmp_path: Path) -> No
         ('{"address": ""}', "field 'address': names no scheduler address"),
     ],
 )
-def test_cli_bad_scheduler_file_names_the_file(tmp_path: Path, content, says) -> None:
+def test_cli_bad_scheduler_file_names_the_file(
+    tmp_path: Path, content, says, capsys: pytest.CaptureFixture
+) -> None:
+    # Read before Dask is asked anything: the command in this process says what a subprocess
+    # of it would (exit code, the one line).
     path = tmp_path / "scheduler.json"
     if content is not None:
         path.write_text(content)
-    done = subprocess.run(
-        cli(str(small_spec(tmp_path)), "--out", str(tmp_path / "out"),
-            "--scheduler-file", str(path)),
-        capture_output=True, text=True, timeout=DEADLINE_S,
+    code = main(
+        ["sweep", str(small_spec(tmp_path)), "--out", str(tmp_path / "out"),
+         "--scheduler-file", str(path)]
     )  # fmt: skip
-    assert done.returncode == 2, done.stderr
-    assert done.stderr.count("\n") == 1 and f"{path}" in done.stderr and says in done.stderr
-    assert not (tmp_path / "out").exists()
+    done = capsys.readouterr()
+    assert code == 2, done.err
+    assert done.err.count("\n") == 1 and f"{path}" in done.err and says in done.err
+    assert done.out == "" and not (tmp_path / "out").exists()
 
 
 def test_cli_unreachable_scheduler_from_the_environment_says_where_it_came_from(
@@ -543,7 +558,10 @@ def test_resume_refuses_a_changed_spec_unless_pruned_and_renumbers(tmp_path: Pat
     assert (again.skipped, again.ran) == (4, 0)
 
 
-def test_cli_changed_spec_on_resume_is_one_line(tmp_path: Path) -> None:
+def test_cli_changed_spec_on_resume_is_one_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture
+) -> None:
+    # Refused before any cluster is started: the command in this process (exit code, one line).
     out = tmp_path / "out"
     spec_path = small_spec(tmp_path, seeds=1)
     cells = expand(read_spec(spec_path))
@@ -555,15 +573,11 @@ def test_cli_changed_spec_on_resume_is_one_line(tmp_path: Path) -> None:
     table.add(sweep_tasks.run_cell(cells[0]))
     table.save()
     small_spec(tmp_path, seeds=2)
-    done = subprocess.run(
-        cli(str(spec_path), "--out", str(out), "--resume"),
-        capture_output=True,
-        text=True,
-        timeout=DEADLINE_S,
-    )
-    assert done.returncode == 2, done.stderr
-    assert done.stderr.count("\n") == 1 and str(spec_path) in done.stderr
-    assert "0 cells no longer in it, 2 new" in done.stderr and "seeds" in done.stderr
+    code = main(["sweep", str(spec_path), "--out", str(out), "--resume"])
+    done = capsys.readouterr()
+    assert code == 2, done.err
+    assert done.err.count("\n") == 1 and str(spec_path) in done.err
+    assert "0 cells no longer in it, 2 new" in done.err and "seeds" in done.err
 
 
 def test_retry_failed_runs_the_failed_cells_again(tmp_path: Path, cluster) -> None:
@@ -613,42 +627,58 @@ def stop(*procs: subprocess.Popen) -> None:
             p.wait()
 
 
+def run_in_thread(sweep: Callable[[], SweepResult]) -> tuple[threading.Thread, dict]:
+    """``sweep`` started in a thread; its result (or what it raised) lands in the dict."""
+    outcome: dict = {}
+
+    def run() -> None:
+        try:
+            outcome["result"] = sweep()
+        except BaseException as exc:  # handed to the test's thread
+            outcome["error"] = exc
+
+    thread = threading.Thread(target=run)
+    thread.start()
+    return thread, outcome
+
+
 def test_min_workers_waits_for_workers_that_join_later(tmp_path: Path) -> None:
-    scheduler, address = start_scheduler(tmp_path)
-    procs = [scheduler]
-    try:
-        sweep = subprocess.Popen(
-            cli(str(small_spec(tmp_path)), "--out", str(tmp_path / "out"),
-                "--scheduler-file", str(tmp_path / "scheduler.json"),
-                "--min-workers", "2", "--min-workers-timeout", str(DEADLINE_S)),
-            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-        )  # fmt: skip
-        procs.insert(0, sweep)
-        seen = []
-        while not any("waiting for 2 Dask workers (0 so far" in line for line in seen):
-            line = sweep.stdout.readline()
-            assert line, f"the sweep ended before it said it waits: {seen} {sweep.stderr.read()}"
-            seen.append(line)
-        assert not (tmp_path / "out" / PARQUET).exists()  # nothing ran without workers
-        procs.insert(1, start_workers(address, 2))
-        out, err = sweep.communicate(timeout=DEADLINE_S)
-        assert sweep.returncode == 0, err
-        assert "2 Dask workers joined" in out and "8 cells run (0 failed" in out
-        assert len(by_cell(read_results(tmp_path / "out"))) == 8
-    finally:
-        stop(*procs)
+    # A scheduler with no worker, and the two asked for added once the sweep says it waits
+    # (threads of this process: the wait is the subject, not what the workers are).
+    said = Said("waiting for 2 Dask workers (0 so far")
+    with threaded_cluster(0) as empty:
+        thread, outcome = run_in_thread(
+            lambda: run_sweep(
+                small_spec(tmp_path),
+                tmp_path / "out",
+                scheduler=empty.scheduler_address,
+                min_workers=2,
+                min_workers_timeout=DEADLINE_S,
+                stream=said,
+            )
+        )
+        try:
+            wait_for(lambda: said.heard.is_set() or not thread.is_alive(), "the sweep to wait")
+            assert said.heard.is_set(), (said.text(), outcome)
+            assert not (tmp_path / "out" / PARQUET).exists()  # nothing ran without workers
+            empty.scale(2)
+        finally:
+            thread.join(timeout=DEADLINE_S)
+    assert not thread.is_alive() and "error" not in outcome, outcome
+    result = outcome["result"]
+    assert "2 Dask workers joined" in said.text()
+    assert (result.ran, result.failed, result.infeasible) == (8, 0, 0)
+    assert len(by_cell(read_results(tmp_path / "out"))) == 8
 
 
-def test_min_workers_that_never_join_stop_the_sweep_with_a_message(tmp_path: Path) -> None:
-    scheduler, address = start_scheduler(tmp_path)
-    try:
-        done = subprocess.run(
-            cli(str(small_spec(tmp_path)), "--out", str(tmp_path / "out"),
-                "--scheduler", address, "--min-workers", "1", "--min-workers-timeout", "2"),
-            capture_output=True, text=True, timeout=DEADLINE_S,
-        )  # fmt: skip
-    finally:
-        stop(scheduler)
+def test_min_workers_that_never_join_stop_the_sweep_with_a_message(
+    tmp_path: Path, empty_scheduler: str
+) -> None:
+    done = subprocess.run(
+        cli(str(small_spec(tmp_path)), "--out", str(tmp_path / "out"),
+            "--scheduler", empty_scheduler, "--min-workers", "1", "--min-workers-timeout", "2"),
+        capture_output=True, text=True, timeout=DEADLINE_S,
+    )  # fmt: skip
     assert done.returncode == 4, done.stderr
     assert done.stderr.count("\n") == 1, done.stderr
     assert "0 of the 1 Dask workers asked for (--min-workers) joined within 2 s" in done.stderr
@@ -661,17 +691,18 @@ def test_a_worker_with_another_planner_version_is_refused(tmp_path: Path) -> Non
     # A worker whose gcs-planner says it is another release, as an old install on one node would.
     preload = tmp_path / "other_version.py"
     preload.write_text("import gcs_planner\ngcs_planner.__version__ = '0.0.1-old'\n")
-    scheduler, address = start_scheduler(tmp_path)
-    workers = start_workers(address, 1, "--preload", str(preload))
-    try:
-        done = subprocess.run(
-            cli(str(small_spec(tmp_path)), "--out", str(tmp_path / "out"),
-                "--scheduler", address, "--min-workers", "1",
-                "--min-workers-timeout", str(DEADLINE_S)),
-            capture_output=True, text=True, timeout=DEADLINE_S,
-        )  # fmt: skip
-    finally:
-        stop(workers, scheduler)
+    # the scheduler in this process; the worker its own process (its own gcs_planner)
+    with threaded_cluster(0) as empty:
+        workers = start_workers(empty.scheduler_address, 1, "--no-nanny", "--preload", str(preload))
+        try:
+            done = subprocess.run(
+                cli(str(small_spec(tmp_path)), "--out", str(tmp_path / "out"),
+                    "--scheduler", empty.scheduler_address, "--min-workers", "1",
+                    "--min-workers-timeout", str(DEADLINE_S)),
+                capture_output=True, text=True, timeout=DEADLINE_S,
+            )  # fmt: skip
+        finally:
+            stop(workers)
     assert done.returncode == 2, done.stderr
     assert done.stderr.count("\n") == 1, done.stderr
     assert "Dask worker tcp://127.0.0.1:" in done.stderr
@@ -739,39 +770,37 @@ def test_cells_are_grouped_into_tasks_of_about_a_second_after_a_few_alone(
 
 
 def test_a_worker_with_another_version_joining_mid_sweep_stops_it(tmp_path: Path) -> None:
-    import threading
-
     from gcs_planner.sweep.workers import WorkerVersionError
 
     preload = tmp_path / "other_version.py"
     preload.write_text("import gcs_planner\ngcs_planner.__version__ = '0.0.1-old'\n")
     started, release = tmp_path / "started", tmp_path / "release"
     task = functools.partial(sweep_tasks.held, started=str(started), release=str(release))
-    scheduler, address = start_scheduler(tmp_path)
-    procs = [start_workers(address, 1), scheduler]
-    outcome: dict = {}
-
-    def sweep() -> None:
+    # The sweep's first worker a thread of this process; the one that joins mid-sweep its own
+    # process, with its own gcs_planner.
+    with threaded_cluster(1) as first:
+        address = first.scheduler_address
+        thread, outcome = run_in_thread(
+            lambda: run_sweep(
+                small_spec(tmp_path),
+                tmp_path / "out",
+                scheduler=address,
+                task=task,
+                min_workers=1,
+                min_workers_timeout=DEADLINE_S,
+            )
+        )
+        procs = []
         try:
-            outcome["result"] = run_sweep(
-                small_spec(tmp_path), tmp_path / "out", scheduler=address, task=task,
-                min_workers=1, min_workers_timeout=DEADLINE_S,
-            )  # fmt: skip
-        except BaseException as exc:  # handed to the test's thread
-            outcome["error"] = exc
-
-    thread = threading.Thread(target=sweep)
-    thread.start()
-    try:
-        wait_for(lambda: started.exists() or not thread.is_alive(), "the first cell to start")
-        assert started.exists(), outcome
-        procs.insert(0, start_workers(address, 1, "--preload", str(preload)))
-        thread.join(timeout=DEADLINE_S)
-        assert not thread.is_alive(), "the sweep did not stop"
-    finally:
-        release.write_text("go")
-        thread.join(timeout=DEADLINE_S)
-        stop(*procs)
+            wait_for(lambda: started.exists() or not thread.is_alive(), "the first cell to start")
+            assert started.exists(), outcome
+            procs.append(start_workers(address, 1, "--no-nanny", "--preload", str(preload)))
+            thread.join(timeout=DEADLINE_S)
+            assert not thread.is_alive(), "the sweep did not stop"
+        finally:
+            release.write_text("go")
+            thread.join(timeout=DEADLINE_S)
+            stop(*procs)
     error = outcome.get("error")
     assert isinstance(error, WorkerVersionError), outcome
     assert "Dask worker tcp://127.0.0.1:" in str(error) and "runs gcs-planner 0.0.1-old" in str(
@@ -799,11 +828,12 @@ def test_local_workers_are_forked_with_the_planner_imported_and_sigint_ignored()
     from gcs_planner.sweep.worker_start import start_method
 
     assert start_method() == "forkserver"  # Linux
-    client, cluster = runner._connect(None, 2, 1, "127.0.0.1:0")
+    # One worker: what each worker holds is the subject, not how many there are.
+    client, cluster = runner._connect(None, 1, 1, "127.0.0.1:0")
     try:
-        client.wait_for_workers(2, timeout=120)
+        client.wait_for_workers(1, timeout=120)
         first = client.run(_worker_state)
-        assert len(first) == 2, first
+        assert len(first) == 1, first
         # forked by the forkserver, not spawned by a nanny in this process
         for planner, legs, sigint, parent in first.values():
             assert planner and legs and sigint == signal.SIG_IGN, first
@@ -811,6 +841,6 @@ def test_local_workers_are_forked_with_the_planner_imported_and_sigint_ignored()
         # a worker its nanny restarts is spawned, as Dask does, and ignores SIGINT alike
         client.restart(timeout=120)
         again = client.run(_worker_state)
-        assert len(again) == 2 and all(s[0] and s[2] == signal.SIG_IGN for s in again.values())
+        assert len(again) == 1 and all(s[0] and s[2] == signal.SIG_IGN for s in again.values())
     finally:
         runner._disconnect(client, cluster)
