@@ -6,15 +6,21 @@ from __future__ import annotations
 from benchmarks import sweep as sweep_bench
 
 
-def test_sweep_benchmark_runs_all_three_ways_with_equal_fronts() -> None:
+def test_sweep_benchmark_runs_all_three_ways_with_equal_fronts(tmp_path) -> None:
+    # 100 corrections: of the 4 generated scenarios two have routes and two have none, so the
+    # fronts compared hold lengths and routes, not only "infeasible" (as at 40 corrections).
+    spec = tmp_path / "spec.toml"
+    spec.write_text(sweep_bench.spec_text(4, 100, 200.0), "utf-8")
+    statuses = sorted(f[0][0] for f in sweep_bench._serial(spec)[2].values())
+    assert statuses == ["infeasible", "infeasible", "ok", "ok"]
     # One worker: the fronts are the subject, not the speed-up (each worker process of the
     # separately started `dask worker` imports the planner afresh).
-    timings, ratios = sweep_bench.run_benchmark(4, corrections=40, workers=1, rounds=2)
+    timings, ratios = sweep_bench.run_benchmark(4, corrections=100, workers=1, rounds=2)
     assert [t.cells for t in timings] == [4, 4, 4] and len(ratios) == 2
     assert "serial" in timings[0].name and "local cluster" in timings[1].name
     assert "dask scheduler" in timings[2].name
     assert all(t.seconds > 0 and t.cpu_seconds > 0 for t in timings)
-    text = sweep_bench.render(timings, ratios, 4, 40, 200.0)
+    text = sweep_bench.render(timings, ratios, 4, 100, 200.0)
     assert text.count("\n| ") == 1 + 3  # the header and one row per run
     assert "identical fronts" in text
 
