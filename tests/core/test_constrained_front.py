@@ -7,20 +7,25 @@ search spends the plan's one budget and says which limit stopped it."""
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
+from collections.abc import Callable
 
 import numpy as np
 import pytest
 from support.enumeration import THREE, TWO, all_routes, pareto
+from support.prefix_flight import PrefixFlights
 from support.scenarios import turning_scenario, uncertain_straight_scenario, windy_envelope
 
 from gcs_planner.baselines.brute import brute_force_front
-from gcs_planner.core.bnb import flown_route
+from gcs_planner.core.bnb import flown_leg, flown_route_legs
 from gcs_planner.core.capture_front import route_fits
 from gcs_planner.core.flight_time import route_minutes
 from gcs_planner.core.planner import plan
 from gcs_planner.core.probability import success_probability
+from gcs_planner.core.route import Leg, Route, evaluate_route
 from gcs_planner.errors import InfeasibleError
+from gcs_planner.geometry.legs import scenario_leg_model
 from gcs_planner.scenario.model import Kind, Scenario
 
 
@@ -37,19 +42,52 @@ def _windy_turbulent(base: Scenario, seed: int, radius: float, top: float = 1.5)
     )
 
 
-def _routes(sc: Scenario, probability: bool) -> list[tuple]:
-    """Every simple route flown that arrives (or is feasible): (length, k, -p, minutes, fits)."""
+def _routes(
+    sc: Scenario, probability: bool, fly: Callable[[tuple[int, ...]], Route] | None = None
+) -> list[tuple]:
+    """Every simple route flown (by ``fly``, when given) that arrives (or is feasible):
+    (length, k, -p, minutes, fits)."""
     out = []
+    fly = fly or _straight_flight(sc) or PrefixFlights(sc).route
     for pts in all_routes(sc):
-        route = flown_route(sc, pts)
-        legs = [s.leg for s in route.stops[1:]]
-        p = success_probability(sc, pts, legs).probability
+        route = fly(pts)
+        if probability:
+            legs = [s.leg for s in route.stops[1:]]
+            p = success_probability(sc, pts, legs).probability
         if (p > 0) if probability else route.feasible:
             mass = round(-p, 12) if probability else 0.0
             minutes = route_minutes(sc, route)
             fits = route_fits(sc, route)
             out.append((round(route.length, 6), route.corrections, mass, minutes, fits))
     return out
+
+
+def _straight_flight(sc: Scenario) -> Callable[[tuple[int, ...]], Route] | None:
+    """``flown_route`` of the scenario's routes, for straight legs from a free heading at A (None
+    otherwise): each leg flown as ``route_trajectory`` flies it (the first from the chord, the
+    next from the heading the one before ended with: a straight leg's is its chord's), once per
+    (point before, start, end) for every route through them, then ``evaluate_route``."""
+    model = scenario_leg_model(sc)
+    if model.carries_heading or sc.heading_at_a is not None:
+        return None
+    xyz, memo = sc.xyz, {}
+
+    def leg(before: int | None, a: int, b: int) -> tuple[Leg, object]:
+        key = (before, a, b)
+        if key not in memo:
+            if before is None:
+                flown = flown_route_legs(sc, (a, b))[0]
+            else:
+                flown = model.leg(xyz[a], leg(None, before, a)[1], xyz[b])
+            memo[key] = (flown_leg(flown), flown.heading_out)
+        return memo[key]
+
+    def fly(pts: tuple[int, ...]) -> Route:
+        legs = [leg(None, pts[0], pts[1])[0]]
+        legs += [leg(pts[k - 1], pts[k], pts[k + 1])[0] for k in range(1, len(pts) - 1)]
+        return evaluate_route(sc, pts, legs, turn_radius=sc.params.turn_radius)
+
+    return fly
 
 
 def _within(routes: list[tuple], minutes: float, fit: bool) -> list[tuple]:
@@ -117,8 +155,9 @@ def test_both_constraints_at_once_equal_brute_force_on_straight_legs():
 @pytest.mark.parametrize("seed", range(30))
 def test_both_constraints_with_turns_and_probability_equal_enumeration(seed):
     sc = _windy_turbulent(turning_scenario(seed, 200.0, max_points=4), seed, 4.0)
+    fly = functools.cache(PrefixFlights(sc).route)  # each route flown once for both
     for objectives in (TWO, THREE):
-        routes = _routes(sc, "probability" in objectives)
+        routes = _routes(sc, "probability" in objectives, fly)
         minutes = _endurance(routes, seed)
         if minutes is None:
             continue

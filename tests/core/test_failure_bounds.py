@@ -6,13 +6,15 @@ and the leg bounds that know the cone of headings at a point (``pair_bounds``)."
 from __future__ import annotations
 
 import dataclasses
+import functools
 
 import numpy as np
 import pytest
 from support.enumeration import all_routes, assert_front_equals_enumeration
+from support.prefix_flight import PrefixFlights
 from support.scenarios import climbing_scenario, turning_scenario, uncertain_straight_scenario
 
-from gcs_planner.core.bnb import PROB_EPS, Ceiling, Options, flown_route
+from gcs_planner.core.bnb import PROB_EPS, Ceiling, Options
 from gcs_planner.core.bnb.context import _Context
 from gcs_planner.core.bnb.front import _relaxed
 from gcs_planner.core.budget import Budget
@@ -22,7 +24,7 @@ from gcs_planner.core.probability import propagate
 from gcs_planner.core.reach import build_reach_graph
 from gcs_planner.geometry.airplane import airplane_leg
 from gcs_planner.geometry.legs import AirplaneLegs
-from gcs_planner.scenario.model import Kind
+from gcs_planner.scenario.model import Kind, Scenario
 
 
 def scenarios(seeds: range = range(20)):
@@ -30,15 +32,35 @@ def scenarios(seeds: range = range(20)):
     with large altitude differences (helices) under several climb limits (each at most 4
     correction points: 65 routes each to fly, not 326; the same draws)."""
     for seed in seeds:
-        yield uncertain_straight_scenario(seed, max_points=4)
-        yield turning_scenario(seed, [200.0, 1500.0, 4000.0][seed % 3], max_points=4)
-        yield climbing_scenario(seed, max_points=4)
+        for family in range(3):
+            yield _scenario(family, seed)
+
+
+@functools.cache
+def _scenario(family: int, seed: int) -> Scenario:
+    """One scenario of ``scenarios``, made once per test process: the tests below fly the routes
+    of the same ones (each route flown once, ``prefixes``)."""
+    if family == 0:
+        return uncertain_straight_scenario(seed, max_points=4)
+    if family == 1:
+        return turning_scenario(seed, [200.0, 1500.0, 4000.0][seed % 3], max_points=4)
+    return climbing_scenario(seed, max_points=4)
+
+
+# The routes flown of each scenario of ``_scenario`` (by its id: they live as long as the process).
+_FLIGHTS: dict[int, tuple[Scenario, PrefixFlights, dict]] = {}
 
 
 def prefixes(scenario, points):
     """Per correction point of a route: (position, length so far, error states after it), and
     the route's length and probability, all from the route flown independently."""
-    route = flown_route(scenario, points)
+    if id(scenario) not in _FLIGHTS:
+        _FLIGHTS[id(scenario)] = (scenario, PrefixFlights(scenario), {})
+    kept, flights, routes = _FLIGHTS[id(scenario)]
+    assert kept is scenario
+    if points not in routes:
+        routes[points] = flights.route(points)
+    route = routes[points]
     kind = [Kind(int(c)) for c in scenario.kind]
     states = {(0.0, 0.0): 1.0}
     length = 0.0

@@ -6,7 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from support.enumeration import all_routes, pareto
+from support.enumeration import pareto
+from support.prefix_flight import PrefixFlights, every_route_flown
 from support.scenarios import contingency_scenario
 
 from gcs_planner.core.bnb import Options, bnb_front, flown_route, flown_route_legs
@@ -49,8 +50,7 @@ def _enumerated(sub) -> dict[bool, list[tuple]]:
     """Both fronts of every continuation, by whether probability is an objective: each route
     flown once for both."""
     values: dict[bool, list[tuple]] = {False: [], True: []}
-    for pts in all_routes(sub):
-        route = flown_route(sub, pts)
+    for pts, route in every_route_flown(sub):
         p = success_probability(sub, pts, [s.leg for s in route.stops[1:]]).probability
         for probability in (False, True):
             if (p > 0) if probability else route.feasible:
@@ -73,9 +73,9 @@ def test_a_continuation_is_flown_as_the_whole_route_flies_it(radius: float) -> N
             continue
         state, prefix = got
         sub, indices = state_scenario(sc, state)
-        for pts in all_routes(sub):
-            whole = flown_route(sc, (*prefix[:-1], *original_points(indices, pts)))
-            part = flown_route(sub, pts)
+        whole_flights = PrefixFlights(sc)
+        for pts, part in every_route_flown(sub):
+            whole = whole_flights.route((*prefix[:-1], *original_points(indices, pts)))
             tail = whole.stops[len(prefix) :]
             np.testing.assert_allclose(
                 [s.leg.length for s in tail], [s.leg.length for s in part.stops[1:]], rtol=1e-12
