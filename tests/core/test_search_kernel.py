@@ -7,31 +7,16 @@ searches run compiled from their first label, without the Python trial.)"""
 from __future__ import annotations
 
 import collections
-import functools
 
 from support.compiled_search import assert_same_search, searched_both_ways
-from support.enumeration import assert_same_front, front_of
-from support.fan_walk import fanned_dfs_front
+from support.enumeration import assert_same_front, front_of, probed_front
 from support.scenarios import probed_scenario
-from support.shared_results import shared_front
 
 from gcs_planner.core import search_kernel
 from gcs_planner.core.bnb import search as bnb_search
 from gcs_planner.core.budget import Budget
 
 LEGS = ("airplane", "airplane, climb limits", "cs3d")
-
-
-@functools.cache
-def probed_front(seed: int, legs: str, probability: bool) -> list[tuple[float, int, float]]:
-    """``enumeration.probed_front``: the same question under the same name, so the run's other
-    test processes share it either way, walked with the onward legs fanned (support/fan_walk.py,
-    held equal to ``dfs_front`` in test_fan_walk.py)."""
-    return shared_front(
-        "probed_front",
-        (seed, legs, probability),
-        lambda: fanned_dfs_front(probed_scenario(seed, legs), probability),
-    )
 
 
 def test_compiled_searches_equal_the_python_ones_and_enumeration(monkeypatch) -> None:

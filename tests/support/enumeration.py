@@ -194,10 +194,15 @@ def dfs_front(scenario: Scenario, probability: bool) -> list[tuple[float, int, f
 def probed_front(seed: int, legs: str, probability: bool) -> list[tuple[float, int, float]]:
     """``dfs_front`` of ``probed_scenario(seed, legs)``, enumerated once per test session (the
     tests of the probes and of the compiled searches ask for the same scenarios), and shared
-    with the run's other test processes (support/shared_results.py)."""
+    with the run's other test processes (support/shared_results.py). Walked with the onward
+    legs fanned (support/fan_walk.py, held equal to ``dfs_front`` in test_fan_walk.py)."""
+    from .fan_walk import fanned_dfs_front  # (fan_walk walks with dfs_front: imported late)
+
     question = (seed, legs, probability)
     return shared_front(
-        "probed_front", question, lambda: dfs_front(probed_scenario(seed, legs), probability)
+        "probed_front",
+        question,
+        lambda: fanned_dfs_front(probed_scenario(seed, legs), probability),
     )
 
 
