@@ -57,11 +57,10 @@ BIN = Path(sys.executable).parent  # the installed environment's scripts: gcs-pl
 TIMEOUT_S = 600  # a hang guard per command, not a measurement
 
 SETUP = re.compile(
-    r"^python3 -m venv \.venv && \. \.venv/bin/activate && pip install (?:--no-compile )?"
-    r"(?P<what>\S+)"
+    r"^python3 -m venv \.venv && \. \.venv/bin/activate && pip install (?P<what>\S+)"
     r"(?: && (?P<rest>.+))?$"
 )
-PIP_ONLY = re.compile(r"^pip install (?:--no-compile )?(?P<what>\S+)$")
+PIP_ONLY = re.compile(r"^pip install (?P<what>\S+)$")
 # What each documented install provides; the test environment must have it (installed '.[test]').
 INSTALLED = {
     ".": ["gcs_planner"],
