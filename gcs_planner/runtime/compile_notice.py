@@ -31,10 +31,12 @@ from gcs_planner.runtime.terminal import on_terminal
 # docs/benchmarks.md, "The first plan after installing"): the notice tells the user how long a
 # first plan or dry run will be busy. A three-objective plan compiles the search (with the
 # expansion it shares with the probes and the airplane legs), then the probes; a large
-# straight plan fewest_corrections; a plan flying a route the airplane legs alone.
+# straight plan fewest_corrections; any plan on 3,000+ points the cost-to-go tables; a plan
+# flying a route the airplane legs alone.
 KERNELS: dict[tuple[str, str], float] = {
     ("gcs_planner.core.probe_kernel", "probe"): 6.0,
     ("gcs_planner.core.kernel", "fewest_corrections"): 11.0,
+    ("gcs_planner.core.cost_to_go_kernel", "merge_frontier"): 9.0,
     ("gcs_planner.geometry.airplane_kernel", "airplane_lengths"): 0.5,
     ("gcs_planner.core.search_kernel", "search"): 17.0,
     # The compiled flight of the dry run.

@@ -22,6 +22,7 @@ KERNELS = (
     ("gcs_planner.core.probe_kernel", "probe", "the probes of the search over simple routes"),
     ("gcs_planner.core.kernel", "fewest_corrections", "straight legs on maps of 3,000+ points"),
     ("gcs_planner.core.kernel", "layered_search", "straight legs on maps of 3,000+ points"),
+    ("gcs_planner.core.cost_to_go_kernel", "merge_frontier", "the bounds on maps of 3,000+ points"),
     ("gcs_planner.geometry.airplane_kernel", "airplane_lengths", "the airplane legs' lengths"),
     ("gcs_planner.sim.flight_kernel", "fly_plain", "the dry run's flight (point mass)"),
     ("gcs_planner.sim.flight_kernel", "closest_approach", "the dry run's replay of the track"),
@@ -47,6 +48,8 @@ def compile_kernels(
     if unknown:
         raise ValueError(f"no such part of the compile: {sorted(unknown)}; the parts: {PARTS}")
     from gcs_planner.core.bnb import Options, bnb_front
+    from gcs_planner.core.cost_to_go import cost_to_go
+    from gcs_planner.core.reach import build_reach_graph
     from gcs_planner.core.search import straight_front
     from gcs_planner.scenario.generate import random_scenario
     from gcs_planner.scenario.model import Parameters
@@ -76,6 +79,13 @@ def compile_kernels(
         t0 = time.perf_counter()
         straight_front(big, compiled=True, focus=focus)
         done.append((name, time.perf_counter() - t0))
+    if "straight" in parts:
+        # The cost-to-go tables (the searches' bounds), which maps of 3,000+ points make
+        # compiled, with or without turns.
+        say("compiling cost_to_go ...")
+        t0 = time.perf_counter()
+        cost_to_go(big, build_reach_graph(big), compiled=True)
+        done.append(("cost_to_go", time.perf_counter() - t0))
     if "flight" in parts:
         say("compiling the dry run's flight ...")
         t0 = time.perf_counter()
