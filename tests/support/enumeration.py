@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import functools
 import itertools
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 
 import numpy as np
 
@@ -95,13 +95,17 @@ def enumerate_straight_front(scenario: Scenario) -> list[tuple]:
     return pareto(values)
 
 
-def enumerate_fronts(scenario: Scenario) -> dict:
+def enumerate_fronts(
+    scenario: Scenario, flights: Iterable[tuple[tuple[int, ...], Route]] | None = None
+) -> dict:
     """Both enumerated fronts of a scenario, by objective set (TWO, THREE), as (length,
     corrections, -probability) tuples (probability 0 for two objectives): every simple route
-    flown once."""
+    flown once (``flights``: (points, flown route) of every simple route, when the caller flies
+    them its own way)."""
+    if flights is None:
+        flights = ((points, flown_route(scenario, points)) for points in all_routes(scenario))
     two, three = [], []
-    for points in all_routes(scenario):
-        route = flown_route(scenario, points)
+    for points, route in flights:
         if not route.feasible:
             continue
         legs = [s.leg for s in route.stops[1:]]
@@ -181,6 +185,14 @@ def dfs_front(scenario: Scenario, probability: bool) -> list[tuple[float, int, f
                 extend((*path, t), leg.heading_out, length + leg.length, after)
 
     extend((scenario.start,), heading_a, 0.0, {(0.0, 0.0): 1.0})
+    return walked_front(values, probability)
+
+
+def walked_front(
+    values: list[tuple[float, int, float]], probability: bool
+) -> list[tuple[float, int, float]]:
+    """The Pareto front of the (length, corrections, -probability) of every route walked,
+    sorted by corrections, then length (``dfs_front``'s order)."""
     front: list[tuple[float, int, float]] = []
     for v in sorted(set(values)):  # by length: only an earlier value can dominate a later one
         if not any(all(x <= y for x, y in zip(kept, v)) for kept in front):

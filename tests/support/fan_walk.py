@@ -12,7 +12,7 @@ from gcs_planner.core.probability import propagate
 from gcs_planner.geometry.legs import scenario_leg_model
 from gcs_planner.scenario.model import Kind, Scenario
 
-from .enumeration import dfs_front
+from .enumeration import dfs_front, walked_front
 
 
 def fanned_dfs_front(scenario: Scenario, probability: bool) -> list[tuple[float, int, float]]:
@@ -50,10 +50,4 @@ def fanned_dfs_front(scenario: Scenario, probability: bool) -> list[tuple[float,
                 extend((*path, t), out, length + d, after)
 
     extend((scenario.start,), heading_a, 0.0, {(0.0, 0.0): 1.0})
-    front: list[tuple[float, int, float]] = []
-    for v in sorted(set(values)):  # by length: only an earlier value can dominate a later one
-        if not any(all(x <= y for x, y in zip(kept, v)) for kept in front):
-            front.append(v)
-    if not probability:
-        front = [(length, k, 0.0) for length, k, _ in front]
-    return sorted(front, key=lambda t: (t[1], t[0], t[2]))
+    return walked_front(values, probability)

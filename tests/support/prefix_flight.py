@@ -8,13 +8,12 @@ import math
 from collections.abc import Iterator
 
 from gcs_planner.core.bnb import flown_leg, flown_route, flown_route_legs
-from gcs_planner.core.probability import success_probability
 from gcs_planner.core.route import Route, evaluate_route
 from gcs_planner.geometry.dubins import COINCIDENT_M
 from gcs_planner.geometry.legs import FlownLeg, scenario_leg_model
 from gcs_planner.scenario.model import Scenario
 
-from .enumeration import THREE, TWO, all_routes, pareto
+from .enumeration import all_routes, enumerate_fronts
 
 
 class PrefixFlights:
@@ -62,13 +61,4 @@ def every_route_flown(scenario: Scenario) -> Iterator[tuple[tuple[int, ...], Rou
 
 def enumerated_fronts(scenario: Scenario) -> dict:
     """``enumeration.enumerate_fronts(scenario)``, every simple route flown by prefix."""
-    two, three = [], []
-    for points, route in every_route_flown(scenario):
-        if not route.feasible:
-            continue
-        legs = [s.leg for s in route.stops[1:]]
-        p = success_probability(scenario, points, legs).probability
-        assert p > 0, points
-        two.append((round(route.length, 6), route.corrections, 0.0))
-        three.append((round(route.length, 6), route.corrections, round(-p, 12)))
-    return {TWO: pareto(two), THREE: pareto(three)}
+    return enumerate_fronts(scenario, every_route_flown(scenario))
