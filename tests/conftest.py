@@ -77,7 +77,9 @@ def pytest_sessionstart(session: pytest.Session) -> None:
     say = terminal.write_line if terminal else (lambda text: None)
     say("numba's kernels are not cached: compiling them once for every test process ...")
     # In two processes side by side (numba compiles on one core): the search here, the straight
-    # legs and the flight in another interpreter importing the same copy of the package.
+    # legs and the flight in another interpreter importing the same copy of the package. The
+    # cost-to-go tables of maps of 3,000+ points (the part "bounds") are left to the few tests
+    # that make them, which compile them beside the others' work, not before every test.
     import gcs_planner
 
     beside = subprocess.Popen(

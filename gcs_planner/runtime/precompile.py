@@ -35,15 +35,15 @@ def missing() -> list[str]:
 
 
 # The compile in parts that share no kernel, so that two processes can compile them side by side.
-PARTS = ("search", "straight", "flight")
+PARTS = ("search", "straight", "bounds", "flight")
 
 
 def compile_kernels(
     say: Callable[[str], None] = print, parts: Collection[str] = PARTS
 ) -> list[tuple[str, float]]:
     """Compile (or load from the cache) the kernels of ``KERNELS``: those of ``parts`` (of
-    ``PARTS``: the search and its probes, the straight legs' two, the dry run's flight), all by
-    default; returns (kernel, seconds)."""
+    ``PARTS``: the search and its probes, the straight legs' two, the cost-to-go tables of
+    large maps, the dry run's flight), all by default; returns (kernel, seconds)."""
     unknown = set(parts) - set(PARTS)
     if unknown:
         raise ValueError(f"no such part of the compile: {sorted(unknown)}; the parts: {PARTS}")
@@ -79,7 +79,7 @@ def compile_kernels(
         t0 = time.perf_counter()
         straight_front(big, compiled=True, focus=focus)
         done.append((name, time.perf_counter() - t0))
-    if "straight" in parts:
+    if "bounds" in parts:
         # The cost-to-go tables (the searches' bounds), which maps of 3,000+ points make
         # compiled, with or without turns.
         say("compiling cost_to_go ...")
