@@ -1,5 +1,6 @@
 """Routes flown once per test module for the enumerations that several tests repeat over the
-same scenarios: ``core.bnb.flown_route`` remembered by the scenario's contents and the points.
+same scenarios: ``core.bnb.flown_route``'s legs remembered by the scenario's contents and the
+points before them.
 
 The enumerations (support/enumeration.py) are the reference the searches are compared with;
 flying every route of the same seeded scenarios again in each test is most of their CPU. A
@@ -14,9 +15,10 @@ from collections.abc import Callable, Iterator
 import numpy as np
 import pytest
 
-from gcs_planner.core.bnb import flown_route
 from gcs_planner.core.route import Route
 from gcs_planner.scenario.model import Scenario
+
+from .prefix_flight import PrefixFlights
 
 
 def contents(value: object) -> object:
@@ -39,14 +41,15 @@ def contents(value: object) -> object:
 
 
 def remembered_flown_route() -> Callable[[Scenario, tuple[int, ...]], Route]:
-    """``flown_route`` with a memory of the routes it flew (Route is frozen: shared safely)."""
-    flown: dict[tuple, Route] = {}
+    """``flown_route`` with a memory of the legs it flew, per scenario (by its contents), each
+    leg once for every route sharing the partial route before it (support/prefix_flight.py)."""
+    flights: dict[object, PrefixFlights] = {}
 
     def fly(scenario: Scenario, points) -> Route:  # noqa: ANN001 - any sequence of indices
-        key = (contents(scenario), tuple(int(p) for p in points))
-        if key not in flown:
-            flown[key] = flown_route(scenario, points)
-        return flown[key]
+        key = contents(scenario)
+        if key not in flights:
+            flights[key] = PrefixFlights(scenario)
+        return flights[key].route(tuple(int(p) for p in points))
 
     return fly
 
