@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import functools
 import json
 import re
 import subprocess
@@ -67,7 +68,7 @@ def test_readme_first_command_plans_the_example_as_installed(tmp_path, monkeypat
     assert written.startswith("out/")
     # The installed script, run once in this test run: test_documented_commands.py's
     # README.md:13 runs the same command and shares its plan (tests/support/shared_commands.py).
-    run = lambda: run_script(*command[1:], cwd=tmp_path)  # noqa: E731
+    run = functools.partial(run_script, *command[1:], cwd=tmp_path)
     done = run_once(text, tmp_path, {written.removeprefix("out/")}, run)
     assert done.returncode == 0, done.stderr
     out = tmp_path / written
