@@ -21,6 +21,9 @@ from gcs_planner.link.protocol import Tolerance, item_differences
 from gcs_planner.mission.items import MissionItem
 from gcs_planner.mission.waypoints import loads_waypoints
 
+# Mostly waiting on protocol timers: started first in each test process (tests/conftest.py).
+pytestmark = pytest.mark.waits
+
 INT32_MAX = 2**31 - 1
 PX4 = mavlink.MAV_AUTOPILOT_PX4
 ARDUPILOT = mavlink.MAV_AUTOPILOT_ARDUPILOTMEGA

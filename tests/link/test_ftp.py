@@ -37,6 +37,9 @@ from gcs_planner.link.mission_ftp import (
 from gcs_planner.link.protocol import item_differences, mission_differences
 from gcs_planner.mission.items import MissionItem
 
+# Mostly waiting on protocol timers: started first in each test process (tests/conftest.py).
+pytestmark = pytest.mark.waits
+
 
 def _mission(n: int) -> list[MissionItem]:
     return [

@@ -7,6 +7,7 @@ Counts, not clocks: what is compared is what the radio and the client counted.""
 
 from __future__ import annotations
 
+import pytest
 from gcs_planner.sim.radio import RadioConfig, SikRadio
 from gcs_planner.sim.vehicle import MockVehicle, free_udp_port
 
@@ -16,6 +17,9 @@ from gcs_planner.link.mission_client import MissionClient
 from gcs_planner.link.pacing import Backoff
 from gcs_planner.link.protocol import mission_differences
 from gcs_planner.mission.items import MissionItem
+
+# Mostly waiting on protocol timers: started first in each test process (tests/conftest.py).
+pytestmark = pytest.mark.waits
 
 
 def _mission(n: int) -> list[MissionItem]:

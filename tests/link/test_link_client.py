@@ -16,6 +16,9 @@ from gcs_planner.link.mission_client import MissionClient
 from gcs_planner.link.protocol import mission_differences
 from gcs_planner.mission.items import MissionItem
 
+# Mostly waiting on protocol timers: started first in each test process (tests/conftest.py).
+pytestmark = pytest.mark.waits
+
 
 def make_items(n: int, frame: int = 0) -> list[MissionItem]:
     out = [MissionItem(0, frame, 16, x=305_000_000, y=1_235_000_000, z=10.0)]  # home slot

@@ -19,6 +19,9 @@ from gcs_planner.link.connection import mavlink, open_link
 from gcs_planner.link.mission_client import MissionClient
 from gcs_planner.mission.items import MissionItem
 
+# Mostly waiting on protocol timers: started first in each test process (tests/conftest.py).
+pytestmark = pytest.mark.waits
+
 
 def _mission(n: int) -> list[MissionItem]:
     return [

@@ -25,6 +25,9 @@ from gcs_planner.link.pacing import RadioFlow, Window
 from gcs_planner.link.protocol import mission_differences
 from gcs_planner.mission.items import MissionItem
 
+# Mostly waiting on protocol timers: started first in each test process (tests/conftest.py).
+pytestmark = pytest.mark.waits
+
 SCENARIO = "missions/example/scenario.toml"
 
 

@@ -11,6 +11,9 @@ from gcs_planner.link.mission_client import MissionClient
 from gcs_planner.link.signing import key_from_passphrase
 from gcs_planner.mission.items import MissionItem
 
+# Mostly waiting on protocol timers: started first in each test process (tests/conftest.py).
+pytestmark = pytest.mark.waits
+
 ITEMS = [MissionItem(i, 0, 16, x=305_000_000 + i, y=1_235_000_000, z=100.0) for i in range(5)]
 
 

@@ -29,6 +29,9 @@ from gcs_planner.link.mission_client import MissionClient
 from gcs_planner.link.protocol import item_to_message
 from gcs_planner.mission.items import MissionItem
 
+# Mostly waiting on protocol timers: started first in each test process (tests/conftest.py).
+pytestmark = pytest.mark.waits
+
 VEHICLE_TYPES = (
     "HEARTBEAT", "MISSION_COUNT", "MISSION_ITEM_INT", "MISSION_ITEM", "MISSION_REQUEST_LIST",
     "MISSION_REQUEST_INT", "MISSION_REQUEST", "MISSION_ACK", "MISSION_CLEAR_ALL",

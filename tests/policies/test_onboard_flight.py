@@ -27,6 +27,9 @@ from gcs_planner.mission.onboard_mission import onboard_mission
 from gcs_planner.policies.flight import start_mission
 from gcs_planner.policies.onboard_dry_run import check_onboard, onboard_dry_run
 
+# Mostly waiting on protocol timers: started first in each test process (tests/conftest.py).
+pytestmark = pytest.mark.waits
+
 CAPTURE = 5.0
 
 

@@ -31,6 +31,9 @@ from gcs_planner.link.protocol import mission_differences
 from gcs_planner.mission.policy_missions import PolicyMissions
 from gcs_planner.policies.flight import PolicyFlight
 
+# Mostly waiting on protocol timers: started first in each test process (tests/conftest.py).
+pytestmark = pytest.mark.waits
+
 SCALE = 20.0
 # The flights whose verdict hangs on a switch made in time fly slower: the window after the
 # report at P (until the aircraft passes abeam V2, 2 km on) is then 8 s of wall time.

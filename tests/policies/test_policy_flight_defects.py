@@ -30,6 +30,9 @@ from gcs_planner.link.mission_client import MissionClient
 from gcs_planner.policies import dry_run as policy_dry_run_module
 from gcs_planner.policies.flight import MAV_MODE_FLAG_SAFETY_ARMED, PolicyFlight
 
+# Mostly waiting on protocol timers: started first in each test process (tests/conftest.py).
+pytestmark = pytest.mark.waits
+
 SET_CURRENT = mavlink.MAV_CMD_DO_SET_MISSION_CURRENT
 
 

@@ -25,6 +25,9 @@ from gcs_planner.link.mission_client import MissionClient
 from gcs_planner.link.protocol import item_to_message
 from gcs_planner.mission.items import MissionItem
 
+# Mostly waiting on protocol timers: started first in each test process (tests/conftest.py).
+pytestmark = pytest.mark.waits
+
 FLAVOUR = PX4.firmware
 ITEMS = [MissionItem(i, 3, 16, x=305_000_000 + 97 * i, y=1_235_000_000, z=100.0) for i in range(4)]
 WAIT_S = 10.0  # generous: an event-driven wait, not a time window
