@@ -58,13 +58,13 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
     """With test processes, the tests that mostly wait run first in half of them.
 
     The link, radio and mock-vehicle tests (marked ``waits``) spend their time on protocol
-    timers, about 550 s of wall for 25 s of CPU in a run. Left where they fall in the
-    collection, they gathered in one or two processes and ended the run: its last half minute
-    waited on timers while a core sat idle (369 s of tests, 16:58 and 17:05 on the idle 2-core
-    machine). Dealt first to every process, they all waited at once and the cores idled at the
-    start instead (393 s); spread between modules in every process, their waits often fell
-    together (about 380 s). So half of the processes (two of README's four) start with them
-    while the other half compute, and the run ends on tests that keep both cores busy (360 s).
+    timers: most of a run's waiting, little of its CPU. Left where they fall in the collection,
+    they gathered in one or two processes and ended the run waiting on timers while a core sat
+    idle. Dealt first to every process, they all waited at once and the cores idled at the
+    start instead; spread between modules in every process, their waits often fell together.
+    So half of the processes (two of README's four) start with them while the other half
+    compute, and the run ends on tests that keep both cores busy (docs/benchmarks.md, "The
+    test suite", has the runs).
 
     xdist's ``worksteal`` hands the collection out in contiguous shares (the first process
     N // n tests, the next (N - that) // (n - 1), and so on) and steals from the ends of the
