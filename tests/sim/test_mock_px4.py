@@ -289,7 +289,11 @@ def test_100_items_up_and_down_at_20_percent_loss(seed):
                      fault_seed=seed) as vehicle:  # fmt: skip
         link = open_link(f"udpout:127.0.0.1:{port}")
         try:
-            client = MissionClient(link)
+            # Ten retries, not the specification's five: at 20 % loss each way a request goes
+            # unanswered six times in a row about once in 500 (0.36 ** 6), and which frames the
+            # seed drops moves with the resends' timing on a busy machine (one CI run beside other
+            # work lost a request list so). What is tested is the sequence, not the retry count.
+            client = MissionClient(link, retries=10)
             client.connect(timeout=20.0)
             assert client.requests_in_sequence()
             report = client.upload_verified(items)
