@@ -12,6 +12,8 @@ from dataclasses import replace
 
 import pytest
 from support.paths import DATA, MISSIONS
+from support.plan_once import plan_each_scenario_once
+from support.workbook_once import read_workbooks_once
 
 from benchmarks.reserve import SHIPPED, TABLE2, flown_at, fly, planned
 from gcs_planner.aircraft.profile import DRYDEN_SCALE_LENGTH_M, ROLL_RESPONSE_S
@@ -20,6 +22,12 @@ from gcs_planner.cli import main
 
 DS1 = [f"--{k}={v:g}" for k, v in TABLE2[1].items()]
 AP = [f"--{k.replace('_', '-')}={v:g}" for k, v in SHIPPED["ardupilot"].items()]
+
+
+@pytest.fixture(scope="module", autouse=True)
+def workbooks_read_once():
+    """Each contest workbook read once for the module (support/workbook_once.py)."""
+    yield from read_workbooks_once()
 
 
 def plan_json(capsys, *argv: str) -> dict:
@@ -56,7 +64,16 @@ def test_a_turn_adds_most_as_a_u_turn_and_gusts_by_the_square_of_their_speed() -
     assert capped.capped and capped.metres == 100.0 < capped.needed
 
 
-def test_plan_derives_the_reserve_prints_it_with_its_reason_and_writes_it(capsys) -> None:
+@pytest.fixture(scope="module")
+def planned_once():
+    """The JSON and the text of one plan are printed from the same search
+    (support/plan_once.py): the memory of the plans asked for."""
+    yield from plan_each_scenario_once()
+
+
+def test_plan_derives_the_reserve_prints_it_with_its_reason_and_writes_it(
+    capsys, planned_once
+) -> None:
     d = plan_json(capsys, *AP, "--firmware=ardupilot", "--wind=5", "--gust=1.5")
     r = d["reserve"]
     env = d["vehicle"]["envelope"]
@@ -79,6 +96,7 @@ def test_plan_derives_the_reserve_prints_it_with_its_reason_and_writes_it(capsys
     want = f"flight reserve: {r['metres']:,.0f} m, derived for ardupilot: turn entry"
     assert line.startswith(want)
     assert "gusts 1.5 m/s over 30.0 km" in line and line.endswith("--reserve M states it")
+    assert len(planned_once) == 1  # the text printed from the plan the JSON wrote
 
 
 def test_stated_and_contest_reserves_are_unchanged(capsys) -> None:

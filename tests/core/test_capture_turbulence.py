@@ -12,7 +12,8 @@ from dataclasses import replace
 import numpy as np
 import pytest
 from gcs_planner.sim.turbulence import Turbulence
-from support.enumeration import THREE, TWO, all_routes, pareto
+from support.enumeration import THREE, TWO, pareto
+from support.prefix_flight import every_route_flown
 from support.scenarios import turning_scenario, uncertain_straight_scenario
 
 from gcs_planner.aircraft.altitude_hold import AltitudeHold
@@ -125,11 +126,11 @@ def test_the_constraint_bites_in_the_random_sample():
 
 
 def _enumerated(sc: Scenario) -> dict[tuple[str, ...], list[tuple]]:
-    """Every simple route flown once, kept when feasible (or arriving) and every capture fits:
-    both fronts, by objective set, as support.enumeration.enumerate_front makes each."""
+    """Every simple route flown once (each leg once for the routes sharing the partial route
+    before it: support/prefix_flight.py), kept when feasible (or arriving) and every capture
+    fits: both fronts, by objective set, as support.enumeration.enumerate_front makes each."""
     two, three = [], []
-    for pts in all_routes(sc):
-        route = flown_route(sc, pts)
+    for pts, route in every_route_flown(sc):
         if not route_fits(sc, route):
             continue
         p = success_probability(sc, pts, [s.leg for s in route.stops[1:]]).probability
@@ -142,7 +143,9 @@ def _enumerated(sc: Scenario) -> dict[tuple[str, ...], list[tuple]]:
 
 @pytest.mark.parametrize("seed", range(40))
 def test_the_front_of_fitting_routes_with_turns_and_probability_equals_enumeration(seed):
-    sc = replace(turning_scenario(seed, 200.0), error_unit=0.1, capture_radius=4.0)
+    # At most 4 correction points (65 simple routes, not 326), the same 40 draws: a search
+    # that prunes by a capture condition too strict or too lenient still fails here.
+    sc = replace(turning_scenario(seed, 200.0, max_points=4), error_unit=0.1, capture_radius=4.0)
     sc = _with_allowances(sc, seed, 1.5)
     fronts = _enumerated(sc)
     for objectives in (TWO, THREE):

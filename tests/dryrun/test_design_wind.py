@@ -9,6 +9,8 @@ from __future__ import annotations
 import json
 
 import pytest
+from support.plan_once import plan_each_scenario_once
+from support.workbook_once import read_workbooks_once
 
 from gcs_planner.aircraft.autopilot import effective
 from gcs_planner.cli import main
@@ -19,6 +21,19 @@ DS1 = ["--alpha1", "25", "--alpha2", "15", "--beta1", "20", "--beta2", "25", "--
        "--max-bank-angle", "45", "--cruise-airspeed", "12"]  # fmt: skip
 
 
+@pytest.fixture(scope="module", autouse=True)
+def workbooks_read_once():
+    """Each contest workbook read once for the module (support/workbook_once.py)."""
+    yield from read_workbooks_once()
+
+
+@pytest.fixture(scope="module")
+def planned_once():
+    """The same plan flown by several dry runs searched once (support/plan_once.py): the
+    memory of the plans asked for."""
+    yield from plan_each_scenario_once()
+
+
 def fly(capsys, dataset_paths, *extra):
     # --set-params: the vehicle set up for the plan (ArduPlane's NAVL1_LIM_BANK), as upload would
     rc = main(["dry-run", str(dataset_paths[1]), *DS1, "--wind", "10", "--runs", "10", "--json",
@@ -27,7 +42,9 @@ def fly(capsys, dataset_paths, *extra):
     return rc, json.loads(out), err
 
 
-def test_a_plan_for_the_wind_flown_is_lost_less_than_the_still_air_plan(capsys, dataset_paths):
+def test_a_plan_for_the_wind_flown_is_lost_less_than_the_still_air_plan(
+    capsys, dataset_paths, planned_once
+):
     rc0, still, _ = fly(capsys, dataset_paths, "--design-wind", "0")
     rc5, windy, _ = fly(capsys, dataset_paths)  # design wind: the 5 m/s flown
     assert still["verified"] and windy["verified"]
@@ -51,7 +68,7 @@ def test_a_bad_design_wind_names_its_flag(capsys, dataset_paths):
         assert rc == 2 and "--design-wind" in err and "Traceback" not in err
 
 
-def test_a_vehicle_not_set_up_for_the_plan_names_what_it_lacks(capsys, dataset_paths):
+def test_a_vehicle_not_set_up_for_the_plan_names_what_it_lacks(capsys, dataset_paths, planned_once):
     """ArduPlane's shipped NAVL1_LIM_BANK 0 would widen every loiter by EAS2TAS^2: the dry run
     sets it with the plan's vehicle setup, as the operator loads it; flown as it is
     (--vehicle-as-is), the report names it among what the vehicle was not set up for."""

@@ -53,6 +53,7 @@ def fly(leg, step: float = 0.25) -> dict:
         "tightest": tightest,
         "turned": turned,
         "end": pts[-1],
+        "last_step": pts[-2:],
     }
 
 
@@ -86,8 +87,8 @@ def test_flown_geometry_matches_the_closed_form_and_the_envelope() -> None:
             flat = leg.horizontal_length - 2 * math.pi * radius
             limit = climb if leg.dz > 0 else descent
             assert math.degrees(math.atan2(abs(leg.dz), flat)) > limit
-        # the heading at the end is the direction of the last segment
-        last = leg.sample(0.25)[-2:]
+        # the heading at the end is the direction of the last segment (of the same polyline)
+        last = f["last_step"]
         d = (last[1] - last[0])[:2]
         assert np.allclose(d / np.linalg.norm(d), leg.heading_out[:2], atol=1e-3)
     assert helices >= 20

@@ -10,14 +10,18 @@ autopilot, and that with no runs nothing changes.
 
 from __future__ import annotations
 
+import contextlib
 import math
 from dataclasses import replace
 
 import numpy as np
 import pytest
+from support import enumeration
 from support.compiled_search import assert_compiled_flies_as_python, legs_modes
 from support.enumeration import TWO, assert_plans_enumeration, enumerate_fronts
+from support.flown_route_memo import remember_flown_routes
 from support.scenarios import probed_scenario, tall_scenario
+from support.workbook_once import read_workbooks_once
 
 from gcs_planner.aircraft.autopilot import ARDUPLANE, PX4
 from gcs_planner.core.planner import plan
@@ -27,6 +31,16 @@ from gcs_planner.mission.builder import build_mission, resolve_origin
 from gcs_planner.mission.items import HELIX_COMMANDS, MAV_CMD_NAV_WAYPOINT
 from gcs_planner.mission.plan_json import plan_to_dict
 from gcs_planner.scenario.georef import LocalFrame
+
+
+@pytest.fixture(scope="module", autouse=True)
+def routes_flown_once():
+    """The enumerations below fly every simple route of each scenario: each leg once for the
+    routes that share the partial route before it (support/prefix_flight.py); and the contest
+    workbook read once for the module's plans (support/workbook_once.py)."""
+    with contextlib.ExitStack() as both:
+        both.enter_context(contextlib.contextmanager(read_workbooks_once)())
+        yield from remember_flown_routes(enumeration)
 
 
 def _random_legs(seed: int, m: int = 400):

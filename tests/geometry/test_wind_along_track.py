@@ -18,13 +18,22 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from support import enumeration
 from support.compiled_search import assert_compiled_flies_as_python, legs_modes
 from support.enumeration import TWO, assert_plans_enumeration, enumerate_fronts
+from support.flown_route_memo import remember_flown_routes
 from support.scenarios import probed_scenario, tall_scenario
 
 from gcs_planner.aircraft.profile import DerivedEnvelope
 from gcs_planner.geometry.airplane import LegEnvelope, track_factor
 from gcs_planner.geometry.legs import AirplaneLegs, leg_envelope
+
+
+@pytest.fixture(scope="module", autouse=True)
+def routes_flown_once():
+    """The enumerations below fly every simple route of each scenario: each leg once for the
+    routes that share the partial route before it (support/prefix_flight.py)."""
+    yield from remember_flown_routes(enumeration)
 
 
 def along_track(scenario, eas: float, bank: float, climb: float, sink: float, wind: float,
@@ -187,13 +196,38 @@ def test_the_bound_stays_below_legs_from_every_heading() -> None:
         assert np.all(bound <= best * (1 + 1e-12))
 
 
+# On a straight the track and the slope (a leg's z is linear in its horizontal distance) are
+# the same throughout, so every step there asks the same rate: a coarser step on the run-out and
+# the tangent measures the same need with fewer points; where the leg turns, every TURN_STEP_M.
+TURN_STEP_M = 2.0
+STRAIGHT_STEP_M = 100.0
+
+
+def polyline(leg) -> np.ndarray:  # noqa: ANN001 - a flown AirplaneLeg
+    """The leg every TURN_STEP_M on its helix and arc and every STRAIGHT_STEP_M on its run-out
+    and tangent, the ends of each part and the helix's end included."""
+    ro = leg.run_out
+    helix_end = ro + leg.helix_horizontal
+    turn_end = helix_end + leg.arc_horizontal
+    parts = [(0.0, ro, STRAIGHT_STEP_M), (ro, turn_end, TURN_STEP_M),
+             (turn_end, leg.horizontal_length, STRAIGHT_STEP_M)]  # fmt: skip
+    marks = [np.array([0.0, helix_end])]
+    for lo, hi, step in parts:
+        if hi > lo:
+            marks.append(np.linspace(lo, hi, max(1, math.ceil((hi - lo) / step)) + 1))
+    out = leg.points_at_horizontal(np.unique(np.concatenate(marks)))
+    out[-1] = leg.end
+    return out
+
+
 def reflown_rate_excess(leg, *envs: LegEnvelope) -> tuple[float, ...]:
-    """The most the leg, re-flown as a polyline of 2 m steps in the stated wind of each of
-    ``envs``, asks of the climb or sink rate beyond what the aircraft has (m/s; <= 0 when it
-    fits), one figure per envelope: on each step the ground speed along its own track times the
-    tangent of its flight-path angle. The airspeed is the one the leg's limits were taken at
-    (its higher end's, ``LegEnvelope.airspeeds``). The polyline is sampled once for all."""
-    pts = leg.sample(2.0)
+    """The most the leg, re-flown as a polyline (``polyline``: 2 m steps where it turns) in the
+    stated wind of each of ``envs``, asks of the climb or sink rate beyond what the aircraft has
+    (m/s; <= 0 when it fits), one figure per envelope: on each step the ground speed along its
+    own track times the tangent of its flight-path angle. The airspeed is the one the leg's
+    limits were taken at (its higher end's, ``LegEnvelope.airspeeds``). The polyline is sampled
+    once for all."""
+    pts = polyline(leg)
     d = np.diff(pts, axis=0)
     h = np.hypot(d[:, 0], d[:, 1])
     keep = h > 1e-6

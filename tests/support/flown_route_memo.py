@@ -41,15 +41,26 @@ def contents(value: object) -> object:
 
 
 def remembered_flown_route() -> Callable[[Scenario, tuple[int, ...]], Route]:
-    """``flown_route`` with a memory of the legs it flew, per scenario (by its contents), each
-    leg once for every route sharing the partial route before it (support/prefix_flight.py)."""
-    flights: dict[object, PrefixFlights] = {}
+    """``flown_route`` with a memory of the legs it flew, per scenario, each leg once for every
+    route sharing the partial route before it (support/prefix_flight.py).
+
+    A scenario is found by its identity before its contents: hashing a scenario's contents on
+    every route flown costs about as much as flying the route from its remembered prefix. A
+    scenario object met again is the one whose contents were taken (it is held here, so its id
+    is never reused meanwhile); another object with the same contents (a scenario made again
+    from the same seed) meets the routes flown for the first."""
+    by_contents: dict[object, PrefixFlights] = {}
+    by_identity: dict[int, tuple[Scenario, PrefixFlights]] = {}
 
     def fly(scenario: Scenario, points) -> Route:  # noqa: ANN001 - any sequence of indices
-        key = contents(scenario)
-        if key not in flights:
-            flights[key] = PrefixFlights(scenario)
-        return flights[key].route(tuple(int(p) for p in points))
+        held = by_identity.get(id(scenario))
+        if held is None or held[0] is not scenario:
+            key = contents(scenario)
+            if key not in by_contents:
+                by_contents[key] = PrefixFlights(scenario)
+            held = (scenario, by_contents[key])
+            by_identity[id(scenario)] = held
+        return held[1].route(tuple(int(p) for p in points))
 
     return fly
 
