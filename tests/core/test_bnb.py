@@ -6,7 +6,7 @@ import itertools
 
 import numpy as np
 import pytest
-from support.enumeration import assert_front_equals_enumeration
+from support.prefix_fronts import assert_front_equals_prefix_enumeration
 from support.scenarios import mixed_scenario, turning_scenario, uncertain_straight_scenario
 from support.straight_walk import walked_straight_front
 
@@ -20,8 +20,12 @@ def test_front_with_turns_equals_enumeration(probability: bool) -> None:
     nonempty = uncertain = 0
     for seed in range(60):
         # at most 4 points: 65 routes to fly, not 326; the same draws
-        scenario = turning_scenario(seed, [200.0, 1500.0, 4000.0][seed % 3], max_points=4)
-        _, want = assert_front_equals_enumeration(scenario, probability, seed)
+        radius = [200.0, 1500.0, 4000.0][seed % 3]
+        scenario = turning_scenario(seed, radius, max_points=4)
+        # Enumerated with its routes flown by prefix, once for both objective sets.
+        _, want = assert_front_equals_prefix_enumeration(
+            scenario, probability, ("turning_scenario", seed, radius, 4)
+        )
         nonempty += bool(want)
         uncertain += any(w[2] > -1 for w in want)
     assert nonempty >= 20
@@ -162,8 +166,12 @@ def test_front_is_exact_with_a_cost_to_go_cut_short(monkeypatch, probability: bo
     cut = failures_cut = 0
     for seed in range(20):
         layers = seed % 2
-        scenario = turning_scenario(seed, [200.0, 1500.0, 0.0][seed % 3], max_points=4)
-        result, _ = assert_front_equals_enumeration(scenario, probability, seed, at_once)
+        radius = [200.0, 1500.0, 0.0][seed % 3]
+        scenario = turning_scenario(seed, radius, max_points=4)
+        # Enumerated by prefix, once per scenario for this test and the first one above.
+        result, _ = assert_front_equals_prefix_enumeration(
+            scenario, probability, ("turning_scenario", seed, radius, 4), at_once
+        )
         cut += any(c.startswith("the cost-to-go:") for c in result.cut)
         failures_cut += any(c.startswith("the bounds per probability") for c in result.cut)
     assert cut >= 10

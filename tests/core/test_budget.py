@@ -15,7 +15,7 @@ import io
 import math
 
 import pytest
-from support.enumeration import enumerate_front
+from support.prefix_fronts import prefix_front
 from support.scenarios import long_corridor_scenario, turning_scenario
 
 from gcs_planner.cli import main
@@ -99,8 +99,10 @@ def test_cut_short_claims_hold_against_enumeration_with_turns(probability: bool)
     checked = 0
     for seed in range(20):
         # at most 4 correction points (65 routes to fly, not 326), the same draws
-        scenario = turning_scenario(seed, [200.0, 1500.0][seed % 2], max_points=4)
-        want = enumerate_front(scenario, probability)
+        radius = [200.0, 1500.0][seed % 2]
+        scenario = turning_scenario(seed, radius, max_points=4)
+        # Enumerated with its routes flown by prefix, once for both objective sets.
+        want = prefix_front(scenario, probability, ("turning_scenario", seed, radius, 4))
         exact = [_Point(w[0], w[1], -w[2] if probability else 1.0) for w in want]
         for budget in (1, 3, 8):
             res = bnb_front(scenario, probability=probability, max_labels=budget)
@@ -169,7 +171,7 @@ def test_time_limit_cuts_the_set_up_short_and_what_it_claims_still_holds() -> No
     checked = 0
     for seed in range(12):
         scenario = turning_scenario(seed, 200.0, max_points=4)
-        want = enumerate_front(scenario, probability=True)
+        want = prefix_front(scenario, True, ("turning_scenario", seed, 200.0, 4))
         if not want:
             continue
         exact = [_Point(w[0], w[1], -w[2]) for w in want]

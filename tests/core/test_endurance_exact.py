@@ -10,14 +10,15 @@ route, so that it rules some routes out, the front's own among them often enough
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 
 import numpy as np
 import pytest
-from support.enumeration import THREE, TWO, all_routes, assert_fronts_close, pareto, planned_front
+from support.enumeration import THREE, TWO, assert_fronts_close, pareto, planned_front
+from support.prefix_flight import every_route_flown
 from support.scenarios import tall_scenario, windy_envelope
 
-from gcs_planner.core.bnb import flown_route
 from gcs_planner.core.flight_time import ground_speeds, route_minutes, seconds_to_b
 from gcs_planner.core.planner import plan
 from gcs_planner.core.probability import success_probability
@@ -37,11 +38,18 @@ def windy(seed: int, leg_model: str, radius: float):  # noqa: ANN201 - a Scenari
     return dataclasses.replace(scenario, envelope=envelope)
 
 
+@functools.cache
+def windy_routes(seed: int, leg_model: str, radius: float) -> tuple:
+    """``flown_routes(windy(seed, leg_model, radius))``, once per test process: the two tests
+    of the front within the endurance below draw the same scenarios."""
+    return tuple(flown_routes(windy(seed, leg_model, radius)))
+
+
 def flown_routes(scenario) -> list[tuple[float, int, float, float]]:  # noqa: ANN001
-    """Every feasible simple route as (length, corrections, -probability, minutes)."""
+    """Every feasible simple route as (length, corrections, -probability, minutes), each flown
+    by prefix (support/prefix_flight.py: the same Route as ``flown_route``)."""
     out = []
-    for points in all_routes(scenario):
-        route = flown_route(scenario, points)
+    for points, route in every_route_flown(scenario):
         if not route.feasible:
             continue
         p = success_probability(scenario, points, [s.leg for s in route.stops[1:]]).probability
@@ -71,7 +79,7 @@ def test_the_front_within_the_endurance_equals_enumeration(leg_model, radius):
     seeds = range(24) if radius == 0 else range(12)
     for seed in seeds:
         scenario = windy(seed, leg_model, radius)
-        routes = flown_routes(scenario)
+        routes = windy_routes(seed, leg_model, radius)
         if not routes:
             continue
         times = sorted(r[3] for r in routes)
@@ -139,7 +147,7 @@ def test_a_search_cut_short_keeps_within_the_endurance_and_says_it_is_not_proven
     cut = 0
     for seed in range(40):
         scenario = windy(seed, "airplane", 0.0)
-        routes = flown_routes(scenario)
+        routes = windy_routes(seed, "airplane", 0.0)
         if not routes:
             continue
         for quantile in (0.1, 0.25, 0.5):

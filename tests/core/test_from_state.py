@@ -10,7 +10,7 @@ from support.enumeration import pareto
 from support.prefix_flight import PrefixFlights, every_route_flown
 from support.scenarios import contingency_scenario
 
-from gcs_planner.core.bnb import Options, bnb_front, flown_route, flown_route_legs
+from gcs_planner.core.bnb import Options, bnb_front, flown_route_legs
 from gcs_planner.core.from_state import FlightState, original_points, state_scenario
 from gcs_planner.core.planner import plan
 from gcs_planner.core.probability import outcomes, success_probability
@@ -29,17 +29,19 @@ def _failed_state(sc, rng) -> tuple[FlightState, tuple[int, ...]] | None:
     others = [j for j in corr if j != last]
     k = int(rng.integers(0, len(others) + 1))
     prefix = (sc.start, *[int(j) for j in rng.permutation(others)[:k]], last)
-    route = flown_route(sc, (*prefix, sc.end))  # flown to B, to read the prefix's legs
+    # Flown to B (once: the legs flown_route evaluates), to read the prefix's legs.
+    legs = flown_route_legs(sc, (*prefix, sc.end))
+    lengths = [float(leg.length) for leg in legs[: len(prefix) - 1]]
     v = h = 0.0
-    if not all(np.isfinite(s.leg.length) for s in route.stops[1 : len(prefix)]):
+    if not all(np.isfinite(lengths)):
         return None  # a leg of the prefix cannot be flown: no state is reached
-    for stop in route.stops[1 : len(prefix)]:
-        v += stop.leg.length
-        h += stop.leg.length
-        kind = Kind(int(sc.kind[stop.index]))
+    for point, length in zip(prefix[1:], lengths, strict=True):
+        v += length
+        h += length
+        kind = Kind(int(sc.kind[point]))
         ok, failed = outcomes(v, h, kind, sc.params.residual_m)
-        v, h = failed if stop.index == last else ok
-    leg = flown_route_legs(sc, (*prefix, sc.end))[len(prefix) - 2]
+        v, h = failed if point == last else ok
+    leg = legs[len(prefix) - 2]
     if not (leg.reachable and np.isfinite(leg.length)):
         return None
     heading = None if leg.heading_out is None else tuple(float(c) for c in leg.heading_out)

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import functools
 import itertools
+from typing import NamedTuple
 
 import numpy as np
 import pytest
@@ -12,9 +13,9 @@ from support.policies import can_fail_at
 from support.prefix_flight import every_route_flown
 from support.scenarios import contingency_scenario
 
-from gcs_planner.core.contingency import Policy, _Evaluator, _start_heading, evaluate
+from gcs_planner.core.contingency import Policy, _Evaluator, _start_heading
 from gcs_planner.core.policy_front import exact_policy_front, pareto, replanned_front
-from gcs_planner.core.probability import PROB_EPS
+from gcs_planner.core.probability import PROB_EPS, success_probability
 from gcs_planner.core.replan import replan_on_failure
 from gcs_planner.errors import GcsPlannerError
 from gcs_planner.scenario.generate import random_scenario
@@ -70,13 +71,33 @@ def _policy_scenario(seed: int, radius: float) -> Scenario:
     return random_scenario(n, seed, params=params, box=box, unreliable_fraction=0.6)
 
 
+class RouteValue(NamedTuple):
+    """A route's objectives as a policy's (``contingency.PolicyValue``): every outcome of a
+    route flies the same legs, so its length and corrections are the flown route's, and its
+    probability of arriving the exact chain's (``probability.success_probability``)."""
+
+    length: float
+    corrections: int
+    probability: float
+
+
 @functools.cache
 def _flown(seed: int, radius: float) -> tuple:
     """``_policy_scenario(seed, radius)``, every simple route of it flown, and each route's value
-    as a policy: once per test process for the tests below, which draw the same scenarios."""
+    as a policy (from the flight and the probability model, not the policy evaluator the exact
+    front is built on): once per test process for the tests below, which draw the same
+    scenarios."""
     sc = _policy_scenario(seed, radius)
-    routes = tuple(route for _, route in every_route_flown(sc))
-    return sc, routes, tuple(evaluate(sc, Policy.from_route(sc, r)) for r in routes)
+    flown = list(every_route_flown(sc))
+    values = tuple(
+        RouteValue(
+            r.length,
+            r.corrections,
+            success_probability(sc, pts, [s.leg for s in r.stops[1:]]).probability,
+        )
+        for pts, r in flown
+    )
+    return sc, tuple(r for _, r in flown), values
 
 
 @functools.cache

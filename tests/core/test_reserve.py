@@ -7,7 +7,7 @@ import dataclasses
 
 import numpy as np
 import pytest
-from support.enumeration import assert_front_equals_enumeration
+from support.prefix_fronts import assert_front_equals_prefix_enumeration
 from support.scenarios import climbing_scenario
 
 from gcs_planner.core.bnb import bnb_front, flown_route
@@ -64,7 +64,10 @@ def test_a_reserve_plans_as_limits_lowered_by_its_metres(probability: bool) -> N
         tightest = min(getattr(base.params, k) for k in LIMIT_NAMES) / base.params.delta
         reserve = float(rng.uniform(0.1, 0.5)) * tightest
         reserved = with_reserve(base, reserve)
-        result, want = assert_front_equals_enumeration(reserved, probability, seed)
+        # Enumerated with its routes flown by prefix, once for both objective sets.
+        result, want = assert_front_equals_prefix_enumeration(
+            reserved, probability, ("tight_scenario with a reserve", seed)
+        )
         lowered = bnb_front(
             with_tighter_limits(base, reserve), probability=probability, max_labels=10**6
         )
@@ -131,17 +134,18 @@ def test_planning_with_every_unreliable_correction_failing_gives_the_certain_fro
     """A route arrives surely exactly when it survives every unreliable correction failing
     (a failure only leaves errors larger), so the front planned with p_success = 0 is the
     (length, corrections) front of the routes whose exact probability is 1, by enumeration."""
-    from support.enumeration import all_routes, pareto
+    from support.enumeration import pareto
+    from support.prefix_flight import every_route_flown
 
     nonempty = through_unreliable = tried = 0
     for seed in range(46):
         scenario = tight_scenario(seed) if seed % 2 else unreliable_scenario(seed)
-        # Both have at most 4 corrections: 65 routes to fly one by one, not 1,957 with 6.
+        # Both have at most 4 corrections: 65 routes to fly, not 1,957 with 6; each leg flown
+        # once for the routes that share what comes before it (the same Route as flown_route).
         assert scenario.n <= 6
         tried += 1
         certain = []
-        for pts in all_routes(scenario):
-            route = flown_route(scenario, pts)
+        for pts, route in every_route_flown(scenario):
             legs = [s.leg for s in route.stops[1:]]
             if success_probability(scenario, pts, legs).probability == 1.0:
                 certain.append((round(route.length, 6), route.corrections, 0.0))
