@@ -10,6 +10,7 @@ import xml.etree.ElementTree as ET
 
 import pytest
 from support.missions import HOME, ORIGIN, make_plan, tiny_scenario, true_position
+from support.undrawn_pictures import leave_pictures_undrawn
 
 from gcs_planner.cli import main
 from gcs_planner.errors import InputError
@@ -236,9 +237,14 @@ def test_csv_table():
         assert int(r["mission_seq"]) == m.seq_of(r["id"])
 
 
-def test_write_all_writes_every_file(tmp_path):
+def test_write_all_writes_every_file(tmp_path, monkeypatch):
+    # The set of files is the subject: the three pictures are asked for and stood in by a
+    # 1 px PNG (support/undrawn_pictures.py); what they show is test_pictures.py's, and
+    # write_all draws them for real under plan --out (test_edges_files.py).
+    asked = leave_pictures_undrawn(monkeypatch)
     plan = make_plan()
     paths = write_all(plan, tmp_path / "out", firmware="px4")
+    assert sorted(asked) == ["error_budget_png", "front_png", "route_png"]
     names = sorted(p.name for p in paths)
     assert names == sorted(
         [

@@ -44,12 +44,22 @@ def dataset2_plan(dataset_paths) -> dict:
 
 @pytest.fixture(scope="module")
 def dataset2_figures(dataset2_plan) -> Iterator[dict]:
-    """Dataset 2's route and error budget figures, drawn once for the module: the tests below
-    measure several properties of the same drawing (none of them draws on it)."""
+    """Dataset 2's route and error budget figures, drawn once for the module (rendered once on
+    their canvas, so that their layout is done): the tests below measure several properties of
+    the same drawing (none of them draws on it; saving it moves nothing, which
+    test_route_labels_are_drawn_at_the_saved_positions holds)."""
     figures = {draw: draw(dataset2_plan) for draw in (route_figure, error_budget_figure)}
+    for fig in figures.values():
+        fig.canvas.draw()
     yield figures
     for fig in figures.values():
         plt.close(fig)
+
+
+@pytest.fixture(scope="module")
+def dataset2_label_boxes(dataset2_figures) -> dict:
+    """The label boxes of dataset 2's figures as rendered by ``dataset2_figures``."""
+    return {draw: label_boxes(fig, render=False) for draw, fig in dataset2_figures.items()}
 
 
 def crowded_scenario(n_route: int = 40, n_other: int = 200, seed: int = 3) -> Scenario:
@@ -88,10 +98,12 @@ def crowded_plan() -> dict:
     return make_plan(s, (route, route[::2] + [s.n - 1]))
 
 
-def label_boxes(fig) -> list:
+def label_boxes(fig, render: bool = True) -> list:
     """Window extents of every text drawn on the figure's axes (ids, margins, names ...): the
-    text's own box (an annotation's extent would also cover its leader line)."""
-    fig.canvas.draw()
+    text's own box (an annotation's extent would also cover its leader line). ``render`` False:
+    the figure was rendered already (a module's figure, unchanged since)."""
+    if render:
+        fig.canvas.draw()
     renderer = fig.canvas.get_renderer()
     return [
         Text.get_window_extent(t, renderer)
@@ -101,8 +113,9 @@ def label_boxes(fig) -> list:
     ]
 
 
-def assert_no_overprint(fig) -> int:
-    boxes = label_boxes(fig)
+def assert_no_overprint(fig, boxes: list | None = None) -> int:
+    """No two label boxes overlap (``boxes``: the figure's, measured already); their number."""
+    boxes = label_boxes(fig) if boxes is None else boxes
     for a, b in itertools.combinations(boxes, 2):
         inter_w = min(a.x1, b.x1) - max(a.x0, b.x0)
         inter_h = min(a.y1, b.y1) - max(a.y0, b.y0)
@@ -127,9 +140,11 @@ def close_figures():
 
 
 @pytest.mark.parametrize("draw", [route_figure, error_budget_figure, front_figure])
-def test_no_label_overprints_another_on_dataset2(dataset2_plan, dataset2_figures, draw):
+def test_no_label_overprints_another_on_dataset2(
+    dataset2_plan, dataset2_figures, dataset2_label_boxes, draw
+):
     fig = dataset2_figures[draw] if draw in dataset2_figures else draw(dataset2_plan)
-    n = assert_no_overprint(fig)
+    n = assert_no_overprint(fig, dataset2_label_boxes.get(draw))
     route = dataset2_plan["front"][dataset2_plan["chosen"]]["route"]
     if draw is not front_figure:  # every id of the route is shown in these views
         assert n >= len(route)
@@ -149,8 +164,7 @@ def test_no_label_overprints_another_on_a_crowded_route(draw):
 
 
 def test_labels_stay_inside_their_axes(dataset2_figures):
-    fig = dataset2_figures[route_figure]
-    fig.canvas.draw()
+    fig = dataset2_figures[route_figure]  # rendered by the fixture
     renderer = fig.canvas.get_renderer()
     for ax in fig.axes:
         frame = ax.get_window_extent(renderer)
@@ -160,10 +174,10 @@ def test_labels_stay_inside_their_axes(dataset2_figures):
             assert frame.y0 <= box.y0 and box.y1 <= frame.y1
 
 
-def test_route_labels_are_drawn_at_the_saved_positions(dataset2_figures):
+def test_route_labels_are_drawn_at_the_saved_positions(dataset2_figures, dataset2_label_boxes):
     """The layout is fixed before the labels are placed: saving moves nothing."""
     fig = dataset2_figures[route_figure]
-    before = label_boxes(fig)
+    before = dataset2_label_boxes[route_figure]
     fig.savefig(io.BytesIO(), format="png", dpi=DPI)
     after = label_boxes(fig)
     assert np.allclose([b.bounds for b in before], [b.bounds for b in after])
@@ -211,8 +225,7 @@ def test_route_plan_view_is_cropped_to_the_points_with_equal_scales(
     track = trajectory_local(dataset2_plan) / 1000
     assert_cropped(ax, np.r_[xyz[:, 0], track[:, 0]], np.r_[xyz[:, 1], track[:, 1]], 0.06)
     assert ax.get_aspect() == 1.0
-    # Drawn square: equal scales on a square scenario.
-    fig.canvas.draw()
+    # Drawn square (as rendered by the fixture): equal scales on a square scenario.
     box = ax.get_window_extent()
     assert box.width == pytest.approx(box.height, rel=0.02)
 

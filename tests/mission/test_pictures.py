@@ -26,10 +26,20 @@ def decode(png: bytes) -> np.ndarray:
     return mpimg.imread(io.BytesIO(png), format="png")
 
 
-def test_route_picture():
+@pytest.fixture(scope="module")
+def route_pictures() -> dict:
+    """The tiny plan's routes 0 and 2 drawn once for the module, with the figures open before
+    and after: test_route_picture reads route 0, the next test holds it against route 2."""
+    plan = make_plan()
     before = plt.get_fignums()
-    img = decode(route_png(make_plan()))
-    assert plt.get_fignums() == before
+    pictures = {k: route_png(plan, k) for k in (0, 2)}
+    return {"before": before, "after": plt.get_fignums(), **pictures}
+
+
+def test_route_picture(route_pictures):
+    # Drawing closes its figures.
+    assert route_pictures["after"] == route_pictures["before"]
+    img = decode(route_pictures[0])
     h, w = img.shape[:2]
     assert 800 <= w <= 2000 and 600 <= h <= 1400 and w > h
     # Not blank: drawn pixels of several colours (V blue, H orange, A green, B red, the track).
@@ -40,21 +50,28 @@ def test_route_picture():
     assert blue > 50 and orange > 50
 
 
-def test_route_picture_of_another_route_differs():
-    plan = make_plan()
-    assert not np.array_equal(decode(route_png(plan, 0)), decode(route_png(plan, 2)))
+def test_route_picture_of_another_route_differs(route_pictures):
+    assert not np.array_equal(decode(route_pictures[0]), decode(route_pictures[2]))
+
+
+@pytest.fixture(scope="module")
+def front_pictures() -> dict:
+    """The tiny plan's front drawn once per case the tests below read, by (probability shown,
+    chosen route): the front with probability unshown and route 0 chosen serves both tests."""
+    cases = ((True, 0), (False, 0), (False, 1))
+    return {(p, c): front_png(make_plan(chosen=c, probability=p)) for p, c in cases}
 
 
 @pytest.mark.parametrize("probability", [True, False])
-def test_front_picture(probability):
-    img = decode(front_png(make_plan(probability=probability)))
+def test_front_picture(front_pictures, probability):
+    img = decode(front_pictures[probability, 0])
     h, w = img.shape[:2]
     assert 600 <= w <= 1600 and 400 <= h <= 1200
 
 
-def test_front_picture_marks_the_chosen_route():
-    a = decode(front_png(make_plan(chosen=0, probability=False)))
-    b = decode(front_png(make_plan(chosen=1, probability=False)))
+def test_front_picture_marks_the_chosen_route(front_pictures):
+    a = decode(front_pictures[False, 0])
+    b = decode(front_pictures[False, 1])
     assert a.shape == b.shape and not np.array_equal(a, b)
 
 
@@ -132,6 +149,6 @@ def test_front_picture_reads_with_one_and_with_fifty_routes(n):
     img = decode(front_png(plan))
     h, w = img.shape[:2]
     assert 600 <= w <= 1600 and 400 <= h <= 1200
-    other = decode(front_png({**plan, "chosen": 0 if n == 1 else n - 1}))
-    if n > 1:  # the chosen ring moves with the choice
+    if n > 1:  # the chosen ring moves with the choice (one route has no other to choose)
+        other = decode(front_png({**plan, "chosen": n - 1}))
         assert not np.array_equal(img, other)

@@ -308,7 +308,16 @@ def test_plan_policy_writes_every_mission_and_the_file(tmp_path, capsys, monkeyp
     risky = ["--allow-risky"]
     assert main(["plan", str(csv), *flags_of(sc), "--out", str(out), "--policy"]) == 3
     assert "no ardupilot setup flies this plan" in capsys.readouterr().err
+    # The missions, the policy file and the folder are the subject: the five pictures are
+    # asked for and stood in by a 1 px PNG (support/undrawn_pictures.py); what they show is
+    # test_picture_layout.py's and test_pictures.py's, and `plan --policy --out` draws them for
+    # real in README's documented command (tests/docs/test_documented_commands.py).
+    asked = leave_pictures_undrawn(monkeypatch)
     assert main(["plan", str(csv), *flags_of(sc), "--out", str(out), "--policy", *risky]) == 0
+    assert {"tree_png", "policy_front_png", "route_png", "front_png", "error_budget_png"} <= set(
+        asked
+    )
+    asked.clear()
     text = capsys.readouterr().out
     assert "contingency policy: 3 mission(s), 2 switch(es)" in text
     assert "chosen route 0" in text and "most reliable route" in text
@@ -327,9 +336,7 @@ def test_plan_policy_writes_every_mission_and_the_file(tmp_path, capsys, monkeyp
     assert json.loads((out / "primary.plan").read_text()) == json.loads(
         (out / "mission.plan").read_text()
     )
-    # A second run replaces the folder it wrote (its branch files included); the pictures, drawn
-    # above, are not what it is about.
-    asked = leave_pictures_undrawn(monkeypatch)
+    # A second run replaces the folder it wrote (its branch files included).
     assert main(["plan", str(csv), *flags_of(sc), "--out", str(out), "--policy", *risky]) == 0
     assert {"tree_png", "policy_front_png", "route_png"} <= set(asked)
 

@@ -3,6 +3,7 @@ MAVLink item types, never the planner (its answers would leak into the check of 
 
 from __future__ import annotations
 
+import functools
 import json
 import subprocess
 import sys
@@ -13,13 +14,16 @@ PLANNER = ("gcs_planner.core", "gcs_planner.geometry", "gcs_planner.mission.buil
 CLIENT = ("gcs_planner.link",)
 
 
-def imported_by(module: str) -> list[str]:
+# Memoised: both tests ask about the same modules, and a fresh interpreter's answer for one
+# module does not change within a session.
+@functools.cache
+def imported_by(module: str) -> tuple[str, ...]:
     """The modules loaded by importing ``module`` alone, in a fresh interpreter."""
     code = f"import json, sys, {module}; print(json.dumps(sorted(sys.modules)))"
     out = subprocess.run(
         [sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120
     ).stdout
-    return json.loads(out)
+    return tuple(json.loads(out))
 
 
 @pytest.mark.parametrize(
