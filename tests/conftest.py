@@ -116,28 +116,34 @@ def pytest_sessionstart(session: pytest.Session) -> None:
     terminal = config.pluginmanager.get_plugin("terminalreporter")
     say = terminal.write_line if terminal else (lambda text: None)
     say("numba's kernels are not cached: compiling them once for every test process ...")
-    # In two processes side by side (numba compiles on one core): the search here, the straight
-    # legs and the flight in another interpreter importing the same copy of the package. The
-    # cost-to-go tables of maps of 3,000+ points (the part "bounds") are left to the few tests
-    # that make them, which compile them beside the others' work, not before every test.
+    # In three processes side by side (numba compiles on one core): the search here; the
+    # straight legs and the flight in another interpreter importing the same copy of the
+    # package; the cost-to-go tables of maps of 3,000+ points (the part "bounds") in a third.
+    # Left to the tests that need them, those tables were compiled by whichever came first:
+    # when the benchmark's quick run did, each of its planning subprocesses compiled them at
+    # once (docs/benchmarks.md, "The test suite").
     import gcs_planner
 
-    beside = subprocess.Popen(
-        [sys.executable, "-c", _COMPILE_THE_REST],
-        cwd=Path(gcs_planner.__file__).resolve().parents[1],
-        stdout=subprocess.DEVNULL,
-    )
+    root = Path(gcs_planner.__file__).resolve().parents[1]
+    beside = [
+        subprocess.Popen(
+            [sys.executable, "-c", _COMPILE_PARTS.format(parts=parts)],
+            cwd=root,
+            stdout=subprocess.DEVNULL,
+        )
+        for parts in (("straight", "flight"), ("bounds",))
+    ]
     try:
         compile_kernels(say=lambda text: None, parts=("search",))
     except Exception as exc:  # noqa: BLE001 - the tests that need a kernel compile it and fail
         say(f"compiling the kernels before the tests failed ({exc}); each process compiles them")
-    if beside.wait() != 0:
-        say("compiling the straight legs' and flight's kernels failed; each process compiles them")
+    if any([process.wait() != 0 for process in beside]):  # a list: wait for every one
+        say("compiling some of the kernels before the tests failed; each process compiles them")
 
 
-_COMPILE_THE_REST = (
+_COMPILE_PARTS = (
     "from gcs_planner.runtime.precompile import compile_kernels\n"
-    "compile_kernels(say=lambda text: None, parts=('straight', 'flight'))\n"
+    "compile_kernels(say=lambda text: None, parts={parts!r})\n"
 )
 
 
