@@ -17,7 +17,6 @@ straight of the derived run-in before it and run-out after it."""
 
 from __future__ import annotations
 
-import copy
 import functools
 import math
 from pathlib import Path
@@ -25,6 +24,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from support.envelope import scenario_in_wind
+from support.workbook_once import read_workbooks_once
 
 from gcs_planner.aircraft.profile import DerivedEnvelope, G, tas_from_eas
 from gcs_planner.core.planner import plan
@@ -53,20 +53,7 @@ INFEASIBLE = {(2, "px4", 5.0), (2, "px4", 10.0)}
 def workbooks_read_once():
     """Each contest workbook read once for the module, not once per wind (openpyxl's read is
     a good part of each case): the same cells, copied for each reader."""
-    from gcs_planner.scenario import xlsx
-
-    read = xlsx.read_workbook_cells
-    cells: dict[Path, object] = {}
-
-    def read_once(path: Path):  # noqa: ANN202 - xlsx.read_workbook_cells's CellTable
-        key = Path(path).resolve()
-        if key not in cells:
-            cells[key] = read(path)
-        return copy.deepcopy(cells[key])
-
-    with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(xlsx, "read_workbook_cells", read_once)
-        yield
+    yield from read_workbooks_once()
 
 
 @functools.cache
