@@ -46,13 +46,18 @@ def pareto(points: list[tuple]) -> list[tuple]:
 
 
 def enumerate_front(
-    scenario: Scenario, probability: bool, keep: Callable[[Route], bool] | None = None
+    scenario: Scenario,
+    probability: bool,
+    keep: Callable[[Route], bool] | None = None,
+    flights: Iterable[tuple[tuple[int, ...], Route]] | None = None,
 ) -> list[tuple]:
     """The front of every simple route, each flown under the scenario's leg model (only the
-    routes ``keep`` admits, when given)."""
+    routes ``keep`` admits, when given; ``flights``: (points, flown route) of every simple
+    route, when the caller flies them its own way)."""
+    if flights is None:
+        flights = ((pts, flown_route(scenario, pts)) for pts in all_routes(scenario))
     values = []
-    for pts in all_routes(scenario):
-        route = flown_route(scenario, pts)
+    for pts, route in flights:
         if keep is not None and not keep(route):
             continue
         if probability:
@@ -66,19 +71,27 @@ def enumerate_front(
 
 
 def assert_front_equals_enumeration(
-    scenario: Scenario, probability: bool, seed: int, options: Options | None = None
+    scenario: Scenario,
+    probability: bool,
+    seed: object,
+    options: Options | None = None,
+    want: list[tuple] | None = None,
 ) -> tuple:
-    """The branch and bound's front, proven, equal to enumeration of every simple route; returns
-    (the search's result, the enumerated front)."""
+    """The branch and bound's front, proven, equal to enumeration of every simple route
+    (``want``, when the caller enumerated it already); returns (the search's result, the
+    enumerated front). ``seed`` names the case in a failure."""
     result = bnb_front(scenario, probability=probability, max_labels=10**6, options=options)
-    assert result.optimal
+    assert result.optimal, seed
     got = [
         (round(f.length, 6), f.corrections, round(-f.probability, 12) if probability else 0.0)
         for f in result.front
     ]
-    want = enumerate_front(scenario, probability)
+    if want is None:
+        want = enumerate_front(scenario, probability)
     assert [g[1:] for g in got] == [w[1:] for w in want], seed
-    np.testing.assert_allclose([g[0] for g in got], [w[0] for w in want], atol=1e-6)
+    np.testing.assert_allclose(
+        [g[0] for g in got], [w[0] for w in want], atol=1e-6, err_msg=str(seed)
+    )
     return result, want
 
 
